@@ -1,0 +1,38 @@
+# cmam — top-level convenience targets. The real build is CMake (see CMakePresets.json).
+#   make          build the cmam binary (build/release/app/cmam)
+#   make demo     install dependencies, build, render scenes/demo.pbrt
+#   make test     install dependencies, build, run every test through CTest
+#   make bench    build and run the benchmarks (Google Benchmark)
+JOBS ?= $(shell nproc)
+BUILD := build/release
+CMAM := $(BUILD)/app/cmam
+DEMO_OUT ?= $(BUILD)/demo.png
+
+.PHONY: all build deps configure demo test bench clean
+
+all: build
+
+deps:
+	@bash scripts/setup-deps.sh
+
+configure:
+	@test -f $(BUILD)/build.ninja || cmake --preset release >/dev/null
+
+build: configure
+	@cmake --build $(BUILD) -j $(JOBS)
+
+demo: deps
+	@$(MAKE) --no-print-directory build
+	@$(CMAM) render scenes/demo.pbrt -o $(DEMO_OUT)
+	@echo "demo image: $(abspath $(DEMO_OUT))"
+
+test: deps
+	@$(MAKE) --no-print-directory build
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+bench: deps
+	@$(MAKE) --no-print-directory build
+	@$(BUILD)/bench/render_bench
+
+clean:
+	rm -rf build

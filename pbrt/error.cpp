@@ -1,0 +1,28 @@
+#include "pbrt/error.h"
+
+namespace cmam::pbrt {
+
+std::string FileLoc::to_string() const {
+    if (!file) return {};
+    return *file + ":" + std::to_string(line) + ":" + std::to_string(col);
+}
+
+namespace {
+std::string located(const FileLoc& loc, const char* kind, const std::string& message) {
+    std::string where = loc.to_string();
+    return where.empty() ? std::string(kind) + ": " + message
+                         : where + ": " + kind + ": " + message;
+}
+}  // namespace
+
+SceneError::SceneError(const FileLoc& loc, const std::string& message)
+    : std::runtime_error(located(loc, "error", message)), m_loc(loc), m_message(message) {}
+
+SceneError::SceneError(const std::string& message)
+    : std::runtime_error("error: " + message), m_message(message) {}
+
+std::string format_warning(const FileLoc& loc, const std::string& message) {
+    return located(loc, "warning", message);
+}
+
+}  // namespace cmam::pbrt

@@ -1,0 +1,41 @@
+// pbrt — locations and errors of scene input.
+// Every problem found in a scene file carries FILE:LINE:COL; the library throws, main prints.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace cmam::pbrt {
+
+/// A position in a scene file: 1-based line and column.
+struct FileLoc {
+    std::shared_ptr<const std::string> file;  // shared by every token of one file
+    int line = 0;
+    int col = 0;
+
+    std::string to_string() const;  // "file:line:col", or "" when unknown
+};
+
+/// The one exception type of the scene parser and the scene builder. `what()` is the complete,
+/// printable message: "file:line:col: error: message".
+class SceneError : public std::runtime_error {
+public:
+    SceneError(const FileLoc& loc, const std::string& message);
+    explicit SceneError(const std::string& message);  // not tied to a location
+    const std::string& message() const { return m_message; }
+    const FileLoc& loc() const { return m_loc; }
+
+private:
+    FileLoc m_loc;
+    std::string m_message;
+};
+
+/// Receives located warnings ("file:line:col: warning: message").
+using WarningSink = std::function<void(const std::string&)>;
+
+/// Formats a warning the same way errors are formatted.
+std::string format_warning(const FileLoc& loc, const std::string& message);
+
+}  // namespace cmam::pbrt

@@ -1,0 +1,264 @@
+#include "pbrt/params.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cmam::pbrt {
+
+std::optional<ParamType> parse_param_type(const std::string& n) {
+    if (n == "integer") return ParamType::Integer;
+    if (n == "float") return ParamType::Float;
+    if (n == "point2") return ParamType::Point2;
+    if (n == "vector2") return ParamType::Vector2;
+    if (n == "point3" || n == "point") return ParamType::Point3;
+    if (n == "vector3" || n == "vector") return ParamType::Vector3;
+    if (n == "normal" || n == "normal3") return ParamType::Normal;
+    if (n == "rgb" || n == "color") return ParamType::Rgb;
+    if (n == "spectrum") return ParamType::Spectrum;
+    if (n == "bool") return ParamType::Bool;
+    if (n == "string") return ParamType::String;
+    if (n == "texture") return ParamType::Texture;
+    return std::nullopt;
+}
+
+const char* to_string(ParamType t) {
+    switch (t) {
+        case ParamType::Integer: return "integer";
+        case ParamType::Float: return "float";
+        case ParamType::Point2: return "point2";
+        case ParamType::Vector2: return "vector2";
+        case ParamType::Point3: return "point3";
+        case ParamType::Vector3: return "vector3";
+        case ParamType::Normal: return "normal";
+        case ParamType::Rgb: return "rgb";
+        case ParamType::Spectrum: return "spectrum";
+        case ParamType::Bool: return "bool";
+        case ParamType::String: return "string";
+        case ParamType::Texture: return "texture";
+    }
+    return "?";
+}
+
+namespace {
+std::size_t arity(ParamType t) {
+    switch (t) {
+        case ParamType::Point2:
+        case ParamType::Vector2: return 2;
+        case ParamType::Point3:
+        case ParamType::Vector3:
+        case ParamType::Normal:
+        case ParamType::Rgb: return 3;
+        default: return 1;
+    }
+}
+std::string q(const std::string& s) { return "\"" + s + "\""; }
+}  // namespace
+
+void ParamSet::add(Param p) {
+    for (const Param& o : m_params)
+        if (o.name == p.name)
+            throw SceneError(p.loc, "parameter " + q(p.name) + " given twice (first at " +
+                                        o.loc.to_string() + ")");
+    std::size_t n = p.numbers.size() + p.strings.size() + p.bools.size();
+    if (n == 0) throw SceneError(p.loc, "parameter " + q(p.name) + " has no values");
+    std::size_t k = arity(p.type);
+    if (p.type == ParamType::Spectrum) {
+        if (!p.numbers.empty() && p.numbers.size() % 2 != 0)
+            throw SceneError(p.loc, "spectrum " + q(p.name) +
+                                        " needs (wavelength, value) pairs, got " +
+                                        std::to_string(p.numbers.size()) + " numbers");
+    } else if (p.numbers.size() % k != 0) {
+        throw SceneError(p.loc, std::string(to_string(p.type)) + " parameter " + q(p.name) +
+                                    " needs a multiple of " + std::to_string(k) +
+                                    " values, got " + std::to_string(p.numbers.size()));
+    }
+    if (p.type == ParamType::Integer)
+        for (double x : p.numbers)
+            if (x != std::floor(x))
+                throw SceneError(p.loc, "integer parameter " + q(p.name) +
+                                            " has a non-integer value " + std::to_string(x));
+    m_params.push_back(std::move(p));
+}
+
+const Param* ParamSet::find(const std::string& name) const {
+    for (const Param& p : m_params)
+        if (p.name == name) return &p;
+    return nullptr;
+}
+
+const Param* ParamSet::find_typed(const std::string& name,
+                                  std::initializer_list<ParamType> types) const {
+    const Param* p = find(name);
+    if (!p) return nullptr;
+    if (std::find(types.begin(), types.end(), p->type) == types.end()) {
+        std::string expected;
+        for (ParamType t : types) expected += (expected.empty() ? "" : " or ") + std::string(to_string(t));
+        throw SceneError(p->loc, "parameter " + q(name) + " has type " + p->type_name +
+                                     ", expected " + expected);
+    }
+    p->used = true;
+    return p;
+}
+
+namespace {
+void expect_single(const Param& p, std::size_t n, std::size_t expected = 1) {
+    if (n != expected)
+        throw SceneError(p.loc, "parameter " + q(p.name) + " expects " +
+                                    std::to_string(expected) + " value" +
+                                    (expected == 1 ? "" : "s") + ", got " + std::to_string(n));
+}
+}  // namespace
+
+double ParamSet::get_float(const std::string& name, double def) const {
+    const Param* p = find_typed(name, {ParamType::Float});
+    if (!p) return def;
+    expect_single(*p, p->numbers.size());
+    return p->numbers[0];
+}
+
+int ParamSet::get_int(const std::string& name, int def) const {
+    const Param* p = find_typed(name, {ParamType::Integer});
+    if (!p) return def;
+    expect_single(*p, p->numbers.size());
+    return static_cast<int>(p->numbers[0]);
+}
+
+bool ParamSet::get_bool(const std::string& name, bool def) const {
+    const Param* p = find_typed(name, {ParamType::Bool});
+    if (!p) return def;
+    expect_single(*p, p->bools.size());
+    return p->bools[0];
+}
+
+std::string ParamSet::get_string(const std::string& name, const std::string& def) const {
+    const Param* p = find_typed(name, {ParamType::String});
+    if (!p) return def;
+    expect_single(*p, p->strings.size());
+    return p->strings[0];
+}
+
+std::array<double, 3> ParamSet::get_point3(const std::string& name,
+                                           std::array<double, 3> def) const {
+    const Param* p =
+        find_typed(name, {ParamType::Point3, ParamType::Vector3, ParamType::Normal});
+    if (!p) return def;
+    expect_single(*p, p->numbers.size(), 3);
+    return {p->numbers[0], p->numbers[1], p->numbers[2]};
+}
+
+std::optional<Rgb> ParamSet::get_rgb(const std::string& name) const {
+    const Param* p = find(name);
+    if (!p || p->type == ParamType::Texture) return std::nullopt;
+    p = find_typed(name, {ParamType::Rgb, ParamType::Spectrum});
+    if (p->type == ParamType::Rgb) {
+        expect_single(*p, p->numbers.size(), 3);
+        return Rgb{static_cast<float>(p->numbers[0]), static_cast<float>(p->numbers[1]),
+                   static_cast<float>(p->numbers[2])};
+    }
+    if (!p->strings.empty())
+        throw SceneError(p->loc, "spectrum " + q(name) + " from file or named spectrum " +
+                                     q(p->strings[0]) +
+                                     " is not supported; give rgb values or (wavelength, value) pairs");
+    return spectrum_to_rgb(p->numbers);
+}
+
+std::optional<TextureRef> ParamSet::get_texture(const std::string& name) const {
+    const Param* p = find(name);
+    if (!p || p->type != ParamType::Texture) return std::nullopt;
+    p->used = true;
+    expect_single(*p, p->strings.size());
+    return TextureRef{p->strings[0], p->loc};
+}
+
+std::optional<std::vector<int>> ParamSet::get_ints(const std::string& name) const {
+    const Param* p = find_typed(name, {ParamType::Integer});
+    if (!p) return std::nullopt;
+    std::vector<int> r;
+    r.reserve(p->numbers.size());
+    for (double x : p->numbers) r.push_back(static_cast<int>(x));
+    return r;
+}
+
+std::optional<std::vector<double>> ParamSet::get_floats(const std::string& name) const {
+    const Param* p = find_typed(name, {ParamType::Float});
+    if (!p) return std::nullopt;
+    return p->numbers;
+}
+
+std::optional<std::vector<double>> ParamSet::get_point3s(const std::string& name) const {
+    const Param* p =
+        find_typed(name, {ParamType::Point3, ParamType::Vector3, ParamType::Normal});
+    if (!p) return std::nullopt;
+    return p->numbers;
+}
+
+std::optional<std::vector<double>> ParamSet::get_point2s(const std::string& name) const {
+    const Param* p = find_typed(name, {ParamType::Point2, ParamType::Vector2, ParamType::Float});
+    if (!p) return std::nullopt;
+    if (p->numbers.size() % 2 != 0)
+        throw SceneError(p->loc, "parameter " + q(name) + " needs pairs of values, got " +
+                                     std::to_string(p->numbers.size()));
+    return p->numbers;
+}
+
+void ParamSet::check_unused(const std::string& what, const WarningSink& warn,
+                            const std::vector<std::string>& ignored) const {
+    for (const Param& p : m_params) {
+        if (p.used) continue;
+        if (std::find(ignored.begin(), ignored.end(), p.name) != ignored.end()) {
+            if (warn)
+                warn(format_warning(p.loc, "parameter " + q(p.name) + " of " + what +
+                                               " is not supported by cmam; ignored"));
+            continue;
+        }
+        throw SceneError(p.loc, "unknown parameter " + q(p.name) + " for " + what);
+    }
+}
+
+namespace {
+// CIE 1931 2-degree colour matching functions, multi-lobe Gaussian fit
+// (Wyman, Sloan & Shirley, JCGT 2013), wavelength in nm.
+double g(double x, double mu, double s1, double s2) {
+    double t = (x - mu) / (x < mu ? s1 : s2);
+    return std::exp(-0.5 * t * t);
+}
+double cie_x(double l) {
+    return 1.056 * g(l, 599.8, 37.9, 31.0) + 0.362 * g(l, 442.0, 16.0, 26.7) -
+           0.065 * g(l, 501.1, 20.4, 26.2);
+}
+double cie_y(double l) { return 0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1); }
+double cie_z(double l) { return 1.217 * g(l, 437.0, 11.8, 36.0) + 0.681 * g(l, 459.0, 26.0, 13.8); }
+
+double interpolate(const std::vector<std::pair<double, double>>& s, double l) {
+    if (l <= s.front().first) return s.front().second;
+    if (l >= s.back().first) return s.back().second;
+    auto it = std::lower_bound(s.begin(), s.end(), l,
+                               [](const auto& a, double x) { return a.first < x; });
+    auto prev = it - 1;
+    double t = (l - prev->first) / (it->first - prev->first);
+    return prev->second + t * (it->second - prev->second);
+}
+}  // namespace
+
+Rgb spectrum_to_rgb(const std::vector<double>& pairs) {
+    std::vector<std::pair<double, double>> s;
+    for (std::size_t i = 0; i + 1 < pairs.size(); i += 2) s.emplace_back(pairs[i], pairs[i + 1]);
+    std::sort(s.begin(), s.end());
+    double x = 0, y = 0, z = 0, yint = 0;
+    for (double l = 360; l <= 830; l += 1) {
+        double v = interpolate(s, l);
+        x += v * cie_x(l);
+        y += v * cie_y(l);
+        z += v * cie_z(l);
+        yint += cie_y(l);
+    }
+    x /= yint;
+    y /= yint;
+    z /= yint;
+    // XYZ to linear sRGB (the matrix pbrt-v3 uses).
+    return Rgb{static_cast<float>(3.240479 * x - 1.537150 * y - 0.498535 * z),
+               static_cast<float>(-0.969256 * x + 1.875991 * y + 0.041556 * z),
+               static_cast<float>(0.055648 * x - 0.204043 * y + 1.057311 * z)};
+}
+
+}  // namespace cmam::pbrt

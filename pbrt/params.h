@@ -1,0 +1,80 @@
+// pbrt — typed parameter lists ("float fov" [45]) with the pbrt-v3 type names and aliases.
+// Each lookup marks its parameter used, so a builder can report unknown parameters with their
+// location afterwards.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pbrt/error.h"
+
+namespace cmam::pbrt {
+
+enum class ParamType { Integer, Float, Point2, Vector2, Point3, Vector3, Normal, Rgb, Spectrum,
+                       Bool, String, Texture };
+
+/// Parses a pbrt-v3 type name (including the aliases point, vector, color, normal3).
+std::optional<ParamType> parse_param_type(const std::string& name);
+const char* to_string(ParamType t);
+
+struct Param {
+    ParamType type{};
+    std::string type_name;  // as written
+    std::string name;
+    FileLoc loc;            // of the "type name" declaration
+    std::vector<double> numbers;
+    std::vector<std::string> strings;
+    std::vector<bool> bools;
+    mutable bool used = false;
+};
+
+using Rgb = std::array<float, 3>;
+
+/// A spectrum- or float-valued parameter that is either a constant or a named texture.
+struct TextureRef {
+    std::string name;  // texture name
+    FileLoc loc;
+};
+
+class ParamSet {
+public:
+    /// Adds a parameter; throws SceneError on a duplicate name or a malformed value list.
+    void add(Param p);
+    bool empty() const { return m_params.empty(); }
+    const std::vector<Param>& params() const { return m_params; }
+
+    /// Single-valued getters: the default when absent; SceneError on a wrong type or count.
+    double get_float(const std::string& name, double def) const;
+    int get_int(const std::string& name, int def) const;
+    bool get_bool(const std::string& name, bool def) const;
+    std::string get_string(const std::string& name, const std::string& def) const;
+    std::array<double, 3> get_point3(const std::string& name, std::array<double, 3> def) const;
+    /// rgb/color/spectrum constant (spectrum sampled values are converted to RGB).
+    std::optional<Rgb> get_rgb(const std::string& name) const;
+    std::optional<TextureRef> get_texture(const std::string& name) const;
+
+    std::optional<std::vector<int>> get_ints(const std::string& name) const;
+    std::optional<std::vector<double>> get_floats(const std::string& name) const;
+    /// point3/normal/vector3 arrays as flat triples; point2/float arrays as flat pairs.
+    std::optional<std::vector<double>> get_point3s(const std::string& name) const;
+    std::optional<std::vector<double>> get_point2s(const std::string& name) const;
+
+    const Param* find(const std::string& name) const;
+    /// Throws SceneError at the first parameter nobody asked for, naming `what` ("shape
+    /// \"sphere\""). Names listed in `ignored` are pbrt-v3 parameters cmam does not support:
+    /// they get a warning instead.
+    void check_unused(const std::string& what, const WarningSink& warn,
+                      const std::vector<std::string>& ignored = {}) const;
+
+private:
+    std::vector<Param> m_params;
+    const Param* find_typed(const std::string& name, std::initializer_list<ParamType> types) const;
+};
+
+/// Converts a sampled spectrum (wavelength, value pairs in nm) to linear sRGB, via CIE XYZ
+/// (analytic fit of the CIE 1931 2-degree observer), normalised so a constant 1 has Y = 1.
+Rgb spectrum_to_rgb(const std::vector<double>& lambda_value_pairs);
+
+}  // namespace cmam::pbrt

@@ -1,0 +1,224 @@
+#include "pbrt/ply.h"
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace cmam::pbrt {
+
+namespace {
+
+enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
+
+bool parse_scalar(const std::string& s, Scalar* out) {
+    if (s == "char" || s == "int8") *out = Scalar::I8;
+    else if (s == "uchar" || s == "uint8") *out = Scalar::U8;
+    else if (s == "short" || s == "int16") *out = Scalar::I16;
+    else if (s == "ushort" || s == "uint16") *out = Scalar::U16;
+    else if (s == "int" || s == "int32") *out = Scalar::I32;
+    else if (s == "uint" || s == "uint32") *out = Scalar::U32;
+    else if (s == "float" || s == "float32") *out = Scalar::F32;
+    else if (s == "double" || s == "float64") *out = Scalar::F64;
+    else return false;
+    return true;
+}
+
+int size_of(Scalar s) {
+    switch (s) {
+        case Scalar::I8: case Scalar::U8: return 1;
+        case Scalar::I16: case Scalar::U16: return 2;
+        case Scalar::I32: case Scalar::U32: case Scalar::F32: return 4;
+        case Scalar::F64: return 8;
+    }
+    return 0;
+}
+
+struct Property {
+    std::string name;
+    bool is_list = false;
+    Scalar count_type{}, type{};
+};
+
+struct Element {
+    std::string name;
+    std::size_t count = 0;
+    std::vector<Property> props;
+};
+
+enum class Format { Ascii, BinaryLE, BinaryBE };
+
+class Reader {
+public:
+    Reader(std::istream& in, Format f, const std::string& path) : m_in(in), m_format(f), m_path(path) {}
+
+    double read(Scalar s) {
+        if (m_format == Format::Ascii) {
+            double v;
+            if (!(m_in >> v)) fail("unexpected end of data or malformed number");
+            return v;
+        }
+        unsigned char buf[8];
+        int n = size_of(s);
+        if (!m_in.read(reinterpret_cast<char*>(buf), n)) fail("unexpected end of data");
+        bool swap = (m_format == Format::BinaryBE) == (std::endian::native == std::endian::little);
+        if (swap) std::reverse(buf, buf + n);
+        switch (s) {
+            case Scalar::I8: { int8_t v; std::memcpy(&v, buf, 1); return v; }
+            case Scalar::U8: return buf[0];
+            case Scalar::I16: { int16_t v; std::memcpy(&v, buf, 2); return v; }
+            case Scalar::U16: { uint16_t v; std::memcpy(&v, buf, 2); return v; }
+            case Scalar::I32: { int32_t v; std::memcpy(&v, buf, 4); return v; }
+            case Scalar::U32: { uint32_t v; std::memcpy(&v, buf, 4); return v; }
+            case Scalar::F32: { float v; std::memcpy(&v, buf, 4); return v; }
+            case Scalar::F64: { double v; std::memcpy(&v, buf, 8); return v; }
+        }
+        return 0;
+    }
+    [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
+
+private:
+    std::istream& m_in;
+    Format m_format;
+    const std::string& m_path;
+};
+
+}  // namespace
+
+PlyMesh read_ply(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw PlyError(path + ": cannot open PLY file: " + std::strerror(errno));
+    std::string line;
+    if (!std::getline(in, line) || line.substr(0, 3) != "ply")
+        throw PlyError(path + ": not a PLY file (missing \"ply\" magic)");
+    Format format = Format::Ascii;
+    bool have_format = false;
+    std::vector<Element> elements;
+    for (;;) {
+        if (!std::getline(in, line)) throw PlyError(path + ": PLY header has no end_header");
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream ls(line);
+        std::string word;
+        ls >> word;
+        if (word == "end_header") break;
+        if (word == "comment" || word == "obj_info" || word.empty()) continue;
+        if (word == "format") {
+            std::string f;
+            ls >> f;
+            if (f == "ascii") format = Format::Ascii;
+            else if (f == "binary_little_endian") format = Format::BinaryLE;
+            else if (f == "binary_big_endian") format = Format::BinaryBE;
+            else throw PlyError(path + ": unknown PLY format \"" + f + "\"");
+            have_format = true;
+        } else if (word == "element") {
+            Element e;
+            long long count = -1;
+            ls >> e.name >> count;
+            if (count < 0) throw PlyError(path + ": malformed element line \"" + line + "\"");
+            e.count = static_cast<std::size_t>(count);
+            elements.push_back(std::move(e));
+        } else if (word == "property") {
+            if (elements.empty()) throw PlyError(path + ": property before any element");
+            Property p;
+            std::string t;
+            ls >> t;
+            if (t == "list") {
+                std::string ct, it;
+                ls >> ct >> it >> p.name;
+                p.is_list = true;
+                if (!parse_scalar(ct, &p.count_type) || !parse_scalar(it, &p.type))
+                    throw PlyError(path + ": unknown property type in \"" + line + "\"");
+            } else {
+                ls >> p.name;
+                if (!parse_scalar(t, &p.type))
+                    throw PlyError(path + ": unknown property type \"" + t + "\"");
+            }
+            elements.back().props.push_back(p);
+        } else {
+            throw PlyError(path + ": unexpected PLY header line \"" + line + "\"");
+        }
+    }
+    if (!have_format) throw PlyError(path + ": PLY header has no format line");
+
+    PlyMesh mesh;
+    Reader r(in, format, path);
+    bool have_vertices = false;
+    for (const Element& e : elements) {
+        if (e.name == "vertex") {
+            have_vertices = true;
+            int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
+            for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
+                const std::string& n = e.props[k].name;
+                if (n == "x") ix = k;
+                else if (n == "y") iy = k;
+                else if (n == "z") iz = k;
+                else if (n == "nx") inx = k;
+                else if (n == "ny") iny = k;
+                else if (n == "nz") inz = k;
+                else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") iu = k;
+                else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") iv = k;
+            }
+            if (ix < 0 || iy < 0 || iz < 0) r.fail("vertex element lacks x, y, z properties");
+            bool normals = inx >= 0 && iny >= 0 && inz >= 0;
+            bool uvs = iu >= 0 && iv >= 0;
+            std::vector<double> vals(e.props.size());
+            for (std::size_t i = 0; i < e.count; ++i) {
+                for (std::size_t k = 0; k < e.props.size(); ++k) {
+                    const Property& p = e.props[k];
+                    if (p.is_list) {
+                        auto n = static_cast<long long>(r.read(p.count_type));
+                        for (long long c = 0; c < n; ++c) r.read(p.type);
+                        vals[k] = 0;
+                    } else {
+                        vals[k] = r.read(p.type);
+                    }
+                }
+                mesh.positions.insert(mesh.positions.end(), {float(vals[ix]), float(vals[iy]), float(vals[iz])});
+                if (normals) mesh.normals.insert(mesh.normals.end(), {float(vals[inx]), float(vals[iny]), float(vals[inz])});
+                if (uvs) mesh.uvs.insert(mesh.uvs.end(), {float(vals[iu]), float(vals[iv])});
+            }
+        } else if (e.name == "face") {
+            for (std::size_t i = 0; i < e.count; ++i) {
+                for (const Property& p : e.props) {
+                    if (!p.is_list) {
+                        r.read(p.type);
+                        continue;
+                    }
+                    auto n = static_cast<long long>(r.read(p.count_type));
+                    if (n < 0 || n > 1 << 20) r.fail("face has an invalid vertex count");
+                    std::vector<int> f(static_cast<std::size_t>(n));
+                    for (auto& x : f) x = static_cast<int>(r.read(p.type));
+                    if (p.name != "vertex_indices" && p.name != "vertex_index") continue;
+                    if (n == 3) {
+                        mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
+                    } else if (n == 4) {
+                        mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
+                    } else {
+                        r.fail("face with " + std::to_string(n) + " vertices (only triangles and quads are supported)");
+                    }
+                }
+            }
+        } else {
+            for (std::size_t i = 0; i < e.count; ++i)
+                for (const Property& p : e.props) {
+                    if (p.is_list) {
+                        auto n = static_cast<long long>(r.read(p.count_type));
+                        for (long long c = 0; c < n; ++c) r.read(p.type);
+                    } else {
+                        r.read(p.type);
+                    }
+                }
+        }
+    }
+    if (!have_vertices) throw PlyError(path + ": PLY file has no vertex element");
+    std::size_t nv = mesh.positions.size() / 3;
+    for (int idx : mesh.indices)
+        if (idx < 0 || static_cast<std::size_t>(idx) >= nv)
+            throw PlyError(path + ": face index " + std::to_string(idx) + " out of range (" +
+                           std::to_string(nv) + " vertices)");
+    return mesh;
+}
+
+}  // namespace cmam::pbrt

@@ -1,0 +1,67 @@
+// pbrt — the plain description a pbrt-v3 file parses into.
+// No rendering types here: records of what the file said, each with its location, transforms
+// resolved, named materials and textures resolved to indices at the point of use (pbrt-v3 keeps
+// them in the graphics state, so AttributeEnd scopes them).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pbrt/params.h"
+#include "pbrt/transform.h"
+
+namespace cmam::pbrt {
+
+/// A directive's type string and parameters ("Shape \"sphere\" ...").
+struct Entity {
+    std::string type;
+    ParamSet params;
+    FileLoc loc;
+    bool given = false;  // false when the file never said it (defaults apply)
+};
+
+/// Texture names visible at a point in the file: name -> index in SceneDesc textures.
+struct TextureScope {
+    std::map<std::string, int> float_textures;
+    std::map<std::string, int> spectrum_textures;
+};
+
+struct TextureDesc {
+    std::string name;
+    bool is_float = false;  // "float" or "spectrum"
+    Entity entity;          // entity.type is the class ("imagemap", "checkerboard", ...)
+    Mat4 world_from_texture;
+    TextureScope scope;     // textures visible when it was declared
+};
+
+struct MaterialDesc {
+    Entity entity;          // entity.type is the material type ("matte", ...)
+    TextureScope scope;     // textures visible when it was declared
+    std::string name;       // for MakeNamedMaterial
+};
+
+struct ShapeDesc {
+    Entity entity;
+    Mat4 world_from_object;
+    bool reverse_orientation = false;
+    int material = -1;      // index into SceneDesc::materials; -1 is the default matte
+};
+
+struct LightDesc {
+    Entity entity;
+    Mat4 world_from_light;
+};
+
+struct SceneDesc {
+    Entity camera, film, sampler, filter, integrator, accelerator;
+    Mat4 camera_from_world = Mat4::identity();
+    std::vector<TextureDesc> textures;
+    std::vector<MaterialDesc> materials;
+    std::vector<ShapeDesc> shapes;
+    std::vector<LightDesc> lights;
+    std::string base_dir;  // directory of the main file (relative paths resolve against the
+                           // directory of the file that names them; see Param locations)
+};
+
+}  // namespace cmam::pbrt

@@ -1,0 +1,96 @@
+#include "pbrt/tokenizer.h"
+
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace cmam::pbrt {
+
+Tokenizer::Tokenizer(std::string filename, std::string contents)
+    : m_file(std::make_shared<const std::string>(std::move(filename))),
+      m_text(std::move(contents)) {}
+
+Tokenizer Tokenizer::from_file(const std::string& path, const FileLoc& included_from) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        std::string why = std::strerror(errno);
+        throw SceneError(included_from, "cannot open scene file \"" + path + "\": " + why);
+    }
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return Tokenizer(path, ss.str());
+}
+
+char Tokenizer::advance() {
+    char c = m_text[m_pos++];
+    if (c == '\n') {
+        ++m_line;
+        m_col = 1;
+    } else {
+        ++m_col;
+    }
+    return c;
+}
+
+std::optional<Token> Tokenizer::next() {
+    while (m_pos < m_text.size()) {
+        char c = m_text[m_pos];
+        if (std::isspace(static_cast<unsigned char>(c))) {
+            advance();
+            continue;
+        }
+        if (c == '#') {
+            while (m_pos < m_text.size() && m_text[m_pos] != '\n') advance();
+            continue;
+        }
+        Token tok;
+        tok.loc = here();
+        if (c == '[' || c == ']') {
+            tok.text = std::string(1, advance());
+            return tok;
+        }
+        if (c == '"') {
+            advance();
+            tok.quoted = true;
+            for (;;) {
+                if (m_pos >= m_text.size() || m_text[m_pos] == '\n')
+                    throw SceneError(tok.loc, "unterminated string");
+                char d = advance();
+                if (d == '"') break;
+                if (d == '\\') {
+                    if (m_pos >= m_text.size()) throw SceneError(tok.loc, "unterminated string");
+                    char e = advance();
+                    switch (e) {
+                        case 'n': tok.text += '\n'; break;
+                        case 't': tok.text += '\t'; break;
+                        case 'b': tok.text += '\b'; break;
+                        case 'f': tok.text += '\f'; break;
+                        case 'r': tok.text += '\r'; break;
+                        case '\\': tok.text += '\\'; break;
+                        case '\'': tok.text += '\''; break;
+                        case '"': tok.text += '"'; break;
+                        default:
+                            throw SceneError(tok.loc, std::string("unknown escape \\") + e +
+                                                          " in string");
+                    }
+                    continue;
+                }
+                tok.text += d;
+            }
+            return tok;
+        }
+        while (m_pos < m_text.size()) {
+            char d = m_text[m_pos];
+            if (std::isspace(static_cast<unsigned char>(d)) || d == '"' || d == '[' ||
+                d == ']' || d == '#')
+                break;
+            tok.text += advance();
+        }
+        return tok;
+    }
+    return std::nullopt;
+}
+
+}  // namespace cmam::pbrt

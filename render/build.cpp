@@ -1,0 +1,543 @@
+// render — turns a parsed pbrt-v3 description into a renderable Scene, with pbrt-v3's
+// defaults and meanings, reporting unsupported input at its file location.
+#include <cmath>
+#include <filesystem>
+
+#include "pbrt/parser.h"
+#include "pbrt/ply.h"
+#include "render/image_io.h"
+#include "render/scene.h"
+
+namespace cmam::render {
+
+using pbrt::Entity;
+using pbrt::Mat4;
+using pbrt::SceneError;
+using pbrt::TextureScope;
+
+namespace {
+
+std::string q(const std::string& s) { return "\"" + s + "\""; }
+
+std::array<double, 12> to34(const Mat4& m) {
+    std::array<double, 12> r{};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 4; ++j) r[4 * i + j] = m.m[i][j];
+    return r;
+}
+
+class Builder {
+public:
+    Builder(const pbrt::SceneDesc& d, const BuildOptions& o, const pbrt::WarningSink& w)
+        : m_desc(d), m_opts(o), m_warn(w) {}
+
+    std::unique_ptr<Scene> run() {
+        m_scene = std::make_unique<Scene>();
+        film();
+        camera();
+        sampler();
+        filter();
+        integrator();
+        if (m_desc.accelerator.given) m_desc.accelerator.params.check_unused("Accelerator", m_warn, names_of(m_desc.accelerator));
+        for (std::size_t i = 0; i < m_desc.textures.size(); ++i) texture(m_desc.textures[i]);
+        for (const auto& m : m_desc.materials) m_scene->materials.push_back(material(m));
+        for (const auto& s : m_desc.shapes) shape(s);
+        for (const auto& l : m_desc.lights) light(l);
+        if (m_desc.lights.empty() && !m_desc.shapes.empty() && m_warn)
+            m_warn(pbrt::format_warning(m_desc.camera.loc, "the scene has no lights; it will render black"));
+        m_scene->commit();
+        return std::move(m_scene);
+    }
+
+private:
+    const pbrt::SceneDesc& m_desc;
+    BuildOptions m_opts;
+    pbrt::WarningSink m_warn;
+    std::unique_ptr<Scene> m_scene;
+
+    void warn(const pbrt::FileLoc& loc, const std::string& msg) {
+        if (m_warn) m_warn(pbrt::format_warning(loc, msg));
+    }
+    static std::vector<std::string> names_of(const Entity& e) {
+        std::vector<std::string> n;
+        for (const auto& p : e.params.params()) n.push_back(p.name);
+        return n;
+    }
+
+    void film() {
+        const Entity& e = m_desc.film;
+        FilmSettings& f = m_scene->film;
+        if (e.given && e.type != "image")
+            throw SceneError(e.loc, "unsupported Film " + q(e.type) + " (supported: \"image\")");
+        f.xres = e.params.get_int("xresolution", 640);
+        f.yres = e.params.get_int("yresolution", 480);
+        if (f.xres <= 0 || f.yres <= 0 || f.xres > 65536 || f.yres > 65536)
+            throw SceneError(e.params.find("xresolution") ? e.params.find("xresolution")->loc : e.loc,
+                             "film resolution must be between 1 and 65536");
+        f.filename = e.params.get_string("filename", "pbrt.exr");
+        double cw[4] = {0, 1, 0, 1};
+        if (auto c = e.params.get_floats("cropwindow")) {
+            if (c->size() != 4) throw SceneError(e.params.find("cropwindow")->loc, "cropwindow needs 4 values");
+            for (int i = 0; i < 4; ++i) cw[i] = std::clamp((*c)[i], 0.0, 1.0);
+        }
+        f.x0 = static_cast<int>(std::ceil(f.xres * std::min(cw[0], cw[1])));
+        f.x1 = static_cast<int>(std::ceil(f.xres * std::max(cw[0], cw[1])));
+        f.y0 = static_cast<int>(std::ceil(f.yres * std::min(cw[2], cw[3])));
+        f.y1 = static_cast<int>(std::ceil(f.yres * std::max(cw[2], cw[3])));
+        if (f.width() <= 0 || f.height() <= 0)
+            throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
+        e.params.check_unused("Film \"image\"", m_warn, {"diagonal", "maxsampleluminance", "scale", "pixelbounds"});
+    }
+
+    void camera() {
+        const Entity& e = m_desc.camera;
+        if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
+        if (e.type != "perspective")
+            throw SceneError(e.loc, "unsupported Camera " + q(e.type) + " (supported: \"perspective\")");
+        Camera& c = m_scene->camera;
+        c.xres = m_scene->film.xres;
+        c.yres = m_scene->film.yres;
+        double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
+        if (frame > 1) {
+            c.screen[0] = float(-frame); c.screen[1] = float(frame); c.screen[2] = -1; c.screen[3] = 1;
+        } else {
+            c.screen[0] = -1; c.screen[1] = 1; c.screen[2] = float(-1 / frame); c.screen[3] = float(1 / frame);
+        }
+        if (auto sw = e.params.get_floats("screenwindow")) {
+            if (sw->size() != 4) throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
+            for (int i = 0; i < 4; ++i) c.screen[i] = float((*sw)[i]);
+        }
+        double fov = e.params.get_float("fov", 90);
+        double halffov = e.params.get_float("halffov", -1);
+        if (halffov > 0) fov = 2 * halffov;
+        if (!(fov > 0 && fov < 180)) throw SceneError(e.params.find("fov") ? e.params.find("fov")->loc : e.loc, "fov must be in (0, 180) degrees");
+        c.tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
+        if (e.params.get_float("lensradius", 0) != 0)
+            warn(e.params.find("lensradius")->loc, "lensradius ignored: cmam renders a pinhole camera");
+        Mat4 wc;
+        try {
+            wc = m_desc.camera_from_world.inverse();
+        } catch (const std::domain_error&) {
+            throw SceneError(e.loc, "the camera transform is singular");
+        }
+        auto m = to34(wc);
+        for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
+        e.params.check_unused("Camera \"perspective\"", m_warn, {"focaldistance", "shutteropen", "shutterclose"});
+    }
+
+    void sampler() {
+        const Entity& e = m_desc.sampler;
+        SamplerSettings& s = m_scene->sampler;
+        if (!e.given) {  // pbrt-v3's default: halton, 16 samples per pixel
+            s.xsamples = s.ysamples = 4;
+        } else if (e.type == "stratified") {
+            s.xsamples = e.params.get_int("xsamples", 4);
+            s.ysamples = e.params.get_int("ysamples", 4);
+            s.jitter = e.params.get_bool("jitter", true);
+            if (s.xsamples <= 0 || s.ysamples <= 0) throw SceneError(e.loc, "xsamples and ysamples must be positive");
+            e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions"});
+        } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" || e.type == "02sequence" ||
+                   e.type == "lowdiscrepancy" || e.type == "maxmindist") {
+            int n = e.params.get_int("pixelsamples", 16);
+            if (n <= 0) throw SceneError(e.loc, "pixelsamples must be positive");
+            int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
+            s.xsamples = s.ysamples = k;
+            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " + std::to_string(k) + "x" +
+                            std::to_string(k) + " jittered samples per pixel");
+            e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
+        } else {
+            throw SceneError(e.loc, "unknown Sampler " + q(e.type));
+        }
+        if (m_opts.spp_override > 0) {
+            int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
+            s.xsamples = s.ysamples = k;
+            s.jitter = k > 1;
+        }
+    }
+
+    void filter() {
+        const Entity& e = m_desc.filter;
+        if (!e.given) return;
+        if (e.type == "box") {
+            double xw = e.params.get_float("xwidth", 0.5), yw = e.params.get_float("ywidth", 0.5);
+            if (xw != 0.5 || yw != 0.5)
+                warn(e.loc, "box filter width other than 0.5 is rendered with width 0.5 (each sample counts for its own pixel)");
+            e.params.check_unused("PixelFilter \"box\"", m_warn);
+        } else if (e.type == "gaussian" || e.type == "mitchell" || e.type == "sinc" || e.type == "triangle") {
+            warn(e.loc, "PixelFilter " + q(e.type) + " is rendered as \"box\"");
+            e.params.check_unused("PixelFilter", m_warn, names_of(e));
+        } else {
+            throw SceneError(e.loc, "unknown PixelFilter " + q(e.type));
+        }
+    }
+
+    void integrator() {
+        const Entity& e = m_desc.integrator;
+        if (!e.given) return;  // pbrt-v3's default is "path"; cmam renders Whitted
+        if (e.type != "whitted") warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
+        if (e.params.find("maxdepth")) m_scene->max_depth = e.params.get_int("maxdepth", 5);
+        e.params.check_unused("Integrator " + q(e.type), m_warn, e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));
+    }
+
+    // --- textures ---------------------------------------------------------------------
+    TexInput spectrum_input(const Entity& e, const TextureScope& scope, const std::string& name, Rgb def) {
+        if (auto ref = e.params.get_texture(name)) {
+            auto it = scope.spectrum_textures.find(ref->name);
+            if (it == scope.spectrum_textures.end())
+                throw SceneError(ref->loc, "spectrum texture " + q(ref->name) + " is not defined");
+            return {it->second, {}};
+        }
+        if (auto c = e.params.get_rgb(name)) return {-1, Rgb((*c)[0], (*c)[1], (*c)[2])};
+        return {-1, def};
+    }
+    TexInput float_input(const Entity& e, const TextureScope& scope, const std::string& name, float def) {
+        if (auto ref = e.params.get_texture(name)) {
+            auto it = scope.float_textures.find(ref->name);
+            if (it == scope.float_textures.end())
+                throw SceneError(ref->loc, "float texture " + q(ref->name) + " is not defined");
+            return {it->second, {}};
+        }
+        return {-1, Rgb(float(e.params.get_float(name, def)))};
+    }
+
+    void uv_mapping(const Entity& e, TextureNode* n) {
+        std::string mapping = e.params.get_string("mapping", "uv");
+        if (mapping != "uv") {
+            const auto* p = e.params.find("mapping");
+            throw SceneError(p ? p->loc : e.loc, "unsupported texture mapping " + q(mapping) + " (supported: \"uv\")");
+        }
+        n->su = float(e.params.get_float("uscale", 1));
+        n->sv = float(e.params.get_float("vscale", 1));
+        n->du = float(e.params.get_float("udelta", 0));
+        n->dv = float(e.params.get_float("vdelta", 0));
+    }
+
+    const texture::Image* load_image(const Entity& e, bool is_float) {
+        const auto* fp = e.params.find("filename");
+        if (!fp) throw SceneError(e.loc, "imagemap texture needs a \"string filename\" parameter");
+        std::string name = e.params.get_string("filename", "");
+        std::string path = pbrt::resolve_path(fp->loc, name);
+        std::string wrap_name = e.params.get_string("wrap", "repeat");
+        auto wrap = texture::parse_wrap_mode(wrap_name);
+        if (!wrap || *wrap == texture::WrapMode::Mirror)
+            throw SceneError(e.params.find("wrap")->loc, "unknown wrap mode " + q(wrap_name) + " (expected \"repeat\", \"black\" or \"clamp\")");
+        float scale = float(e.params.get_float("scale", 1));
+        // pbrt-v3: 8-bit formats it reads (PNG, TGA) are sRGB-encoded unless "gamma" says otherwise.
+        RawImage raw;
+        try {
+            raw = read_image(path);
+        } catch (const ImageIoError& err) {
+            throw SceneError(fp->loc, err.what());
+        }
+        bool gamma = e.params.get_bool("gamma", raw.is_8bit);
+        e.params.get_bool("trilinear", false);  // used by the filtering library
+        e.params.get_float("maxanisotropy", 8);
+        std::string key = std::filesystem::weakly_canonical(path).string() + "|" + (is_float ? "f" : "s") + "|" +
+                          std::string(texture::to_string(*wrap)) + "|" + std::to_string(scale) + "|" + (gamma ? "1" : "0");
+        auto it = m_scene->images.find(key);
+        if (it != m_scene->images.end()) return it->second.get();
+
+        int w = raw.width, h = raw.height, nc = raw.channels;
+        int out_c = is_float ? 1 : 3;
+        std::vector<float> texels(static_cast<std::size_t>(w) * h * out_c);
+        for (int y = 0; y < h; ++y) {
+            int j = h - 1 - y;  // flip: v = 0 is the bottom row (pbrt-v3)
+            for (int x = 0; x < w; ++x) {
+                const float* src = &raw.pixels[(static_cast<std::size_t>(y) * w + x) * nc];
+                float rgb[3] = {src[0], nc >= 3 ? src[1] : src[0], nc >= 3 ? src[2] : src[0]};
+                float* dst = &texels[(static_cast<std::size_t>(j) * w + x) * out_c];
+                if (is_float) {
+                    float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
+                    dst[0] = scale * (gamma ? texture::srgb_to_linear(yv) : yv);
+                } else {
+                    for (int c = 0; c < 3; ++c) dst[c] = scale * (gamma ? texture::srgb_to_linear(rgb[c]) : rgb[c]);
+                }
+            }
+        }
+        auto img = std::make_unique<texture::Image>(w, h, out_c, std::move(texels), *wrap, *wrap);
+        const texture::Image* ptr = img.get();
+        m_scene->images.emplace(key, std::move(img));
+        return ptr;
+    }
+
+    void texture(const pbrt::TextureDesc& t) {
+        const Entity& e = t.entity;
+        TextureNode n;
+        n.is_float = t.is_float;
+        const std::string what = std::string(t.is_float ? "float" : "spectrum") + " texture " + q(e.type);
+        auto input = [&](const std::string& name, float def) {
+            return t.is_float ? float_input(e, t.scope, name, def) : spectrum_input(e, t.scope, name, Rgb(def));
+        };
+        if (e.type == "imagemap") {
+            n.kind = TextureNode::Kind::Image;
+            uv_mapping(e, &n);
+            n.image = load_image(e, t.is_float);
+        } else if (e.type == "constant") {
+            n.kind = TextureNode::Kind::Constant;
+            n.constant = input("value", 1).value;
+        } else if (e.type == "checkerboard") {
+            n.kind = TextureNode::Kind::Checkerboard;
+            int dim = e.params.get_int("dimension", 2);
+            if (dim != 2) throw SceneError(e.params.find("dimension")->loc, "only 2-D checkerboards are supported");
+            uv_mapping(e, &n);
+            n.tex1 = input("tex1", 1);
+            n.tex2 = input("tex2", 0);
+            std::string aa = e.params.get_string("aamode", "closedform");
+            if (aa != "closedform" && aa != "none")
+                throw SceneError(e.params.find("aamode")->loc, "unknown aamode " + q(aa) + " (expected \"closedform\" or \"none\")");
+        } else if (e.type == "scale") {
+            n.kind = TextureNode::Kind::Scale;
+            n.tex1 = input("tex1", 1);
+            n.tex2 = input("tex2", 1);
+        } else if (e.type == "mix") {
+            n.kind = TextureNode::Kind::Mix;
+            n.tex1 = input("tex1", 0);
+            n.tex2 = input("tex2", 1);
+            n.amount = float_input(e, t.scope, "amount", 0.5f);
+        } else {
+            throw SceneError(e.loc, "unsupported texture class " + q(e.type) +
+                                        " (supported: \"imagemap\", \"checkerboard\", \"constant\", \"scale\", \"mix\")");
+        }
+        e.params.check_unused(what, m_warn);
+        m_scene->textures.push_back(n);
+    }
+
+    // --- materials ----------------------------------------------------------------------
+    Material material(const pbrt::MaterialDesc& d) {
+        const Entity& e = d.entity;
+        const TextureScope& s = d.scope;
+        Material m;
+        const std::string& t = e.type;
+        if (t == "matte") {
+            m.type = Material::Type::Matte;
+            m.kd = spectrum_input(e, s, "Kd", Rgb(0.5f));
+            m.sigma = float_input(e, s, "sigma", 0);
+        } else if (t == "mirror") {
+            m.type = Material::Type::Mirror;
+            m.kr = spectrum_input(e, s, "Kr", Rgb(0.9f));
+        } else if (t == "glass") {
+            m.type = Material::Type::Glass;
+            m.kr = spectrum_input(e, s, "Kr", Rgb(1));
+            m.kt = spectrum_input(e, s, "Kt", Rgb(1));
+            m.eta = e.params.find("eta") ? float_input(e, s, "eta", 1.5f) : float_input(e, s, "index", 1.5f);
+            for (const char* r : {"uroughness", "vroughness"}) {
+                TexInput rough = float_input(e, s, r, 0);
+                if (rough.node >= 0 || rough.value.r != 0)
+                    warn(e.params.find(r)->loc, std::string(r) + " ignored: glass is rendered perfectly smooth");
+            }
+            e.params.get_bool("remaproughness", true);
+        } else if (t == "plastic") {
+            m.type = Material::Type::Plastic;
+            m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
+            m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
+            m.roughness = float_input(e, s, "roughness", 0.1f);
+            m.remap_roughness = e.params.get_bool("remaproughness", true);
+        } else if (t == "none" || t.empty()) {
+            m.type = Material::Type::None;
+        } else {
+            throw SceneError(e.loc, "unsupported material " + q(t) +
+                                        " (supported: \"matte\", \"mirror\", \"glass\", \"plastic\", \"none\")");
+        }
+        if (e.params.find("type")) e.params.get_string("type", "");
+        e.params.check_unused("material " + q(t), m_warn, {"bumpmap"});
+        return m;
+    }
+
+    // --- shapes ---------------------------------------------------------------------------
+    void shape(const pbrt::ShapeDesc& s) {
+        const Entity& e = s.entity;
+        auto prim = std::make_unique<Primitive>();
+        prim->material = s.material;
+        prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
+        const std::vector<std::string> ignored = {"alpha", "shadowalpha"};
+        if (e.type == "sphere" || e.type == "disk") {
+            Mat4 ow;
+            try {
+                ow = s.world_from_object.inverse();
+            } catch (const std::domain_error&) {
+                throw SceneError(e.loc, "the shape's transform is singular");
+            }
+            prim->world_from_object = to34(s.world_from_object);
+            prim->object_from_world = to34(ow);
+            double r = e.params.get_float("radius", 1);
+            if (!(r > 0)) throw SceneError(e.params.find("radius")->loc, "radius must be positive");
+            prim->radius = r;
+            double phimax = std::clamp(e.params.get_float("phimax", 360), 0.0, 360.0);
+            prim->phi_max = phimax * std::numbers::pi / 180;
+            if (e.type == "sphere") {
+                prim->kind = Primitive::Kind::Sphere;
+                double z0 = std::clamp(e.params.get_float("zmin", -r), -r, r);
+                double z1 = std::clamp(e.params.get_float("zmax", r), -r, r);
+                prim->zmin = std::min(z0, z1);
+                prim->zmax = std::max(z0, z1);
+                prim->theta_zmin = std::acos(std::clamp(prim->zmin / r, -1.0, 1.0));
+                prim->theta_zmax = std::acos(std::clamp(prim->zmax / r, -1.0, 1.0));
+                if (prim->theta_zmin == prim->theta_zmax) throw SceneError(e.loc, "sphere has zmin == zmax");
+            } else {
+                prim->kind = Primitive::Kind::Disk;
+                prim->height = e.params.get_float("height", 0);
+                prim->inner_radius = e.params.get_float("innerradius", 0);
+                if (prim->inner_radius < 0 || prim->inner_radius >= r)
+                    throw SceneError(e.params.find("innerradius")->loc, "innerradius must be in [0, radius)");
+            }
+            e.params.check_unused("shape " + q(e.type), m_warn, ignored);
+        } else if (e.type == "trianglemesh" || e.type == "plymesh") {
+            prim->kind = Primitive::Kind::Triangles;
+            std::vector<float> P, N, UV;
+            std::vector<int> idx;
+            if (e.type == "plymesh") {
+                const auto* fp = e.params.find("filename");
+                if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
+                std::string path = pbrt::resolve_path(fp->loc, e.params.get_string("filename", ""));
+                pbrt::PlyMesh mesh;
+                try {
+                    mesh = pbrt::read_ply(path);
+                } catch (const pbrt::PlyError& err) {
+                    throw SceneError(fp->loc, err.what());
+                }
+                P = std::move(mesh.positions);
+                N = std::move(mesh.normals);
+                UV = std::move(mesh.uvs);
+                idx = std::move(mesh.indices);
+                e.params.check_unused("shape \"plymesh\"", m_warn, {"alpha", "shadowalpha", "displacement", "edgelength"});
+            } else {
+                auto p = e.params.get_point3s("P");
+                if (!p) throw SceneError(e.loc, "trianglemesh needs a \"point3 P\" parameter");
+                for (double x : *p) P.push_back(float(x));
+                std::size_t nv = P.size() / 3;
+                if (auto i = e.params.get_ints("indices")) {
+                    idx = *i;
+                } else if (nv == 3) {
+                    idx = {0, 1, 2};
+                } else {
+                    throw SceneError(e.loc, "trianglemesh needs an \"integer indices\" parameter");
+                }
+                if (idx.size() % 3 != 0)
+                    throw SceneError(e.params.find("indices")->loc, "indices count " + std::to_string(idx.size()) + " is not a multiple of 3");
+                for (int i : idx)
+                    if (i < 0 || static_cast<std::size_t>(i) >= nv)
+                        throw SceneError(e.params.find("indices")->loc, "index " + std::to_string(i) + " out of range (" + std::to_string(nv) + " vertices)");
+                if (auto n = e.params.get_point3s("N")) {
+                    if (n->size() != P.size()) throw SceneError(e.params.find("N")->loc, "N must have one normal per vertex of P");
+                    for (double x : *n) N.push_back(float(x));
+                }
+                const char* uvname = e.params.find("uv") ? "uv" : "st";
+                if (auto uv = e.params.get_point2s(uvname)) {
+                    if (uv->size() != 2 * nv) throw SceneError(e.params.find(uvname)->loc, std::string(uvname) + " must have one (u,v) pair per vertex of P");
+                    for (double x : *uv) UV.push_back(float(x));
+                }
+                e.params.check_unused("shape \"trianglemesh\"", m_warn, {"alpha", "shadowalpha", "S", "faceIndices"});
+            }
+            std::size_t nv = P.size() / 3;
+            prim->positions.resize(nv);
+            for (std::size_t i = 0; i < nv; ++i) {
+                auto w = s.world_from_object.apply_point({P[3 * i], P[3 * i + 1], P[3 * i + 2]});
+                prim->positions[i] = Vec3(float(w[0]), float(w[1]), float(w[2]));
+            }
+            if (!N.empty()) {
+                Mat4 inv_t;
+                try {
+                    inv_t = s.world_from_object.inverse().transposed();
+                } catch (const std::domain_error&) {
+                    throw SceneError(e.loc, "the shape's transform is singular");
+                }
+                prim->normals.resize(nv);
+                for (std::size_t i = 0; i < nv; ++i) {
+                    auto w = inv_t.apply_vector({N[3 * i], N[3 * i + 1], N[3 * i + 2]});
+                    prim->normals[i] = Vec3(float(w[0]), float(w[1]), float(w[2]));
+                }
+            }
+            if (!UV.empty()) {
+                prim->uvs.resize(nv);
+                for (std::size_t i = 0; i < nv; ++i) prim->uvs[i] = {UV[2 * i], UV[2 * i + 1]};
+            }
+            // Drop degenerate triangles (pbrt-v3 cannot hit them either).
+            for (std::size_t t = 0; t + 2 < idx.size(); t += 3) {
+                Vec3 a = prim->positions[idx[t]], b = prim->positions[idx[t + 1]], c = prim->positions[idx[t + 2]];
+                if (length(cross(b - a, c - a)) == 0) continue;
+                prim->indices.insert(prim->indices.end(), {uint32_t(idx[t]), uint32_t(idx[t + 1]), uint32_t(idx[t + 2])});
+            }
+            if (prim->indices.empty()) return;
+        } else {
+            throw SceneError(e.loc, "unsupported shape " + q(e.type) +
+                                        " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
+        }
+        m_scene->primitives.push_back(std::move(prim));
+    }
+
+    // --- lights ---------------------------------------------------------------------------
+    static Vec3 to_vec(const std::array<double, 3>& a) { return Vec3(float(a[0]), float(a[1]), float(a[2])); }
+
+    void light(const pbrt::LightDesc& d) {
+        const Entity& e = d.entity;
+        Light l;
+        Rgb scale(1);
+        if (auto sc = e.params.get_rgb("scale")) scale = Rgb((*sc)[0], (*sc)[1], (*sc)[2]);
+        const Mat4& m = d.world_from_light;
+        if (e.type == "point") {
+            l.type = Light::Type::Point;
+            auto I = e.params.get_rgb("I");
+            l.intensity = (I ? Rgb((*I)[0], (*I)[1], (*I)[2]) : Rgb(1)) * scale;
+            l.position = to_vec(m.apply_point(e.params.get_point3("from", {0, 0, 0})));
+        } else if (e.type == "spot") {
+            l.type = Light::Type::Spot;
+            auto I = e.params.get_rgb("I");
+            l.intensity = (I ? Rgb((*I)[0], (*I)[1], (*I)[2]) : Rgb(1)) * scale;
+            auto from = e.params.get_point3("from", {0, 0, 0});
+            auto to = e.params.get_point3("to", {0, 0, 1});
+            double cone = e.params.get_float("coneangle", 30), delta = e.params.get_float("conedelta", 5);
+            l.position = to_vec(m.apply_point(from));
+            Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
+            if (length(axis) == 0) throw SceneError(e.loc, "spot light \"from\" and \"to\" coincide");
+            l.direction = normalize(axis);
+            l.cos_total = float(std::cos(cone * std::numbers::pi / 180));
+            l.cos_falloff_start = float(std::cos((cone - delta) * std::numbers::pi / 180));
+        } else if (e.type == "distant") {
+            l.type = Light::Type::Distant;
+            auto L = e.params.get_rgb("L");
+            l.intensity = (L ? Rgb((*L)[0], (*L)[1], (*L)[2]) : Rgb(1)) * scale;
+            auto from = e.params.get_point3("from", {0, 0, 0});
+            auto to = e.params.get_point3("to", {0, 0, 1});
+            Vec3 w = to_vec(m.apply_vector({from[0] - to[0], from[1] - to[1], from[2] - to[2]}));
+            if (length(w) == 0) throw SceneError(e.loc, "distant light \"from\" and \"to\" coincide");
+            l.direction = normalize(w);
+        } else if (e.type == "infinite") {
+            l.type = Light::Type::Infinite;
+            if (const auto* mp = e.params.find("mapname"))
+                throw SceneError(mp->loc, "infinite light environment maps are not supported (give a constant \"rgb L\")");
+            auto L = e.params.get_rgb("L");
+            l.intensity = (L ? Rgb((*L)[0], (*L)[1], (*L)[2]) : Rgb(1)) * scale;
+            e.params.get_int("samples", 1);  // pbrt-v3's sample count hint; one sample per lookup here
+        } else {
+            throw SceneError(e.loc, "unsupported light " + q(e.type) +
+                                        " (supported: \"point\", \"spot\", \"distant\", \"infinite\")");
+        }
+        e.params.check_unused("light " + q(e.type), m_warn);
+        m_scene->lights.push_back(l);
+    }
+};
+
+}  // namespace
+
+void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
+    float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
+    float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
+    Vec3 d(sx * tan_half_fov, sy * tan_half_fov, 1);
+    const auto& m = world_from_camera;
+    *org = Vec3(m[3], m[7], m[11]);
+    *dir = normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                          m[8] * d.x + m[9] * d.y + m[10] * d.z));
+}
+
+std::size_t Scene::texture_memory_bytes() const {
+    std::size_t n = 0;
+    for (const auto& [k, img] : images) n += img->memory_bytes();
+    return n;
+}
+
+std::unique_ptr<Scene> build_scene(const pbrt::SceneDesc& desc, const BuildOptions& options,
+                                   const pbrt::WarningSink& warn) {
+    return Builder(desc, options, warn).run();
+}
+
+}  // namespace cmam::render

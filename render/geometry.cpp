@@ -1,0 +1,285 @@
+// render — Embree set-up, analytic quadrics (pbrt-v3 sphere and disk) as user geometry, and
+// the construction of oriented surface hits.
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "render/scene.h"
+
+namespace cmam::render {
+
+namespace {
+
+using D3 = std::array<double, 3>;
+
+D3 xform_point(const std::array<double, 12>& m, const D3& p) {
+    return {m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3], m[4] * p[0] + m[5] * p[1] + m[6] * p[2] + m[7],
+            m[8] * p[0] + m[9] * p[1] + m[10] * p[2] + m[11]};
+}
+D3 xform_vector(const std::array<double, 12>& m, const D3& v) {
+    return {m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[4] * v[0] + m[5] * v[1] + m[6] * v[2],
+            m[8] * v[0] + m[9] * v[1] + m[10] * v[2]};
+}
+// Normals transform with the inverse transpose: n_world = (object_from_world)^T n_obj.
+D3 xform_normal(const std::array<double, 12>& object_from_world, const D3& n) {
+    const auto& m = object_from_world;
+    return {m[0] * n[0] + m[4] * n[1] + m[8] * n[2], m[1] * n[0] + m[5] * n[1] + m[9] * n[2],
+            m[2] * n[0] + m[6] * n[1] + m[10] * n[2]};
+}
+double phi_of(double x, double y) {
+    double phi = std::atan2(y, x);
+    return phi < 0 ? phi + 2 * std::numbers::pi : phi;
+}
+
+/// Nearest object-space hit parameter in (tmin, tmax) for a quadric; returns false on a miss.
+bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, double tmax, double* t_out) {
+    if (prim.kind == Primitive::Kind::Sphere) {
+        double r = prim.radius;
+        double a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        double b = 2 * (d[0] * o[0] + d[1] * o[1] + d[2] * o[2]);
+        double c = o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - r * r;
+        double disc = b * b - 4 * a * c;
+        if (disc < 0 || a == 0) return false;
+        double sq = std::sqrt(disc);
+        double q = b < 0 ? -0.5 * (b - sq) : -0.5 * (b + sq);
+        double t0 = q / a, t1 = q != 0 ? c / q : t0;
+        if (t0 > t1) std::swap(t0, t1);
+        for (double t : {t0, t1}) {
+            if (!(t > tmin && t < tmax)) continue;
+            D3 p = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+            if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * r;
+            if ((prim.zmin > -r && p[2] < prim.zmin) || (prim.zmax < r && p[2] > prim.zmax) ||
+                phi_of(p[0], p[1]) > prim.phi_max)
+                continue;
+            *t_out = t;
+            return true;
+        }
+        return false;
+    }
+    // Disk at z = height.
+    if (d[2] == 0) return false;
+    double t = (prim.height - o[2]) / d[2];
+    if (!(t > tmin && t < tmax)) return false;
+    double x = o[0] + t * d[0], y = o[1] + t * d[1];
+    double dist2 = x * x + y * y;
+    if (dist2 > prim.radius * prim.radius || dist2 < prim.inner_radius * prim.inner_radius) return false;
+    if (phi_of(x, y) > prim.phi_max) return false;
+    *t_out = t;
+    return true;
+}
+
+void quadric_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* prim = static_cast<const Primitive*>(args->geometryUserPtr);
+    double r = prim->radius;
+    double z0 = prim->kind == Primitive::Kind::Sphere ? prim->zmin : prim->height;
+    double z1 = prim->kind == Primitive::Kind::Sphere ? prim->zmax : prim->height;
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (int c = 0; c < 8; ++c) {
+        D3 p = xform_point(prim->world_from_object, {c & 1 ? r : -r, c & 2 ? r : -r, c & 4 ? z1 : z0});
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], p[k]);
+            hi[k] = std::max(hi[k], p[k]);
+        }
+    }
+    RTCBounds* b = args->bounds_o;
+    auto pad = [](double x, bool up) {
+        float f = static_cast<float>(x);
+        return std::nextafter(std::nextafter(f, up ? 1e30f : -1e30f), up ? 1e30f : -1e30f);
+    };
+    b->lower_x = pad(lo[0], false);
+    b->lower_y = pad(lo[1], false);
+    b->lower_z = pad(lo[2], false);
+    b->upper_x = pad(hi[0], true);
+    b->upper_y = pad(hi[1], true);
+    b->upper_z = pad(hi[2], true);
+}
+
+void quadric_intersect(const RTCIntersectFunctionNArguments* args) {
+    const auto* prim = static_cast<const Primitive*>(args->geometryUserPtr);
+    RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
+    RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        D3 o = {RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
+        D3 d = {RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        double t;
+        if (!quadric_hit(*prim, xform_point(prim->object_from_world, o), xform_vector(prim->object_from_world, d),
+                         RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t))
+            continue;
+        RTCRayN_tfar(ray, args->N, i) = static_cast<float>(t);
+        RTCHitN_Ng_x(hit, args->N, i) = 0;
+        RTCHitN_Ng_y(hit, args->N, i) = 0;
+        RTCHitN_Ng_z(hit, args->N, i) = 1;
+        RTCHitN_u(hit, args->N, i) = 0;
+        RTCHitN_v(hit, args->N, i) = 0;
+        RTCHitN_primID(hit, args->N, i) = args->primID;
+        RTCHitN_geomID(hit, args->N, i) = args->geomID;
+        RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
+    }
+}
+
+void quadric_occluded(const RTCOccludedFunctionNArguments* args) {
+    const auto* prim = static_cast<const Primitive*>(args->geometryUserPtr);
+    RTCRayN* ray = args->ray;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        D3 o = {RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
+        D3 d = {RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        double t;
+        if (quadric_hit(*prim, xform_point(prim->object_from_world, o), xform_vector(prim->object_from_world, d),
+                        RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t))
+            RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
+    }
+}
+
+void embree_error(void*, RTCError code, const char* str) {
+    throw std::runtime_error(std::string("Embree error ") + std::to_string(code) + ": " + (str ? str : ""));
+}
+
+Vec3 to_vec(const D3& d) { return Vec3(float(d[0]), float(d[1]), float(d[2])); }
+
+}  // namespace
+
+Scene::Scene() {
+    m_device = rtcNewDevice(nullptr);
+    if (!m_device) throw std::runtime_error("cannot create the Embree device");
+    rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
+}
+
+Scene::~Scene() {
+    if (m_scene) rtcReleaseScene(m_scene);
+    if (m_device) rtcReleaseDevice(m_device);
+}
+
+void Scene::commit() {
+    m_scene = rtcNewScene(m_device);
+    rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
+    for (std::size_t id = 0; id < primitives.size(); ++id) {
+        Primitive& prim = *primitives[id];
+        RTCGeometry g;
+        if (prim.kind == Primitive::Kind::Triangles) {
+            g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                  3 * sizeof(float), prim.positions.size()));
+            for (std::size_t i = 0; i < prim.positions.size(); ++i) {
+                v[3 * i] = prim.positions[i].x;
+                v[3 * i + 1] = prim.positions[i].y;
+                v[3 * i + 2] = prim.positions[i].z;
+            }
+            auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                       3 * sizeof(uint32_t), prim.indices.size() / 3));
+            std::copy(prim.indices.begin(), prim.indices.end(), idx);
+        } else {
+            g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_USER);
+            rtcSetGeometryUserPrimitiveCount(g, 1);
+            rtcSetGeometryUserData(g, &prim);
+            rtcSetGeometryBoundsFunction(g, quadric_bounds, nullptr);
+            rtcSetGeometryIntersectFunction(g, quadric_intersect);
+            rtcSetGeometryOccludedFunction(g, quadric_occluded);
+        }
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(m_scene, g, static_cast<unsigned>(id));
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(m_scene);
+}
+
+bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay ray{};
+    ray.org_x = org.x;
+    ray.org_y = org.y;
+    ray.org_z = org.z;
+    ray.dir_x = dir.x;
+    ray.dir_y = dir.y;
+    ray.dir_z = dir.z;
+    ray.tnear = tmin;
+    ray.tfar = tmax;
+    ray.mask = 0xffffffffu;
+    rtcOccluded1(m_scene, &ctx, &ray);
+    return ray.tfar < 0;
+}
+
+bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax, SurfaceHit* out) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh{};
+    rh.ray.org_x = org.x;
+    rh.ray.org_y = org.y;
+    rh.ray.org_z = org.z;
+    rh.ray.dir_x = dir.x;
+    rh.ray.dir_y = dir.y;
+    rh.ray.dir_z = dir.z;
+    rh.ray.tnear = tmin;
+    rh.ray.tfar = tmax;
+    rh.ray.mask = 0xffffffffu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(m_scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+    const Primitive& prim = *primitives[rh.hit.geomID];
+    SurfaceHit& h = *out;
+    h.prim = &prim;
+    h.t = rh.ray.tfar;
+    if (prim.kind == Primitive::Kind::Triangles) {
+        uint32_t i0 = prim.indices[3 * rh.hit.primID], i1 = prim.indices[3 * rh.hit.primID + 1],
+                 i2 = prim.indices[3 * rh.hit.primID + 2];
+        float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
+        const Vec3 &p0 = prim.positions[i0], &p1 = prim.positions[i1], &p2 = prim.positions[i2];
+        h.p = b0 * p0 + b1 * p1 + b2 * p2;
+        if (!prim.uvs.empty()) {
+            h.u = b0 * prim.uvs[i0][0] + b1 * prim.uvs[i1][0] + b2 * prim.uvs[i2][0];
+            h.v = b0 * prim.uvs[i0][1] + b1 * prim.uvs[i1][1] + b2 * prim.uvs[i2][1];
+        } else {  // pbrt-v3 default parameterization (0,0), (1,0), (1,1)
+            h.u = b1 + b2;
+            h.v = b2;
+        }
+        Vec3 n = normalize(cross(p0 - p2, p1 - p2));
+        if (prim.flip) n = -n;
+        h.ng = n;
+        h.ns = n;
+        if (!prim.normals.empty()) {
+            Vec3 ns = b0 * prim.normals[i0] + b1 * prim.normals[i1] + b2 * prim.normals[i2];
+            float l = length(ns);
+            if (l > 0) {
+                ns = ns / l;
+                if (prim.flip) ns = -ns;
+                h.ns = ns;
+                h.ng = faceforward(n, ns);
+            }
+        }
+        return true;
+    }
+    // Quadric: recompute the hit in object space (double precision).
+    D3 o = xform_point(prim.object_from_world, {org.x, org.y, org.z});
+    D3 d = xform_vector(prim.object_from_world, {dir.x, dir.y, dir.z});
+    double t = h.t;
+    D3 p = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+    D3 n_obj;
+    if (prim.kind == Primitive::Kind::Sphere) {
+        double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        for (double& x : p) x *= prim.radius / len;
+        if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * prim.radius;
+        double phi = phi_of(p[0], p[1]);
+        double theta = std::acos(std::clamp(p[2] / prim.radius, -1.0, 1.0));
+        h.u = static_cast<float>(phi / prim.phi_max);
+        h.v = static_cast<float>((theta - prim.theta_zmin) / (prim.theta_zmax - prim.theta_zmin));
+        n_obj = p;  // cross(dpdu, dpdv) points outwards
+    } else {
+        p[2] = prim.height;
+        double r = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        h.u = static_cast<float>(phi_of(p[0], p[1]) / prim.phi_max);
+        h.v = static_cast<float>((prim.radius - r) / (prim.radius - prim.inner_radius));
+        n_obj = {0, 0, 1};
+    }
+    if (prim.flip)
+        for (double& x : n_obj) x = -x;
+    h.p = to_vec(xform_point(prim.world_from_object, p));
+    Vec3 n = normalize(to_vec(xform_normal(prim.object_from_world, n_obj)));
+    h.ng = n;
+    h.ns = n;
+    return true;
+}
+
+}  // namespace cmam::render

@@ -1,0 +1,33 @@
+// render — image input and output through OpenImageIO (plus PFM, written directly).
+// Outputs are written to a temporary file beside the target and renamed, so an interrupted
+// render never leaves a truncated image.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cmam::render {
+
+class ImageIoError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Pixels as read from a file: top row first, `channels` floats per pixel, values as stored
+/// (8-bit data scaled to [0,1], no colour conversion).
+struct RawImage {
+    int width = 0, height = 0, channels = 0;
+    bool is_8bit = false;  // the file stores 8-bit (or narrower) integers
+    std::vector<float> pixels;
+};
+
+/// Reads an image; throws ImageIoError naming the file and the reason.
+RawImage read_image(const std::string& path);
+
+/// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
+/// extension: .exr (32-bit float), .pfm (float), .png (8-bit sRGB, clamped), or anything else
+/// OpenImageIO writes (8-bit formats get sRGB encoding). Atomic: temp file, then rename.
+void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
+
+}  // namespace cmam::render

@@ -1,0 +1,37 @@
+// render — pbrt-v3's Whitted integrator and the image render loop.
+// Work is scheduled by whole rows, processed left to right; every pixel's random numbers derive
+// from its position and sample index, so the image is identical for any thread count.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "render/scene.h"
+
+namespace cmam::render {
+
+struct RenderStats {
+    std::atomic<uint64_t> camera_rays{0}, secondary_rays{0}, shadow_rays{0};
+    uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
+};
+
+struct RenderOptions {
+    int threads = 0;  // 0: all cores
+    /// Called after each finished row with (rows done, rows total); may be empty.
+    std::function<void(int, int)> progress;
+};
+
+/// Rendered image: linear RGB, top row first, film.width() x film.height().
+struct Framebuffer {
+    int width = 0, height = 0;
+    std::vector<float> rgb;
+};
+
+Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats);
+
+/// Radiance along one camera ray (exposed for tests).
+Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RenderStats* stats);
+
+}  // namespace cmam::render

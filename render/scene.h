@@ -1,0 +1,146 @@
+// render — the built scene: camera, film, textures, materials, lights and Embree geometry.
+// Built from a pbrt::SceneDesc by build_scene(); rendering reads it from many threads.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <array>
+#include <cmam/texture/footprint.h>
+#include <cmam/texture/image.h>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pbrt/error.h"
+#include "pbrt/scene_desc.h"
+#include "render/math.h"
+
+namespace cmam::render {
+
+/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space).
+struct Camera {
+    std::array<float, 12> world_from_camera{};  // 3x4
+    float tan_half_fov = 1;
+    float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
+    int xres = 640, yres = 480;
+
+    /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
+    void generate_ray(float px, float py, Vec3* org, Vec3* dir) const;
+};
+
+struct FilmSettings {
+    int xres = 640, yres = 480;
+    int x0 = 0, y0 = 0, x1 = 640, y1 = 480;  // cropped pixel bounds [x0,x1) x [y0,y1)
+    std::string filename = "pbrt.exr";
+    int width() const { return x1 - x0; }
+    int height() const { return y1 - y0; }
+};
+
+struct SamplerSettings {
+    int xsamples = 4, ysamples = 4;
+    bool jitter = true;
+    int spp() const { return xsamples * ysamples; }
+};
+
+/// A material or texture input: a constant, or the index of a texture node.
+struct TexInput {
+    int node = -1;
+    Rgb value{};
+};
+
+struct TextureNode {
+    enum class Kind { Constant, Image, Checkerboard, Scale, Mix };
+    Kind kind = Kind::Constant;
+    bool is_float = false;
+    Rgb constant{};
+    float su = 1, sv = 1, du = 0, dv = 0;       // uv mapping
+    const texture::Image* image = nullptr;       // Image: linear, scale applied
+    TexInput tex1, tex2, amount;                 // Checkerboard, Scale, Mix
+};
+
+struct Material {
+    enum class Type { Matte, Mirror, Glass, Plastic, None };
+    Type type = Type::Matte;
+    TexInput kd{-1, Rgb(0.5f)}, ks, kr, kt, sigma, roughness, eta;
+    bool remap_roughness = true;
+};
+
+struct Light {
+    enum class Type { Point, Spot, Distant, Infinite };
+    Type type = Type::Point;
+    Rgb intensity{};    // I for point/spot, L for distant/infinite (scale applied)
+    Vec3 position{};    // point, spot
+    Vec3 direction{};   // distant: towards the light; spot: axis (from -> to)
+    float cos_total = 0, cos_falloff_start = 0;
+};
+
+/// Everything the shading code needs about a geometry (indexed by Embree geomID).
+struct Primitive {
+    enum class Kind { Triangles, Sphere, Disk };
+    Kind kind = Kind::Triangles;
+    int material = -1;       // -1 is the default matte
+    bool flip = false;       // reverse_orientation xor transform swaps handedness
+    // Triangles (world space)
+    std::vector<Vec3> positions, normals;
+    std::vector<std::array<float, 2>> uvs;
+    std::vector<uint32_t> indices;
+    // Quadrics: object_from_world / world_from_object as 3x4, double precision
+    std::array<double, 12> object_from_world{}, world_from_object{};
+    double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
+    double height = 0, inner_radius = 0;
+};
+
+/// A surface hit, in world space, oriented as pbrt-v3 orients it.
+struct SurfaceHit {
+    Vec3 p;
+    Vec3 ng;        // geometric normal
+    Vec3 ns;        // shading normal (same side as ng)
+    float u = 0, v = 0;
+    float t = 0;
+    const Primitive* prim = nullptr;
+};
+
+struct RenderStats;
+
+class Scene {
+public:
+    Scene();
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    Camera camera;
+    FilmSettings film;
+    SamplerSettings sampler;
+    int max_depth = 5;
+    std::vector<TextureNode> textures;
+    std::vector<Material> materials;
+    std::vector<Light> lights;
+    std::vector<std::unique_ptr<Primitive>> primitives;
+    std::map<std::string, std::unique_ptr<texture::Image>> images;  // loaded once per settings
+    Material default_material;
+
+    /// Creates the Embree scene from `primitives`; call once after filling them.
+    void commit();
+    /// Nearest hit along org + t dir, t in (tmin, tmax).
+    bool intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax, SurfaceHit* hit) const;
+    /// True when anything lies along org + t dir, t in (tmin, tmax).
+    bool occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const;
+    RTCScene embree_scene() const { return m_scene; }
+    std::size_t texture_memory_bytes() const;
+
+private:
+    RTCDevice m_device = nullptr;
+    RTCScene m_scene = nullptr;
+};
+
+struct BuildOptions {
+    int spp_override = 0;  // 0: the scene's sampler
+};
+
+/// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.
+std::unique_ptr<Scene> build_scene(const pbrt::SceneDesc& desc, const BuildOptions& options,
+                                   const pbrt::WarningSink& warn);
+
+}  // namespace cmam::render

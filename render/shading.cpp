@@ -1,0 +1,178 @@
+#include "render/shading.h"
+
+#include <cmam/texture/filters.h>
+
+namespace cmam::render {
+
+texture::Texel lookup_image(const texture::Image& image, double s, double t,
+                            const texture::Footprint& footprint, texture::RayTag tag) {
+    // Until footprint producers and filters are wired in, every lookup is a bilinear point
+    // sample at level 0 (what an empty footprint means).
+    (void)footprint;
+    (void)tag;
+    return texture::bilinear(image, s, t);
+}
+
+Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
+    if (in.node < 0) return in.value;
+    const TextureNode& n = scene.textures[static_cast<std::size_t>(in.node)];
+    switch (n.kind) {
+        case TextureNode::Kind::Constant: return n.constant;
+        case TextureNode::Kind::Image: {
+            double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
+            texture::Texel x = lookup_image(*n.image, s, t, ctx.footprint, ctx.tag);
+            if (n.image->channels() == 1) return Rgb(x[0]);
+            return Rgb(x[0], x[1], x[2]);
+        }
+        case TextureNode::Kind::Checkerboard: {
+            double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
+            auto parity = static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
+            return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);
+        }
+        case TextureNode::Kind::Scale:
+            return eval_texture(scene, n.tex1, ctx) * eval_texture(scene, n.tex2, ctx);
+        case TextureNode::Kind::Mix: {
+            float amt = eval_texture(scene, n.amount, ctx).r;
+            Rgb a = amt != 1 ? eval_texture(scene, n.tex1, ctx) : Rgb();
+            Rgb b = amt != 0 ? eval_texture(scene, n.tex2, ctx) : Rgb();
+            return (1 - amt) * a + amt * b;
+        }
+    }
+    return {};
+}
+
+float fresnel_dielectric(float cos_i, float eta_i, float eta_t) {
+    cos_i = std::clamp(cos_i, -1.0f, 1.0f);
+    if (cos_i <= 0) {
+        std::swap(eta_i, eta_t);
+        cos_i = -cos_i;
+    }
+    float sin_i = std::sqrt(std::max(0.0f, 1 - cos_i * cos_i));
+    float sin_t = eta_i / eta_t * sin_i;
+    if (sin_t >= 1) return 1;
+    float cos_t = std::sqrt(std::max(0.0f, 1 - sin_t * sin_t));
+    float r_parl = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    float r_perp = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    return (r_parl * r_parl + r_perp * r_perp) / 2;
+}
+
+bool refract(const Vec3& wi, const Vec3& n, float eta, Vec3* wt) {
+    float cos_i = dot(n, wi);
+    float sin2_i = std::max(0.0f, 1 - cos_i * cos_i);
+    float sin2_t = eta * eta * sin2_i;
+    if (sin2_t >= 1) return false;
+    float cos_t = std::sqrt(1 - sin2_t);
+    *wt = eta * -wi + (eta * cos_i - cos_t) * n;
+    return true;
+}
+
+namespace {
+
+Rgb clamp0(const Rgb& c) { return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)}; }
+
+// Trowbridge-Reitz (GGX) microfacet distribution, isotropic, local frame (pbrt-v3).
+float tr_d(const Vec3& wh, float alpha) {
+    float cos2 = wh.z * wh.z;
+    float sin2 = std::max(0.0f, 1 - cos2);
+    if (cos2 == 0) return 0;
+    float tan2 = sin2 / cos2;
+    float e = tan2 / (alpha * alpha);
+    return 1 / (kPi * alpha * alpha * cos2 * cos2 * (1 + e) * (1 + e));
+}
+float tr_lambda(const Vec3& w, float alpha) {
+    float cos2 = w.z * w.z;
+    if (cos2 == 0) return 0;
+    float tan2 = std::max(0.0f, 1 - cos2) / cos2;
+    return (-1 + std::sqrt(1 + alpha * alpha * tan2)) / 2;
+}
+
+float roughness_to_alpha(float r) {
+    r = std::max(r, 1e-3f);
+    float x = std::log(r);
+    return 1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x +
+           0.000640711f * x * x * x * x;
+}
+
+}  // namespace
+
+Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
+    Vec3 wo = frame.to_local(wo_w), wi = frame.to_local(wi_w);
+    if (wo.z == 0) return {};
+    bool reflect = dot(wi_w, ng) * dot(wo_w, ng) > 0;
+    if (!reflect) return {};  // no non-specular transmission lobes in the supported materials
+    Rgb out{};
+    if (has_diffuse()) {
+        if (on_b == 0) {
+            out += kd * kInvPi;
+        } else {
+            // Oren-Nayar (pbrt-v3 OrenNayar::f)
+            float sin_i = std::sqrt(std::max(0.0f, 1 - wi.z * wi.z));
+            float sin_o = std::sqrt(std::max(0.0f, 1 - wo.z * wo.z));
+            float max_cos = 0;
+            if (sin_i > 1e-4f && sin_o > 1e-4f) {
+                float cpi = std::clamp(wi.x / sin_i, -1.0f, 1.0f), spi = std::clamp(wi.y / sin_i, -1.0f, 1.0f);
+                float cpo = std::clamp(wo.x / sin_o, -1.0f, 1.0f), spo = std::clamp(wo.y / sin_o, -1.0f, 1.0f);
+                max_cos = std::max(0.0f, cpi * cpo + spi * spo);
+            }
+            float sin_alpha, tan_beta;
+            if (std::abs(wi.z) > std::abs(wo.z)) {
+                sin_alpha = sin_o;
+                tan_beta = sin_i / std::abs(wi.z);
+            } else {
+                sin_alpha = sin_i;
+                tan_beta = sin_o / std::abs(wo.z);
+            }
+            out += kd * kInvPi * (on_a + on_b * max_cos * sin_alpha * tan_beta);
+        }
+    }
+    if (has_glossy()) {
+        float cos_o = std::abs(wo.z), cos_i = std::abs(wi.z);
+        Vec3 wh = wi + wo;
+        if (cos_i != 0 && cos_o != 0 && (wh.x != 0 || wh.y != 0 || wh.z != 0)) {
+            wh = normalize(wh);
+            float fr = fresnel_dielectric(dot(wi, faceforward(wh, Vec3(0, 0, 1))), 1.5f, 1.0f);
+            float g = 1 / (1 + tr_lambda(wo, alpha) + tr_lambda(wi, alpha));
+            out += ks * (tr_d(wh, alpha) * g * fr / (4 * cos_i * cos_o));
+        }
+    }
+    return out;
+}
+
+bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, const TexContext& ctx, Bsdf* b) {
+    if (m.type == Material::Type::None) return false;
+    *b = Bsdf{};
+    b->frame = Frame::from_z(hit.ns);
+    b->ng = hit.ng;
+    switch (m.type) {
+        case Material::Type::Matte: {
+            b->kd = clamp0(eval_texture(scene, m.kd, ctx));
+            float sigma = eval_texture(scene, m.sigma, ctx).r;
+            if (sigma != 0) {
+                float s = sigma * kPi / 180, s2 = s * s;
+                b->on_a = 1 - s2 / (2 * (s2 + 0.33f));
+                b->on_b = 0.45f * s2 / (s2 + 0.09f);
+            }
+            break;
+        }
+        case Material::Type::Plastic: {
+            b->kd = clamp0(eval_texture(scene, m.kd, ctx));
+            b->ks = clamp0(eval_texture(scene, m.ks, ctx));
+            float rough = eval_texture(scene, m.roughness, ctx).r;
+            b->alpha = m.remap_roughness ? roughness_to_alpha(rough) : rough;
+            break;
+        }
+        case Material::Type::Mirror:
+            b->kr = clamp0(eval_texture(scene, m.kr, ctx));
+            b->fresnel_noop = true;
+            break;
+        case Material::Type::Glass:
+            b->kr = clamp0(eval_texture(scene, m.kr, ctx));
+            b->kt = clamp0(eval_texture(scene, m.kt, ctx));
+            b->eta = eval_texture(scene, m.eta, ctx).r;
+            break;
+        case Material::Type::None: return false;
+    }
+    return true;
+}
+
+}  // namespace cmam::render

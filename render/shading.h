@@ -1,0 +1,59 @@
+// render — texture evaluation and BSDFs (pbrt-v3's matte, mirror, glass, plastic).
+// Every image lookup goes through lookup_image(): the one place where a footprint and a ray tag
+// reach the filtering library.
+#pragma once
+
+#include "render/scene.h"
+
+namespace cmam::render {
+
+/// What a texture lookup knows about the shading point.
+struct TexContext {
+    float u = 0, v = 0;              // surface (u,v) of the hit
+    texture::Footprint footprint{};  // texture-space footprint of the pixel (None: point sample)
+    texture::RayTag tag{};           // the ray's tag (ID, recursion level)
+};
+
+/// The texture lookup seam: filtered value of `image` at texture coordinates (s,t).
+texture::Texel lookup_image(const texture::Image& image, double s, double t,
+                            const texture::Footprint& footprint, texture::RayTag tag);
+
+/// Evaluates a texture input (constant or node) at a shading point; float textures return
+/// their value in all three channels.
+Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx);
+
+/// A BSDF instantiated at a hit (pbrt-v3 BxDF combinations of the supported materials).
+struct Bsdf {
+    Frame frame;        // shading frame, z = shading normal
+    Vec3 ng;            // geometric normal
+    // Diffuse lobe (Lambertian, or Oren-Nayar when on_b != 0)
+    Rgb kd{};
+    float on_a = 1, on_b = 0;
+    // Microfacet reflection (plastic): Trowbridge-Reitz, Fresnel dielectric(1.5 -> 1)
+    Rgb ks{};
+    float alpha = 0;
+    // Specular lobes
+    Rgb kr{}, kt{};
+    bool fresnel_noop = false;  // mirror
+    float eta = 1.5f;           // glass
+
+    bool has_diffuse() const { return !kd.is_black(); }
+    bool has_glossy() const { return !ks.is_black(); }
+    bool has_nonspecular() const { return has_diffuse() || has_glossy(); }
+
+    /// BSDF value for world directions (pbrt-v3 BSDF::f: only non-specular lobes).
+    Rgb f(const Vec3& wo, const Vec3& wi) const;
+};
+
+/// Builds the BSDF of `material` at `hit`; returns false for material "none".
+bool make_bsdf(const Scene& scene, const Material& material, const SurfaceHit& hit,
+               const TexContext& ctx, Bsdf* bsdf);
+
+/// Unpolarised Fresnel reflectance of a dielectric interface (pbrt-v3 FrDielectric).
+float fresnel_dielectric(float cos_theta_i, float eta_i, float eta_t);
+
+/// Refracts `wi` (pointing away from the surface) through normal `n` on its side with relative
+/// index eta = eta_i/eta_t; false on total internal reflection.
+bool refract(const Vec3& wi, const Vec3& n, float eta, Vec3* wt);
+
+}  // namespace cmam::render
