@@ -1,0 +1,25 @@
+# End-to-end checks of the cmam binary (run by CTest): a render writes the image it names and
+# exits 0; a broken scene exits non-zero with a located error and writes nothing.
+file(REMOVE_RECURSE ${OUT})
+file(MAKE_DIRECTORY ${OUT})
+execute_process(COMMAND ${CMAM} render ${SCENES}/demo.pbrt -o ${OUT}/demo.exr --spp 1 --quiet
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/demo.exr)
+  message(FATAL_ERROR "render failed (${rc}): ${err}")
+endif()
+file(WRITE ${OUT}/bad.pbrt "Camera \"perspective\"\nWorldBegin\nShape \"sphere\" \"float radius\" \"big\"\nWorldEnd\n")
+execute_process(COMMAND ${CMAM} render ${OUT}/bad.pbrt -o ${OUT}/bad.png --quiet
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "a broken scene must fail")
+endif()
+if(NOT err MATCHES "bad.pbrt:3:31: error: float parameter \"radius\" expects a number, got \"big\"")
+  message(FATAL_ERROR "unexpected message: ${err}")
+endif()
+if(EXISTS ${OUT}/bad.png)
+  message(FATAL_ERROR "a failed render must not write an image")
+endif()
+execute_process(COMMAND ${CMAM} check ${SCENES}/demo.pbrt RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "ok:")
+  message(FATAL_ERROR "check failed: ${out}")
+endif()

@@ -1,0 +1,124 @@
+// Parser on valid input: parameters, graphics state, named materials and textures, instancing.
+#include <gtest/gtest.h>
+
+#include "pbrt/parser.h"
+
+using namespace cmam::pbrt;
+
+namespace {
+const char* kHeader = "Camera \"perspective\" \"float fov\" 45\nWorldBegin\n";
+SceneDesc parse_world(const std::string& body, const WarningSink& warn = {}) {
+    return parse_string(std::string(kHeader) + body + "\nWorldEnd\n", "t.pbrt", warn);
+}
+}  // namespace
+
+TEST(Parser, ParameterTypesAndAliases) {
+    SceneDesc d = parse_world(
+        "Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] "
+        "\"normal N\" [0 0 1 0 0 1 0 0 1] \"point2 uv\" [0 0 1 0 0 1] \"bool b\" true \"string s\" \"x\" "
+        "\"color c\" [1 2 3] \"vector3 v\" [1 2 3] \"spectrum sp\" [400 1 700 1]");
+    const ParamSet& p = d.shapes[0].entity.params;
+    EXPECT_EQ(p.get_point3s("P")->size(), 9u);
+    EXPECT_EQ(p.get_ints("indices")->at(2), 2);
+    EXPECT_TRUE(p.get_bool("b", false));
+    EXPECT_EQ(p.get_string("s", ""), "x");
+    EXPECT_EQ((*p.get_rgb("c"))[2], 3.0f);
+    EXPECT_EQ(p.get_point3("v", {}), (std::array<double, 3>{1, 2, 3}));
+    EXPECT_EQ(p.find("P")->type, ParamType::Point3);
+    EXPECT_EQ(p.find("N")->type, ParamType::Normal);
+    auto sp = *p.get_rgb("sp");  // a flat spectrum is a near-white
+    EXPECT_NEAR(0.212671 * sp[0] + 0.715160 * sp[1] + 0.072169 * sp[2], 1.0, 0.02);
+}
+
+TEST(Parser, SingleValuesWithoutBrackets) {
+    SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 2.5 \"float zmin\" [-1]");
+    EXPECT_DOUBLE_EQ(d.shapes[0].entity.params.get_float("radius", 1), 2.5);
+    EXPECT_DOUBLE_EQ(d.shapes[0].entity.params.get_float("zmin", 0), -1);
+    EXPECT_DOUBLE_EQ(d.shapes[0].entity.params.get_float("zmax", 7), 7);
+}
+
+TEST(Parser, AttributesScopeMaterialsTransformsAndOrientation) {
+    SceneDesc d = parse_world(
+        "Material \"mirror\"\n"
+        "AttributeBegin Material \"glass\" Translate 1 0 0 ReverseOrientation Shape \"sphere\" AttributeEnd\n"
+        "Shape \"sphere\"\n"
+        "TransformBegin Translate 0 2 0 Material \"matte\" TransformEnd Shape \"sphere\"");
+    ASSERT_EQ(d.shapes.size(), 3u);
+    EXPECT_EQ(d.materials[d.shapes[0].material].entity.type, "glass");
+    EXPECT_TRUE(d.shapes[0].reverse_orientation);
+    EXPECT_EQ(d.shapes[0].world_from_object.apply_point({0, 0, 0})[0], 1);
+    EXPECT_EQ(d.materials[d.shapes[1].material].entity.type, "mirror");
+    EXPECT_FALSE(d.shapes[1].reverse_orientation);
+    EXPECT_TRUE(d.shapes[1].world_from_object.is_identity());
+    // TransformEnd restores the transform only; the material set inside stays.
+    EXPECT_EQ(d.materials[d.shapes[2].material].entity.type, "matte");
+    EXPECT_TRUE(d.shapes[2].world_from_object.is_identity());
+}
+
+TEST(Parser, DefaultMaterialIsMinusOne) {
+    SceneDesc d = parse_world("Shape \"sphere\"");
+    EXPECT_EQ(d.shapes[0].material, -1);
+}
+
+TEST(Parser, NamedMaterialsAndTextureScopes) {
+    SceneDesc d = parse_world(
+        "Texture \"k\" \"spectrum\" \"constant\" \"rgb value\" [1 0 0]\n"
+        "MakeNamedMaterial \"red\" \"string type\" \"matte\" \"texture Kd\" \"k\"\n"
+        "NamedMaterial \"red\" Shape \"sphere\"");
+    ASSERT_EQ(d.materials.size(), 1u);
+    EXPECT_EQ(d.materials[0].entity.type, "matte");
+    EXPECT_EQ(d.materials[0].name, "red");
+    EXPECT_EQ(d.shapes[0].material, 0);
+    EXPECT_EQ(d.materials[0].scope.spectrum_textures.at("k"), 0);
+    EXPECT_TRUE(d.materials[0].scope.float_textures.empty());
+}
+
+TEST(Parser, ObjectInstancesAreFlattenedWithTheirTransforms) {
+    SceneDesc d = parse_world(
+        "ObjectBegin \"ball\" Translate 0 1 0 Shape \"sphere\" ObjectEnd\n"
+        "Translate 5 0 0 ObjectInstance \"ball\"\n"
+        "Translate 5 0 0 ObjectInstance \"ball\"");
+    ASSERT_EQ(d.shapes.size(), 2u);
+    EXPECT_EQ(d.shapes[0].world_from_object.apply_point({0, 0, 0}), (std::array<double, 3>{5, 1, 0}));
+    EXPECT_EQ(d.shapes[1].world_from_object.apply_point({0, 0, 0}), (std::array<double, 3>{10, 1, 0}));
+}
+
+TEST(Parser, OptionsAndEntities) {
+    SceneDesc d = parse_string(
+        "Film \"image\" \"integer xresolution\" 10 Sampler \"stratified\" PixelFilter \"box\" "
+        "Integrator \"whitted\" Accelerator \"bvh\" Camera \"perspective\" WorldBegin WorldEnd");
+    EXPECT_TRUE(d.film.given);
+    EXPECT_EQ(d.sampler.type, "stratified");
+    EXPECT_EQ(d.filter.type, "box");
+    EXPECT_EQ(d.integrator.type, "whitted");
+    EXPECT_EQ(d.accelerator.type, "bvh");
+    EXPECT_EQ(d.film.params.get_int("xresolution", 0), 10);
+}
+
+TEST(Parser, IgnoredDirectivesWarnWithLocation) {
+    std::vector<std::string> warnings;
+    parse_world("TransformTimes 0 1\nActiveTransform All", [&](const std::string& w) { warnings.push_back(w); });
+    ASSERT_EQ(warnings.size(), 2u);
+    EXPECT_EQ(warnings[0], "t.pbrt:3:1: warning: TransformTimes ignored: cmam renders no motion blur");
+    EXPECT_EQ(warnings[1], "t.pbrt:4:1: warning: ActiveTransform All ignored: cmam renders no motion blur");
+}
+
+TEST(Parser, UnusedParameterErrorNamesEntity) {
+    SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 1 \"float bogus\" 3");
+    const ParamSet& p = d.shapes[0].entity.params;
+    p.get_float("radius", 1);
+    try {
+        p.check_unused("shape \"sphere\"", {});
+        FAIL();
+    } catch (const SceneError& e) {
+        EXPECT_STREQ(e.what(), "t.pbrt:3:33: error: unknown parameter \"bogus\" for shape \"sphere\"");
+    }
+}
+
+TEST(Parser, KnownButUnsupportedParameterWarns) {
+    SceneDesc d = parse_world("Shape \"sphere\" \"texture alpha\" \"a\"");
+    std::vector<std::string> w;
+    d.shapes[0].entity.params.check_unused("shape \"sphere\"", [&](const std::string& s) { w.push_back(s); }, {"alpha"});
+    ASSERT_EQ(w.size(), 1u);
+    EXPECT_EQ(w[0], "t.pbrt:3:16: warning: parameter \"alpha\" of shape \"sphere\" is not supported by cmam; ignored");
+}

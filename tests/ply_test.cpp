@@ -1,0 +1,79 @@
+// PLY reader: ASCII and binary, uv property names, quads, bad input.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "pbrt/ply.h"
+
+using namespace cmam::pbrt;
+namespace fs = std::filesystem;
+
+namespace {
+std::string write_temp(const std::string& name, const std::string& bytes) {
+    fs::path p = fs::temp_directory_path() / ("cmam_ply_" + std::to_string(::getpid()) + "_" + name);
+    std::ofstream(p, std::ios::binary) << bytes;
+    return p.string();
+}
+}  // namespace
+
+TEST(Ply, AsciiQuadWithTextureUV) {
+    std::string path = write_temp("a.ply",
+                                  "ply\nformat ascii 1.0\ncomment hi\nelement vertex 4\n"
+                                  "property float x\nproperty float y\nproperty float z\n"
+                                  "property float texture_u\nproperty float texture_v\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                  "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n4 0 1 2 3\n");
+    PlyMesh m = read_ply(path);
+    EXPECT_EQ(m.positions.size(), 12u);
+    EXPECT_TRUE(m.normals.empty());
+    ASSERT_EQ(m.uvs.size(), 8u);
+    EXPECT_EQ(m.uvs[5], 1.0f);
+    EXPECT_EQ(m.indices, (std::vector<int>{0, 1, 2, 0, 2, 3}));
+}
+
+TEST(Ply, BinaryLittleEndianWithNormalsAndExtraElement) {
+    std::string header =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\n"
+        "property float v\nelement face 1\nproperty list uchar int vertex_indices\n"
+        "element material 1\nproperty list uchar float stuff\nend_header\n";
+    std::string body;
+    auto put = [&](const void* p, size_t n) { body.append(static_cast<const char*>(p), n); };
+    for (int i = 0; i < 3; ++i) {
+        float v[8] = {float(i), float(i * 2), 0, 0, 0, 1, 0.5f * i, 0.25f};
+        put(v, sizeof v);
+    }
+    unsigned char three = 3;
+    int idx[3] = {2, 1, 0};
+    put(&three, 1);
+    put(idx, sizeof idx);
+    unsigned char two = 2;
+    float stuff[2] = {1, 2};
+    put(&two, 1);
+    put(stuff, sizeof stuff);
+    PlyMesh m = read_ply(write_temp("b.ply", header + body));
+    EXPECT_EQ(m.positions[3 * 2 + 1], 4.0f);
+    EXPECT_EQ(m.normals[2], 1.0f);
+    EXPECT_EQ(m.uvs[2], 0.5f);
+    EXPECT_EQ(m.indices, (std::vector<int>{2, 1, 0}));
+}
+
+TEST(Ply, ErrorsNameTheFile) {
+    std::string path = write_temp("c.ply",
+                                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                  "end_header\n0 0 0\n3 0 1 2\n");
+    try {
+        read_ply(path);
+        FAIL();
+    } catch (const PlyError& e) {
+        EXPECT_EQ(std::string(e.what()), path + ": face index 1 out of range (1 vertices)");
+    }
+    std::string trunc = write_temp("d.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                                            "property float z\nend_header\n0 0 0\n1 1\n");
+    EXPECT_THROW(read_ply(trunc), PlyError);
+    EXPECT_THROW(read_ply(write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n")), PlyError);
+}

@@ -1,0 +1,66 @@
+// pbrt-v3 transform conventions: Rotate is right-handed about its axis, LookAt yields
+// camera_from_world with the camera looking down +z, Transform lists columns.
+#include <gtest/gtest.h>
+
+#include "pbrt/parser.h"
+#include "pbrt/transform.h"
+
+using namespace cmam::pbrt;
+
+namespace {
+void expect_near(const std::array<double, 3>& a, const std::array<double, 3>& b, double eps = 1e-12) {
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], eps) << "component " << i;
+}
+}  // namespace
+
+TEST(Transform, RotateIsRightHanded) {
+    expect_near(rotate(90, 0, 0, 1).apply_point({1, 0, 0}), {0, 1, 0});
+    expect_near(rotate(90, 1, 0, 0).apply_point({0, 1, 0}), {0, 0, 1});
+    expect_near(rotate(90, 0, 1, 0).apply_point({0, 0, 1}), {1, 0, 0});
+    expect_near(rotate(120, 1, 1, 1).apply_point({1, 0, 0}), {0, 1, 0});  // axis is normalised
+}
+
+TEST(Transform, LookAtMapsEyeToOriginAndViewToPlusZ) {
+    Mat4 cw = look_at({1, 2, 3}, {1, 2, 10}, {0, 1, 0});
+    expect_near(cw.apply_point({1, 2, 3}), {0, 0, 0});
+    expect_near(cw.apply_point({1, 2, 10}), {0, 0, 7});
+    // pbrt-v3 is left-handed: with up = +y and view = +z, camera +x is world +x.
+    expect_near(cw.apply_vector({1, 0, 0}), {1, 0, 0});
+    expect_near(cw.apply_vector({0, 1, 0}), {0, 1, 0});
+    Mat4 turned = look_at({0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // looking down +x
+    expect_near(turned.apply_vector({1, 0, 0}), {0, 0, 1});
+    expect_near(turned.apply_vector({0, 0, -1}), {1, 0, 0});  // camera right is world -z
+}
+
+TEST(Transform, LookAtRejectsDegenerateInput) {
+    EXPECT_THROW(look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}), std::domain_error);
+    EXPECT_THROW(look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}), std::domain_error);
+}
+
+TEST(Transform, InverseAndHandedness) {
+    Mat4 m = translate(1, 2, 3) * rotate(33, 1, 2, 3) * scale(2, 3, 4);
+    Mat4 p = m * m.inverse();
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) EXPECT_NEAR(p.m[i][j], i == j ? 1 : 0, 1e-12);
+    EXPECT_FALSE(m.swaps_handedness());
+    EXPECT_TRUE(scale(-1, 1, 1).swaps_handedness());
+}
+
+TEST(Transform, DirectivesComposeLikePbrt) {
+    // Translate then Scale: the scale applies first to object points.
+    SceneDesc d = parse_string(
+        "Camera \"perspective\" WorldBegin Translate 1 0 0 Scale 2 2 2 Shape \"sphere\" "
+        "Transform [ 1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1 ] Shape \"sphere\" "
+        "ConcatTransform [ 2 0 0 0  0 2 0 0  0 0 2 0  0 0 0 1 ] Shape \"sphere\" WorldEnd");
+    ASSERT_EQ(d.shapes.size(), 3u);
+    expect_near(d.shapes[0].world_from_object.apply_point({1, 0, 0}), {3, 0, 0});
+    expect_near(d.shapes[1].world_from_object.apply_point({0, 0, 0}), {5, 6, 7});  // columns
+    expect_near(d.shapes[2].world_from_object.apply_point({1, 0, 0}), {7, 6, 7});
+}
+
+TEST(Transform, CameraCoordinateSystem) {
+    SceneDesc d = parse_string(
+        "LookAt 0 0 -5  0 0 0  0 1 0 Camera \"perspective\" WorldBegin CoordSysTransform \"camera\" "
+        "Shape \"sphere\" WorldEnd");
+    expect_near(d.shapes[0].world_from_object.apply_point({0, 0, 0}), {0, 0, -5}, 1e-12);
+}
