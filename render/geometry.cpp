@@ -48,9 +48,8 @@ bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, d
             if (!(t > tmin && t < tmax)) continue;
             D3 p = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
             if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * r;
-            if ((prim.zmin > -r && p[2] < prim.zmin) || (prim.zmax < r && p[2] > prim.zmax) ||
-                phi_of(p[0], p[1]) > prim.phi_max)
-                continue;
+            if ((prim.zmin > -r && p[2] < prim.zmin) || (prim.zmax < r && p[2] > prim.zmax)) continue;
+            if (prim.phi_max < 2 * std::numbers::pi && phi_of(p[0], p[1]) > prim.phi_max) continue;
             *t_out = t;
             return true;
         }
@@ -63,7 +62,7 @@ bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, d
     double x = o[0] + t * d[0], y = o[1] + t * d[1];
     double dist2 = x * x + y * y;
     if (dist2 > prim.radius * prim.radius || dist2 < prim.inner_radius * prim.inner_radius) return false;
-    if (phi_of(x, y) > prim.phi_max) return false;
+    if (prim.phi_max < 2 * std::numbers::pi && phi_of(x, y) > prim.phi_max) return false;
     *t_out = t;
     return true;
 }

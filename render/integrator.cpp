@@ -34,9 +34,14 @@ Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
     return h.p + faceforward(h.ng, w) * ray_epsilon(h.p);
 }
 
+/// Ray counts of one row, added to the shared totals once per row (no per-ray atomics).
+struct RayCounts {
+    uint64_t camera = 0, secondary = 0, shadow = 0;
+};
+
 struct Tracer {
     const Scene& scene;
-    RenderStats* stats;
+    RayCounts* counts;
     Rng& rng;
 
     Rgb escaped() const {
@@ -47,7 +52,7 @@ struct Tracer {
     }
 
     bool visible(const SurfaceHit& h, const Vec3& wi, float dist) {
-        if (stats) ++stats->shadow_rays;
+        if (counts) ++counts->shadow;
         Vec3 o = offset_origin(h, wi);
         float tmax = std::isinf(dist) ? std::numeric_limits<float>::infinity() : dist * (1 - 1e-4f);
         return !scene.occluded(o, wi, 0, tmax);
@@ -129,7 +134,7 @@ struct Tracer {
     }
 
     Rgb spawn(const SurfaceHit& h, const Vec3& wi, int depth) {
-        if (stats) ++stats->secondary_rays;
+        if (counts) ++counts->secondary;
         return li(offset_origin(h, wi), wi, depth + 1);
     }
 
@@ -166,13 +171,24 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
+Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RayCounts* counts) {
+    Rng rng(seed);
+    Tracer t{scene, counts, rng};
+    if (counts) ++counts->camera;
+    return t.li(org, dir, 0);
+}
+
 }  // namespace
 
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RenderStats* stats) {
-    Rng rng(seed);
-    Tracer t{scene, stats, rng};
-    if (stats) ++stats->camera_rays;
-    return t.li(org, dir, 0);
+    RayCounts c;
+    Rgb L = trace_one(scene, org, dir, seed, &c);
+    if (stats) {
+        stats->camera_rays += c.camera;
+        stats->secondary_rays += c.secondary;
+        stats->shadow_rays += c.shadow;
+    }
+    return L;
 }
 
 Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
@@ -192,6 +208,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     auto render_row = [&](int row) {
         int py = film.y0 + row;
         float* out = &fb.rgb[static_cast<std::size_t>(row) * fb.width * 3];
+        RayCounts counts;
         for (int col = 0; col < fb.width; ++col) {
             int px = film.x0 + col;
             uint64_t pixel_seed = mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
@@ -204,13 +221,18 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                     float fx = px + (sx + jx) / nx, fy = py + (sy + jy) / ny;
                     Vec3 org, dir;
                     scene.camera.generate_ray(fx, fy, &org, &dir);
-                    Rgb L = trace_radiance(scene, org, dir, mix_seed(pixel_seed, uint64_t(sy * nx + sx) + 1), stats);
+                    Rgb L = trace_one(scene, org, dir, mix_seed(pixel_seed, uint64_t(sy * nx + sx) + 1), &counts);
                     if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
                     sum[0] += L.r;
                     sum[1] += L.g;
                     sum[2] += L.b;
                 }
             for (int c = 0; c < 3; ++c) out[3 * col + c] = static_cast<float>(sum[c] / spp);
+        }
+        if (stats) {
+            stats->camera_rays += counts.camera;
+            stats->secondary_rays += counts.secondary;
+            stats->shadow_rays += counts.shadow;
         }
         int done = ++rows_done;
         if (options.progress) options.progress(done, fb.height);

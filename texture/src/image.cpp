@@ -81,6 +81,9 @@ Texel bilinear(const Image& image, double u, double v) {
     auto i0 = static_cast<int64_t>(fs0);
     auto j0 = static_cast<int64_t>(ft0);
     float fs = static_cast<float>(s - fs0), ft = static_cast<float>(t - ft0);
+    // Tiled textures: move the lattice cell into the base period so the fast path applies.
+    if (image.wrap_s() == WrapMode::Repeat) i0 = wrap_index(i0, image.width(), WrapMode::Repeat);
+    if (image.wrap_t() == WrapMode::Repeat) j0 = wrap_index(j0, image.height(), WrapMode::Repeat);
     int nc = image.channels();
     Texel out{};
     // Fast path: all four texels inside the image.

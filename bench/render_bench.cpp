@@ -1,0 +1,125 @@
+// Whole-render throughput of the demo scene beside a bare Embree loop that casts the same
+// camera and shadow rays (rtcIntersect1 / rtcOccluded1, no shading), and their ratio.
+#include <benchmark/benchmark.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cstdio>
+#include <limits>
+
+#include "pbrt/parser.h"
+#include "render/integrator.h"
+#include "render/scene.h"
+
+using namespace cmam;
+
+namespace {
+
+std::unique_ptr<render::Scene> demo_scene() {
+    pbrt::SceneDesc d = pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/demo.pbrt");
+    return render::build_scene(d, {}, {});
+}
+
+double g_render_rate = 0, g_bare_rate = 0;
+
+void BM_RenderDemo(benchmark::State& state) {
+    auto scene = demo_scene();
+    uint64_t rays = 0;
+    for (auto _ : state) {
+        render::RenderStats stats;
+        render::Framebuffer fb = render::render(*scene, {}, &stats);
+        benchmark::DoNotOptimize(fb.rgb.data());
+        rays += stats.total_rays();
+    }
+    state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+    state.counters["Mrays/s"] = benchmark::Counter(double(rays) / 1e6, benchmark::Counter::kIsRate);
+    g_render_rate = double(rays) / state.iterations();
+}
+
+// The bare loop: for every camera sample, rtcIntersect1; for every hit, one rtcOccluded1
+// towards each delta light, as the integrator would. No materials, textures or recursion.
+void BM_BareEmbreeDemo(benchmark::State& state) {
+    auto scene = demo_scene();
+    const auto& film = scene->film;
+    const int nx = scene->sampler.xsamples, ny = scene->sampler.ysamples;
+    uint64_t rays_total = 0;
+    for (auto _ : state) {
+        std::atomic<uint64_t> rays{0};
+        tbb::parallel_for(tbb::blocked_range<int>(film.y0, film.y1, 1), [&](const tbb::blocked_range<int>& r) {
+            uint64_t local = 0;
+            RTCIntersectContext ctx;
+            for (int py = r.begin(); py < r.end(); ++py)
+                for (int px = film.x0; px < film.x1; ++px)
+                    for (int s = 0; s < nx * ny; ++s) {
+                        render::Vec3 o, d;
+                        scene->camera.generate_ray(px + (s % nx + 0.5f) / nx, py + (s / nx + 0.5f) / ny, &o, &d);
+                        RTCRayHit rh{};
+                        rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
+                        rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
+                        rh.ray.tfar = std::numeric_limits<float>::infinity();
+                        rh.ray.mask = ~0u;
+                        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                        rtcInitIntersectContext(&ctx);
+                        rtcIntersect1(scene->embree_scene(), &ctx, &rh);
+                        ++local;
+                        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+                        render::Vec3 p = o + d * rh.ray.tfar;
+                        for (const auto& l : scene->lights) {
+                            if (l.type == render::Light::Type::Infinite) continue;
+                            render::Vec3 w = l.type == render::Light::Type::Distant ? l.direction : l.position - p;
+                            float tmax = l.type == render::Light::Type::Distant ? std::numeric_limits<float>::infinity() : 0.9999f;
+                            RTCRay sr{};
+                            render::Vec3 so = p + w * 1e-4f;
+                            sr.org_x = so.x; sr.org_y = so.y; sr.org_z = so.z;
+                            sr.dir_x = w.x; sr.dir_y = w.y; sr.dir_z = w.z;
+                            sr.tfar = tmax;
+                            sr.mask = ~0u;
+                            rtcInitIntersectContext(&ctx);
+                            rtcOccluded1(scene->embree_scene(), &ctx, &sr);
+                            ++local;
+                        }
+                    }
+            rays += local;
+        });
+        rays_total += rays;
+    }
+    state.counters["rays/s"] = benchmark::Counter(double(rays_total), benchmark::Counter::kIsRate);
+    state.counters["Mrays/s"] = benchmark::Counter(double(rays_total) / 1e6, benchmark::Counter::kIsRate);
+    g_bare_rate = double(rays_total) / state.iterations();
+}
+
+BENCHMARK(BM_RenderDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_BareEmbreeDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// Prints the ratio of the two rays/s figures after the runs.
+class RatioReporter : public benchmark::ConsoleReporter {
+public:
+    void ReportRuns(const std::vector<Run>& runs) override {
+        ConsoleReporter::ReportRuns(runs);
+        for (const Run& r : runs) {
+            auto it = r.counters.find("rays/s");
+            if (it == r.counters.end()) continue;
+            if (r.benchmark_name().find("RenderDemo") != std::string::npos) m_render = it->second;
+            if (r.benchmark_name().find("BareEmbree") != std::string::npos) m_bare = it->second;
+        }
+    }
+    void Finalize() override {
+        ConsoleReporter::Finalize();
+        if (m_render > 0 && m_bare > 0)
+            std::printf("\nwhole render / bare Embree loop (rays/s): %.1f%%  (target >= 70%%)\n", 100.0 * m_render / m_bare);
+    }
+
+private:
+    double m_render = 0, m_bare = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    RatioReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+    return 0;
+}
