@@ -173,7 +173,11 @@ private:
 
     void integrator() {
         const Entity& e = m_desc.integrator;
-        if (!e.given) return;  // pbrt-v3's default is "path"; cmam renders Whitted
+        if (!e.given) {
+            if (!m_desc.shapes.empty())
+                warn(m_desc.camera.loc, "no Integrator given: pbrt-v3 would path trace (\"path\"); cmam renders \"whitted\"");
+            return;
+        }
         if (e.type != "whitted") warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
         if (e.params.find("maxdepth")) m_scene->max_depth = e.params.get_int("maxdepth", 5);
         e.params.check_unused("Integrator " + q(e.type), m_warn, e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));
