@@ -3,6 +3,7 @@
 // extent with this value type; filters (MIP, SAT, EWA) consume it. Nothing here knows rays.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 namespace cmam::texture {
@@ -19,16 +20,27 @@ struct RayTag {
     uint32_t level = 0;
 };
 
-/// A texture-space footprint. `None` means "no area information": filters fall back to a
-/// bilinear lookup at level 0 (point sampling). `Axes` gives two axis vectors in (u,v) units,
-/// read as conjugate semi-diameters of an ellipse (the columns of the Jacobian d(u,v)/d(x,y)).
+/// A texture-space footprint around the lookup point.
+/// * `None`: no area information; every filter falls back to bilinear at level 0.
+/// * `Axes`: two axis vectors in (u,v) units, read as conjugate semi-diameters of an ellipse
+///   (the columns of the Jacobian d(u,v)/d(x,y): one pixel step each).
+/// * `Points`: up to three texture-space sample points (the CMAM's cached samples plus the
+///   current one, current first); filters build their region from them.
 struct Footprint {
-    enum class Kind : uint8_t { None, Axes };
+    enum class Kind : uint8_t { None, Axes, Points };
     Kind kind = Kind::None;
     Vec2d axis_a{}, axis_b{};
+    std::array<Vec2d, 3> points{};
+    int point_count = 0;
 
     static Footprint none() { return {}; }
-    static Footprint axes(Vec2d a, Vec2d b) { return {Kind::Axes, a, b}; }
+    static Footprint axes(Vec2d a, Vec2d b) {
+        Footprint f;
+        f.kind = Kind::Axes;
+        f.axis_a = a;
+        f.axis_b = b;
+        return f;
+    }
 };
 
 }  // namespace cmam::texture

@@ -1,0 +1,32 @@
+// cmam::texture — elliptical weighted average filtering (Greene & Heckbert 1986) on a MIP
+// pyramid. algorithms.md §4: the two axes are conjugate semi-diameters (Jacobian columns); a
+// unit-variance reconstruction term (+1) keeps the ellipse at least one texel wide; the minor
+// axis is lengthened to bound the anisotropy, a degenerate minor axis is replaced by a
+// perpendicular one, the level comes from the minor axis and two levels are blended; each row
+// visits only the texels inside the ellipse. Cost is bounded by maxAniso, not by the size.
+#pragma once
+
+#include <cmam/texture/mip.h>
+
+namespace cmam::texture {
+
+/// Gaussian weights indexed by r^2 in [0,1): LUT[i] = exp(-2 i/(N-1)) - exp(-2), N = 128.
+inline constexpr int kEwaLutSize = 128;
+const float* ewa_weight_lut();
+
+struct EwaResult {
+    Texel value{};
+    double lambda = 0;       // fractional MIP level used
+    int texels_read = 0;     // texels inside the ellipse(s) that were weighted
+    double major = 0, minor = 0;  // semi-axes used, level-0 texels (after clamping)
+};
+
+/// EWA lookup at (u,v) with axes `a`, `b` in uv units.
+EwaResult ewa(const MipPyramid& pyramid, double u, double v, double au, double av, double bu, double bv,
+              double max_aniso = 8);
+
+/// One EWA evaluation at level `l` with axes in level-0 texels (exposed for tests).
+Texel ewa_level(const Image& level, double u, double v, double a_s, double a_t, double b_s, double b_t,
+                int* texels_read);
+
+}  // namespace cmam::texture

@@ -1,0 +1,63 @@
+// cmam::texture — one entry point for every filter: a texture plus a footprint in, a value out.
+// Owns the level-0 image and builds the MIP pyramid and the summed-area table on first use.
+#pragma once
+
+#include <cmam/texture/ewa.h>
+#include <cmam/texture/footprint.h>
+#include <cmam/texture/mip.h>
+#include <cmam/texture/sat.h>
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace cmam::texture {
+
+enum class FilterKind : uint8_t { Nearest, Bilinear, Trilinear, Sat, Ewa };
+inline constexpr int kFilterKinds = 5;
+
+/// Parses "nearest", "bilinear", "trilinear", "sat", "ewa"; nullopt otherwise.
+std::optional<FilterKind> parse_filter(std::string_view name);
+std::string_view to_string(FilterKind kind);
+
+struct FilterOptions {
+    FilterKind kind = FilterKind::Ewa;
+    double max_aniso = 8;
+};
+
+/// What a lookup did (for `cmam lookup`, statistics and tests).
+struct LookupInfo {
+    double lambda = 0;         // fractional MIP level (0 for level-0 filters)
+    int level_lo = 0, level_hi = 0;
+    int texels_read = 0;
+    bool fallback = false;     // non-finite input: the texture mean was returned
+    // The region filtered, in level-0 texels: a rectangle (SAT) or ellipse semi-axes (EWA),
+    // or the footprint width (trilinear).
+    double rect[4] = {0, 0, 0, 0};  // x0, y0, x1, y1
+    double major = 0, minor = 0, width = 0;
+};
+
+class FilteredTexture {
+public:
+    explicit FilteredTexture(Image level0);
+
+    const Image& image() const { return m_image; }
+    /// Built on first use (thread-safe).
+    const MipPyramid& pyramid() const;
+    const SummedAreaTable& sat() const;
+    std::size_t memory_bytes() const;  // level 0 + whatever has been built
+
+    /// Filtered value at (u,v) (unwrapped uv; v = 0 is the bottom row).
+    Texel lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
+                 LookupInfo* info = nullptr) const;
+
+private:
+    Image m_image;
+    mutable std::once_flag m_pyr_once, m_sat_once;
+    mutable std::unique_ptr<MipPyramid> m_pyramid;
+    mutable std::unique_ptr<SummedAreaTable> m_sat;
+};
+
+}  // namespace cmam::texture

@@ -1,0 +1,37 @@
+// cmam::texture — MIP pyramid (Williams 1983) and trilinear filtering.
+// algorithms.md §2: exact area (box) downsampling with floor sizes (option 2), so the mean and
+// the cell-to-uv correspondence are exact at every level, for any size; trilinear blends two
+// levels with no jump at lambda = 1.
+#pragma once
+
+#include <cmam/texture/image.h>
+
+#include <vector>
+
+namespace cmam::texture {
+
+class MipPyramid {
+public:
+    MipPyramid() = default;
+    /// Builds all levels, 1 + floor(log2(max(W,H))) of them, from `base` (copied).
+    explicit MipPyramid(const Image& base);
+
+    int levels() const { return static_cast<int>(m_levels.size()); }
+    const Image& level(int l) const { return m_levels[static_cast<std::size_t>(l)]; }
+    std::size_t memory_bytes() const;
+
+    /// Bilinear lookup at level `l` (lattice s' = u*W_l - 1/2 with that level's own size).
+    Texel bilinear(int l, double u, double v) const;
+    /// Trilinear lookup for a footprint `width` in level-0 texels (lambda = log2(width)).
+    /// `levels_used` (optional) receives the fractional level lambda, clamped to [0, L-1].
+    Texel trilinear(double u, double v, double width, double* lambda_used = nullptr) const;
+
+private:
+    std::vector<Image> m_levels;
+};
+
+/// Box-downsamples `src` to `w` x `h` texels: output texel k covers source cells
+/// [k*N/n, (k+1)*N/n) per axis, averaged with their overlap lengths.
+Image box_downsample(const Image& src, int w, int h);
+
+}  // namespace cmam::texture

@@ -1,0 +1,139 @@
+#include <cmam/texture/ewa.h>
+#include <cmam/texture/filters.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace cmam::texture {
+
+const float* ewa_weight_lut() {
+    static const std::array<float, kEwaLutSize> lut = [] {
+        std::array<float, kEwaLutSize> t{};
+        const double alpha = 2;
+        for (int i = 0; i < kEwaLutSize; ++i) {
+            double r2 = double(i) / (kEwaLutSize - 1);
+            t[static_cast<std::size_t>(i)] = static_cast<float>(std::exp(-alpha * r2) - std::exp(-alpha));
+        }
+        return t;
+    }();
+    return lut.data();
+}
+
+Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s, double b_t,
+                int* texels_read) {
+    const int W = img.width(), H = img.height(), nc = img.channels();
+    double s0 = u * W - 0.5, t0 = v * H - 0.5;
+    // Coefficients with the +1 reconstruction term, then normalised so Q < 1 is the ellipse.
+    double A = a_t * a_t + b_t * b_t + 1;
+    double B = -2 * (a_s * a_t + b_s * b_t);
+    double C = a_s * a_s + b_s * b_s + 1;
+    double F = A * C - B * B / 4;
+    A /= F;
+    B /= F;
+    C /= F;
+    double delta = 4 * A * C - B * B;
+    double hy = 2 * std::sqrt(A / delta);
+    const float* lut = ewa_weight_lut();
+    int t_lo = static_cast<int>(std::ceil(t0 - hy)), t_hi = static_cast<int>(std::floor(t0 + hy));
+    double sum[4] = {0, 0, 0, 0}, wsum = 0;
+    int count = 0;
+    for (int it = t_lo; it <= t_hi; ++it) {
+        double y = it - t0;
+        // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0.
+        double bq = B * y, cq = C * y * y - 1;
+        double disc = bq * bq - 4 * A * cq;
+        if (disc <= 0) continue;
+        double sq = std::sqrt(disc);
+        double x_lo = (-bq - sq) / (2 * A), x_hi = (-bq + sq) / (2 * A);
+        int s_lo = static_cast<int>(std::ceil(s0 + x_lo)), s_hi = static_cast<int>(std::floor(s0 + x_hi));
+        int64_t jt = wrap_index(it, H, img.wrap_t());
+        for (int is = s_lo; is <= s_hi; ++is) {
+            double x = is - s0;
+            double r2 = A * x * x + B * x * y + C * y * y;
+            if (r2 >= 1) continue;
+            float w = lut[std::min(static_cast<int>(r2 * kEwaLutSize), kEwaLutSize - 1)];
+            ++count;
+            if (jt < 0) {  // black row: weight counts, value 0
+                wsum += w;
+                continue;
+            }
+            int64_t js = wrap_index(is, W, img.wrap_s());
+            wsum += w;
+            if (js < 0) continue;
+            const float* t = img.texel(static_cast<int>(js), static_cast<int>(jt));
+            for (int c = 0; c < nc; ++c) sum[c] += w * t[c];
+        }
+    }
+    if (texels_read) *texels_read += count;
+    Texel out{};
+    if (wsum <= 0) return texture::bilinear(img, u, v);
+    for (int c = 0; c < nc; ++c) out[c] = static_cast<float>(sum[c] / wsum);
+    return out;
+}
+
+EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, double bu, double bv,
+              double max_aniso) {
+    EwaResult r;
+    const Image& base = pyr.level(0);
+    const int L = pyr.levels();
+    if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(au) || !std::isfinite(av) || !std::isfinite(bu) ||
+        !std::isfinite(bv)) {
+        r.value = base.mean();
+        r.lambda = L - 1;
+        return r;
+    }
+    max_aniso = std::max(1.0, max_aniso);
+    // Axes in level-0 texels, per axis scaled.
+    double as = au * base.width(), at = av * base.height();
+    double bs = bu * base.width(), bt = bv * base.height();
+    double la = std::hypot(as, at), lb = std::hypot(bs, bt);
+    if (la < lb) {
+        std::swap(as, bs);
+        std::swap(at, bt);
+        std::swap(la, lb);
+    }
+    if (la == 0) {  // no extent at all: point sample
+        r.value = pyr.bilinear(0, u, v);
+        r.texels_read = 4;
+        return r;
+    }
+    if (lb == 0) {  // degenerate minor axis: perpendicular, |a| / maxAniso long
+        double k = la / max_aniso / la;
+        bs = -at * k;
+        bt = as * k;
+        lb = la / max_aniso;
+    } else if (lb * max_aniso < la) {  // clamp the anisotropy by widening the minor axis
+        double k = la / (lb * max_aniso);
+        bs *= k;
+        bt *= k;
+        lb *= k;
+    }
+    r.major = la;
+    r.minor = lb;
+    double lambda = std::max(0.0, std::log2(lb));
+    if (lambda >= L - 1) {
+        r.value = pyr.level(L - 1).mean();
+        r.lambda = L - 1;
+        r.texels_read = 1;
+        return r;
+    }
+    int l = static_cast<int>(std::floor(lambda));
+    double f = lambda - l;
+    r.lambda = lambda;
+    auto at_level = [&](int lev) {
+        const Image& img = pyr.level(lev);
+        double ks = double(img.width()) / base.width(), kt = double(img.height()) / base.height();
+        return ewa_level(img, u, v, as * ks, at * kt, bs * ks, bt * kt, &r.texels_read);
+    };
+    Texel a = at_level(l);
+    if (f == 0) {
+        r.value = a;
+        return r;
+    }
+    Texel b = at_level(l + 1);  // l + 1 <= L - 1 here
+    for (int c = 0; c < 4; ++c) r.value[c] = static_cast<float>((1 - f) * a[c] + f * b[c]);
+    return r;
+}
+
+}  // namespace cmam::texture

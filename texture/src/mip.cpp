@@ -1,0 +1,95 @@
+#include <cmam/texture/filters.h>
+#include <cmam/texture/mip.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace cmam::texture {
+
+namespace {
+// Weights of source cells for each output cell along one axis: out k covers [k*N/n, (k+1)*N/n).
+struct Span {
+    int first;
+    std::vector<double> w;
+};
+std::vector<Span> area_weights(int N, int n) {
+    std::vector<Span> spans(static_cast<std::size_t>(n));
+    double scale = double(N) / n;
+    for (int k = 0; k < n; ++k) {
+        double a = k * scale, b = (k + 1) * scale;
+        int i0 = static_cast<int>(std::floor(a)), i1 = std::min(N, static_cast<int>(std::ceil(b)));
+        Span& s = spans[static_cast<std::size_t>(k)];
+        s.first = i0;
+        for (int i = i0; i < i1; ++i) s.w.push_back((std::min<double>(b, i + 1) - std::max<double>(a, i)) / scale);
+    }
+    return spans;
+}
+}  // namespace
+
+Image box_downsample(const Image& src, int w, int h) {
+    const int W = src.width(), H = src.height(), C = src.channels();
+    auto xs = area_weights(W, w), ys = area_weights(H, h);
+    // Along x first (H rows of w texels), then along y.
+    std::vector<double> tmp(static_cast<std::size_t>(w) * H * C, 0.0);
+    for (int j = 0; j < H; ++j)
+        for (int k = 0; k < w; ++k) {
+            const Span& s = xs[static_cast<std::size_t>(k)];
+            for (std::size_t q = 0; q < s.w.size(); ++q) {
+                const float* t = src.texel(s.first + static_cast<int>(q), j);
+                for (int c = 0; c < C; ++c) tmp[(static_cast<std::size_t>(j) * w + k) * C + c] += s.w[q] * t[c];
+            }
+        }
+    std::vector<float> out(static_cast<std::size_t>(w) * h * C);
+    for (int k = 0; k < h; ++k) {
+        const Span& s = ys[static_cast<std::size_t>(k)];
+        for (int i = 0; i < w; ++i)
+            for (int c = 0; c < C; ++c) {
+                double acc = 0;
+                for (std::size_t q = 0; q < s.w.size(); ++q)
+                    acc += s.w[q] * tmp[((static_cast<std::size_t>(s.first) + q) * w + i) * C + c];
+                out[(static_cast<std::size_t>(k) * w + i) * C + c] = static_cast<float>(acc);
+            }
+    }
+    return Image(w, h, C, std::move(out), src.wrap_s(), src.wrap_t());
+}
+
+MipPyramid::MipPyramid(const Image& base) {
+    const int W = base.width(), H = base.height();
+    int L = 1 + static_cast<int>(std::floor(std::log2(std::max(W, H))));
+    m_levels.reserve(static_cast<std::size_t>(L));
+    m_levels.push_back(base);
+    for (int l = 1; l < L; ++l) {
+        int w = std::max(1, W >> l), h = std::max(1, H >> l);
+        m_levels.push_back(box_downsample(m_levels.back(), w, h));
+    }
+}
+
+std::size_t MipPyramid::memory_bytes() const {
+    std::size_t n = 0;
+    for (const Image& i : m_levels) n += i.memory_bytes();
+    return n;
+}
+
+Texel MipPyramid::bilinear(int l, double u, double v) const { return texture::bilinear(level(l), u, v); }
+
+Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_used) const {
+    const int L = levels();
+    double lambda = std::log2(std::max(width, 1e-8));
+    if (!(lambda > 0)) {  // magnification (or NaN width): level 0
+        if (lambda_used) *lambda_used = 0;
+        return bilinear(0, u, v);
+    }
+    if (lambda >= L - 1) {
+        if (lambda_used) *lambda_used = L - 1;
+        return level(L - 1).mean();
+    }
+    if (lambda_used) *lambda_used = lambda;
+    int l = static_cast<int>(std::floor(lambda));
+    float f = static_cast<float>(lambda - l);
+    Texel a = bilinear(l, u, v), b = bilinear(l + 1, u, v);
+    Texel out{};
+    for (int c = 0; c < 4; ++c) out[c] = (1 - f) * a[c] + f * b[c];
+    return out;
+}
+
+}  // namespace cmam::texture

@@ -1,0 +1,134 @@
+#include <cmam/texture/sat.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace cmam::texture {
+
+SummedAreaTable::SummedAreaTable(const Image& image, Storage storage)
+    : m_w(image.width()),
+      m_h(image.height()),
+      m_c(image.channels()),
+      m_wrap_s(image.wrap_s()),
+      m_wrap_t(image.wrap_t()),
+      m_storage(storage),
+      m_mean(image.mean()) {
+    const std::size_t n = static_cast<std::size_t>(m_w + 1) * (m_h + 1) * m_c;
+    std::vector<double> s(n, 0.0);
+    // S[j+1][i+1] = S[j][i+1] + rowprefix_j(i), accumulated in double.
+    for (int j = 0; j < m_h; ++j)
+        for (int c = 0; c < m_c; ++c) {
+            double row = 0;
+            for (int i = 0; i < m_w; ++i) {
+                double t = image.texel(i, j)[c];
+                if (storage == Storage::MeanOffsetFloat) t -= m_mean[c];
+                row += t;
+                s[((static_cast<std::size_t>(j) + 1) * (m_w + 1) + i + 1) * m_c + c] =
+                    s[(static_cast<std::size_t>(j) * (m_w + 1) + i + 1) * m_c + c] + row;
+            }
+        }
+    if (storage == Storage::Double) m_double = std::move(s);
+    else m_float.assign(s.begin(), s.end());
+}
+
+std::size_t SummedAreaTable::memory_bytes() const {
+    return m_double.size() * sizeof(double) + m_float.size() * sizeof(float);
+}
+
+double SummedAreaTable::entry(int i, int j, int c) const {
+    std::size_t k = (static_cast<std::size_t>(j) * (m_w + 1) + i) * m_c + c;
+    return m_storage == Storage::Double ? m_double[k] : double(m_float[k]);
+}
+
+double SummedAreaTable::table(double x, double y, int c) const {
+    // S is bilinear within a cell, so interpolating the lattice values is exact.
+    int i = std::clamp(static_cast<int>(std::floor(x)), 0, m_w - 1);
+    int j = std::clamp(static_cast<int>(std::floor(y)), 0, m_h - 1);
+    double fx = x - i, fy = y - j;
+    double a = entry(i, j, c), b = entry(i + 1, j, c), d = entry(i, j + 1, c), e = entry(i + 1, j + 1, c);
+    return (1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * d + fx * e);
+}
+
+double SummedAreaTable::extended_x(double x, double y, int c) const {
+    const double W = m_w;
+    switch (m_wrap_s) {
+        case WrapMode::Repeat: {
+            double q = std::floor(x / W), r = x - q * W;
+            return q * table(W, y, c) + table(r, y, c);
+        }
+        case WrapMode::Clamp:
+            if (x < 0) return x * table(1, y, c);
+            if (x > W) return table(W, y, c) + (x - W) * (table(W, y, c) - table(W - 1, y, c));
+            return table(x, y, c);
+        case WrapMode::Black:
+        case WrapMode::Mirror:  // mirror is not offered for SATs; treated as black outside
+            return table(std::clamp(x, 0.0, W), y, c);
+    }
+    return 0;
+}
+
+double SummedAreaTable::extended(double x, double y, int c) const {
+    const double H = m_h;
+    switch (m_wrap_t) {
+        case WrapMode::Repeat: {
+            double q = std::floor(y / H), r = y - q * H;
+            return q * extended_x(x, H, c) + extended_x(x, r, c);
+        }
+        case WrapMode::Clamp:
+            if (y < 0) return y * extended_x(x, 1, c);
+            if (y > H) return extended_x(x, H, c) + (y - H) * (extended_x(x, H, c) - extended_x(x, H - 1, c));
+            return extended_x(x, y, c);
+        case WrapMode::Black:
+        case WrapMode::Mirror:
+            return extended_x(x, std::clamp(y, 0.0, H), c);
+    }
+    return 0;
+}
+
+Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) const {
+    if (x0 > x1) std::swap(x0, x1);
+    if (y0 > y1) std::swap(y0, y1);
+    // Translate repeat-wrapped rectangles to the base period: small quotients, no cancellation.
+    if (m_wrap_s == WrapMode::Repeat) {
+        double shift = std::floor(x0 / m_w) * m_w;
+        x0 -= shift;
+        x1 -= shift;
+    }
+    if (m_wrap_t == WrapMode::Repeat) {
+        double shift = std::floor(y0 / m_h) * m_h;
+        y0 -= shift;
+        y1 -= shift;
+    }
+    Texel out{};
+    double area = (x1 - x0) * (y1 - y0);
+    for (int c = 0; c < m_c; ++c) {
+        double v = extended(x1, y1, c) - extended(x0, y1, c) - extended(x1, y0, c) + extended(x0, y0, c);
+        if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
+        out[c] = static_cast<float>(v);
+    }
+    // Black outside: the mean offset must not add texture outside the image.
+    if (m_storage == Storage::MeanOffsetFloat && (m_wrap_s != WrapMode::Repeat && m_wrap_s != WrapMode::Clamp ||
+                                                  m_wrap_t != WrapMode::Repeat && m_wrap_t != WrapMode::Clamp)) {
+        double cx0 = m_wrap_s == WrapMode::Black ? std::clamp(x0, 0.0, double(m_w)) : x0;
+        double cx1 = m_wrap_s == WrapMode::Black ? std::clamp(x1, 0.0, double(m_w)) : x1;
+        double cy0 = m_wrap_t == WrapMode::Black ? std::clamp(y0, 0.0, double(m_h)) : y0;
+        double cy1 = m_wrap_t == WrapMode::Black ? std::clamp(y1, 0.0, double(m_h)) : y1;
+        double inside = (cx1 - cx0) * (cy1 - cy0);
+        for (int c = 0; c < m_c; ++c) out[c] = static_cast<float>(out[c] - m_mean[c] * (area - inside));
+    }
+    return out;
+}
+
+Texel SummedAreaTable::average(double x0, double y0, double x1, double y1) const {
+    double area = std::abs((x1 - x0) * (y1 - y0));
+    if (!(area >= 1e-12)) {
+        double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+        Texel t = integral(std::floor(cx), std::floor(cy), std::floor(cx) + 1, std::floor(cy) + 1);
+        return t;
+    }
+    Texel t = integral(x0, y0, x1, y1);
+    for (float& v : t) v = static_cast<float>(v / area);
+    return t;
+}
+
+}  // namespace cmam::texture
