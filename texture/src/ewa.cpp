@@ -20,20 +20,26 @@ const float* ewa_weight_lut() {
     return lut.data();
 }
 
+EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t) {
+    EwaEllipse e;
+    e.A = a_t * a_t + b_t * b_t + 1;
+    e.B = -2 * (a_s * a_t + b_s * b_t);
+    e.C = a_s * a_s + b_s * b_s + 1;
+    e.F = e.A * e.C - e.B * e.B / 4;
+    // Normalised (divided by F): delta = 4AC - B^2; hx = 2 sqrt(C/delta), hy = 2 sqrt(A/delta).
+    double A = e.A / e.F, B = e.B / e.F, C = e.C / e.F;
+    double delta = 4 * A * C - B * B;
+    e.hx = 2 * std::sqrt(C / delta);
+    e.hy = 2 * std::sqrt(A / delta);
+    return e;
+}
+
 Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s, double b_t,
                 int* texels_read) {
     const int W = img.width(), H = img.height(), nc = img.channels();
     double s0 = u * W - 0.5, t0 = v * H - 0.5;
-    // Coefficients with the +1 reconstruction term, then normalised so Q < 1 is the ellipse.
-    double A = a_t * a_t + b_t * b_t + 1;
-    double B = -2 * (a_s * a_t + b_s * b_t);
-    double C = a_s * a_s + b_s * b_s + 1;
-    double F = A * C - B * B / 4;
-    A /= F;
-    B /= F;
-    C /= F;
-    double delta = 4 * A * C - B * B;
-    double hy = 2 * std::sqrt(A / delta);
+    EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
+    const double A = e.A / e.F, B = e.B / e.F, C = e.C / e.F, hy = e.hy;
     const float* lut = ewa_weight_lut();
     int t_lo = static_cast<int>(std::ceil(t0 - hy)), t_hi = static_cast<int>(std::floor(t0 + hy));
     double sum[4] = {0, 0, 0, 0}, wsum = 0;

@@ -114,6 +114,12 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             return t;
         }
         case FilterKind::Sat: {
+            constexpr double kMax = 1073741824.0;  // 2^30 texels: beyond, sums lose all precision
+            if (!(std::max({std::abs(rx0), std::abs(rx1), std::abs(ry0), std::abs(ry1)}) < kMax)) {
+                in.fallback = true;
+                in.texels_read = 1;
+                return m_image.mean();
+            }
             in.rect[0] = rx0;
             in.rect[1] = ry0;
             in.rect[2] = rx1;

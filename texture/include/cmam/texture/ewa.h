@@ -25,6 +25,14 @@ struct EwaResult {
 EwaResult ewa(const MipPyramid& pyramid, double u, double v, double au, double av, double bu, double bv,
               double max_aniso = 8);
 
+/// The ellipse of axes a, b (level texels) with the +1 reconstruction term: implicit
+/// coefficients before normalisation (A x^2 + B x y + C y^2 = F) and the bounding half-extents.
+struct EwaEllipse {
+    double A = 0, B = 0, C = 0, F = 0;
+    double hx = 0, hy = 0;
+};
+EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t);
+
 /// One EWA evaluation at level `l` with axes in level-0 texels (exposed for tests).
 Texel ewa_level(const Image& level, double u, double v, double a_s, double a_t, double b_s, double b_t,
                 int* texels_read);
