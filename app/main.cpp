@@ -1,4 +1,4 @@
-// cmam — command-line front end: `cmam render`, `cmam check`.
+// cmam — command-line front end: `cmam render`, `cmam check`, `cmam lookup`.
 // Libraries throw; this file is the only place that prints errors.
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <cstdlib>
 #include <mutex>
 
 #include "pbrt/parser.h"
@@ -23,6 +24,7 @@ struct RenderArgs {
     int spp = 0;
     int threads = 0;
     bool quiet = false;
+    bool stats = false;
 };
 
 void print_warning(const std::string& w) { std::cerr << w << "\n"; }
@@ -63,6 +65,25 @@ private:
     int m_last = -1;
 };
 
+void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
+    std::size_t level0 = 0, pyramids = 0, tables = 0;
+    for (const auto& [key, tex] : scene.images) {
+        level0 += tex->image().memory_bytes();
+        std::size_t all = tex->memory_bytes();
+        std::size_t sat = tex->sat_built() ? tex->sat().memory_bytes() : 0;
+        tables += sat;
+        pyramids += all - sat - tex->image().memory_bytes();
+    }
+    auto mb = [](std::size_t b) { return double(b) / (1 << 20); };
+    std::fprintf(stderr, "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB\n",
+                 scene.images.size(), mb(level0), mb(pyramids), mb(tables));
+    std::fprintf(stderr, "lookups: point-sampled (no footprint) %llu", (unsigned long long)stats.lookups_point_sampled);
+    for (int k = 0; k < texture::kFilterKinds; ++k)
+        std::fprintf(stderr, ", %s %llu", std::string(texture::to_string(texture::FilterKind(k))).c_str(),
+                     (unsigned long long)stats.lookups_by_filter[k]);
+    std::fprintf(stderr, "\n");
+}
+
 int run_render(const RenderArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
@@ -88,6 +109,96 @@ int run_render(const RenderArgs& a) {
                      fb.width, fb.height, scene->sampler.spp(), wall_s, render_s, (unsigned long long)rays,
                      render_s > 0 ? rays / render_s / 1e6 : 0.0);
     }
+    if (a.stats) print_stats(*scene, stats);
+    return 0;
+}
+
+struct LookupArgs {
+    std::string image, uv, axes, points, filter = "ewa", wrap = "repeat";
+    double max_aniso = 8;
+    bool json = false;
+};
+
+std::vector<double> parse_numbers(const std::string& text, const char* flag) {
+    std::vector<double> out;
+    std::size_t pos = 0;
+    while (pos <= text.size()) {
+        std::size_t comma = text.find(',', pos);
+        std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+        char* end = nullptr;
+        double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size())
+            throw std::invalid_argument(std::string(flag) + ": \"" + item + "\" is not a number");
+        out.push_back(v);
+        if (comma == std::string::npos) break;
+        pos = comma + 1;
+    }
+    return out;
+}
+
+std::string json_escape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        if (static_cast<unsigned char>(c) < 0x20) continue;
+        out += c;
+    }
+    return out;
+}
+
+int run_lookup(const LookupArgs& a) {
+    auto kind = texture::parse_filter(a.filter);
+    if (!kind) throw std::invalid_argument("--filter: unknown filter \"" + a.filter + "\" (expected nearest, bilinear, trilinear, sat or ewa)");
+    auto wrap = texture::parse_wrap_mode(a.wrap);
+    if (!wrap) throw std::invalid_argument("--wrap: unknown wrap mode \"" + a.wrap + "\" (expected repeat, clamp, black or mirror)");
+    auto uv = parse_numbers(a.uv, "--uv");
+    if (uv.size() != 2) throw std::invalid_argument("--uv needs two numbers: U,V");
+    texture::Footprint fp;
+    if (!a.axes.empty()) {
+        auto ax = parse_numbers(a.axes, "--axes");
+        if (ax.size() != 4) throw std::invalid_argument("--axes needs four numbers: AU,AV,BU,BV");
+        fp = texture::Footprint::axes({ax[0], ax[1]}, {ax[2], ax[3]});
+    } else if (!a.points.empty()) {
+        auto pt = parse_numbers(a.points, "--points");
+        if (pt.size() % 2 != 0 || pt.size() < 2 || pt.size() > 6)
+            throw std::invalid_argument("--points needs one to three U,V pairs (the current sample first)");
+        fp.kind = texture::Footprint::Kind::Points;
+        fp.point_count = static_cast<int>(pt.size() / 2);
+        for (int i = 0; i < fp.point_count; ++i) fp.points[i] = {pt[2 * i], pt[2 * i + 1]};
+        uv = {pt[0], pt[1]};
+    }
+    texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, *wrap));
+    texture::LookupInfo info;
+    texture::Texel v = tex.lookup(uv[0], uv[1], fp, {*kind, a.max_aniso}, &info);
+    const texture::Image& img = tex.image();
+    bool region = fp.kind != texture::Footprint::Kind::None && *kind != texture::FilterKind::Nearest &&
+                  *kind != texture::FilterKind::Bilinear && !info.fallback;
+    if (a.json) {
+        std::printf("{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"filter\": \"%s\", \"uv\": [%.9g, %.9g], "
+                    "\"value\": [%.9g, %.9g, %.9g], \"levels\": [%d, %d], \"lambda\": %.9g, \"texels_read\": %d, "
+                    "\"fallback\": %s",
+                    json_escape(a.image).c_str(), img.width(), img.height(), std::string(texture::to_string(*kind)).c_str(), uv[0],
+                    uv[1], v[0], v[1], v[2], info.level_lo, info.level_hi, info.lambda, info.texels_read,
+                    info.fallback ? "true" : "false");
+        if (region && *kind == texture::FilterKind::Sat)
+            std::printf(", \"rectangle_texels\": [%.9g, %.9g, %.9g, %.9g]", info.rect[0], info.rect[1], info.rect[2], info.rect[3]);
+        if (region && *kind == texture::FilterKind::Ewa)
+            std::printf(", \"ellipse_texels\": {\"major\": %.9g, \"minor\": %.9g}", info.major, info.minor);
+        if (region && *kind == texture::FilterKind::Trilinear) std::printf(", \"width_texels\": %.9g", info.width);
+        std::printf("}\n");
+        return 0;
+    }
+    std::printf("value (linear RGB): %.6f %.6f %.6f\n", v[0], v[1], v[2]);
+    std::printf("filter: %s, MIP levels %d..%d (lambda %.4f), texels read: %d%s\n",
+                std::string(texture::to_string(*kind)).c_str(), info.level_lo, info.level_hi, info.lambda,
+                info.texels_read, info.fallback ? " (non-finite input: texture mean)" : "");
+    if (!region) std::printf("footprint: none (bilinear at level 0)\n");
+    else if (*kind == texture::FilterKind::Sat)
+        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect[0], info.rect[2], info.rect[1], info.rect[3]);
+    else if (*kind == texture::FilterKind::Ewa)
+        std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n", info.major, info.minor);
+    else
+        std::printf("footprint: width %.4f texels\n", info.width);
     return 0;
 }
 
@@ -119,15 +230,33 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 1 << 20));
     render_cmd->add_option("--threads", ra.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
+    render_cmd->add_flag("--stats", ra.stats, "Print texture memory and lookup counts per filter");
 
     std::string check_path;
     auto* check_cmd = app.add_subcommand("check", "Parse and build a scene, report problems, render nothing");
     check_cmd->add_option("scene", check_path, "Scene file (.pbrt)")->required();
 
+    LookupArgs la;
+    auto* lookup_cmd = app.add_subcommand("lookup", "Filter one texture lookup and show what the filter did");
+    lookup_cmd->add_option("image", la.image, "Texture image")->required();
+    lookup_cmd->add_option("--uv", la.uv, "Lookup point U,V (v = 0 is the bottom row, as in pbrt-v3)");
+    auto* axes_opt = lookup_cmd->add_option("--axes", la.axes, "Footprint axes AU,AV,BU,BV in (u,v) units");
+    lookup_cmd->add_option("--points", la.points, "Footprint sample points U1,V1[,U2,V2[,U3,V3]], current first")
+        ->excludes(axes_opt);
+    lookup_cmd->add_option("--filter", la.filter, "nearest, bilinear, trilinear, sat or ewa")->capture_default_str();
+    lookup_cmd->add_option("--wrap", la.wrap, "repeat, clamp, black or mirror")->capture_default_str();
+    lookup_cmd->add_option("--maxaniso", la.max_aniso, "EWA maximum anisotropy")->capture_default_str()->check(CLI::Range(1.0, 1e6));
+    lookup_cmd->add_flag("--json", la.json, "One JSON object on stdout");
+
     CLI11_PARSE(app, argc, argv);
+    if (*lookup_cmd && la.uv.empty() && la.points.empty()) {
+        std::cerr << "cmam lookup: error: give --uv U,V (or --points)\n";
+        return 2;
+    }
     try {
         if (*render_cmd) return run_render(ra);
         if (*check_cmd) return run_check(check_path);
+        if (*lookup_cmd) return run_lookup(la);
     } catch (const pbrt::SceneError& e) {
         std::cerr << e.what() << "\n";
         return 1;

@@ -216,7 +216,7 @@ private:
         n->dv = float(e.params.get_float("vdelta", 0));
     }
 
-    const texture::Image* load_image(const Entity& e, bool is_float) {
+    const texture::FilteredTexture* load_image(const Entity& e, bool is_float) {
         const auto* fp = e.params.find("filename");
         if (!fp) throw SceneError(e.loc, "imagemap texture needs a \"string filename\" parameter");
         std::string name = e.params.get_string("filename", "");
@@ -226,40 +226,21 @@ private:
         if (!wrap || *wrap == texture::WrapMode::Mirror)
             throw SceneError(e.params.find("wrap")->loc, "unknown wrap mode " + q(wrap_name) + " (expected \"repeat\", \"black\" or \"clamp\")");
         float scale = float(e.params.get_float("scale", 1));
-        // pbrt-v3: 8-bit formats it reads (PNG, TGA) are sRGB-encoded unless "gamma" says otherwise.
-        RawImage raw;
+        std::optional<bool> gamma;
+        if (e.params.find("gamma")) gamma = e.params.get_bool("gamma", true);
+        std::string key = std::filesystem::weakly_canonical(path).string() + "|" + (is_float ? "f" : "s") + "|" +
+                          std::string(texture::to_string(*wrap)) + "|" + std::to_string(scale) + "|" +
+                          (gamma ? (*gamma ? "1" : "0") : "default");
+        auto it = m_scene->images.find(key);
+        if (it != m_scene->images.end()) return it->second.get();
+        texture::Image level0;
         try {
-            raw = read_image(path);
+            level0 = load_texture(path, is_float, gamma, scale, *wrap);
         } catch (const ImageIoError& err) {
             throw SceneError(fp->loc, err.what());
         }
-        bool gamma = e.params.get_bool("gamma", raw.is_8bit);
-        e.params.get_bool("trilinear", false);  // used by the filtering library
-        e.params.get_float("maxanisotropy", 8);
-        std::string key = std::filesystem::weakly_canonical(path).string() + "|" + (is_float ? "f" : "s") + "|" +
-                          std::string(texture::to_string(*wrap)) + "|" + std::to_string(scale) + "|" + (gamma ? "1" : "0");
-        auto it = m_scene->images.find(key);
-        if (it != m_scene->images.end()) return it->second.get();
-
-        int w = raw.width, h = raw.height, nc = raw.channels;
-        int out_c = is_float ? 1 : 3;
-        std::vector<float> texels(static_cast<std::size_t>(w) * h * out_c);
-        for (int y = 0; y < h; ++y) {
-            int j = h - 1 - y;  // flip: v = 0 is the bottom row (pbrt-v3)
-            for (int x = 0; x < w; ++x) {
-                const float* src = &raw.pixels[(static_cast<std::size_t>(y) * w + x) * nc];
-                float rgb[3] = {src[0], nc >= 3 ? src[1] : src[0], nc >= 3 ? src[2] : src[0]};
-                float* dst = &texels[(static_cast<std::size_t>(j) * w + x) * out_c];
-                if (is_float) {
-                    float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
-                    dst[0] = scale * (gamma ? texture::srgb_to_linear(yv) : yv);
-                } else {
-                    for (int c = 0; c < 3; ++c) dst[c] = scale * (gamma ? texture::srgb_to_linear(rgb[c]) : rgb[c]);
-                }
-            }
-        }
-        auto img = std::make_unique<texture::Image>(w, h, out_c, std::move(texels), *wrap, *wrap);
-        const texture::Image* ptr = img.get();
+        auto img = std::make_unique<texture::FilteredTexture>(std::move(level0));
+        const texture::FilteredTexture* ptr = img.get();
         m_scene->images.emplace(key, std::move(img));
         return ptr;
     }
@@ -276,6 +257,12 @@ private:
             n.kind = TextureNode::Kind::Image;
             uv_mapping(e, &n);
             n.image = load_image(e, t.is_float);
+            // pbrt-v3: EWA unless "trilinear" is true; "maxanisotropy" bounds EWA's eccentricity.
+            n.filter.kind = e.params.get_bool("trilinear", false) ? texture::FilterKind::Trilinear
+                                                                  : texture::FilterKind::Ewa;
+            n.filter.max_aniso = e.params.get_float("maxanisotropy", 8);
+            if (!(n.filter.max_aniso >= 1))
+                throw SceneError(e.params.find("maxanisotropy")->loc, "maxanisotropy must be at least 1");
         } else if (e.type == "constant") {
             n.kind = TextureNode::Kind::Constant;
             n.constant = input("value", 1).value;

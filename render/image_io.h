@@ -3,6 +3,9 @@
 // render never leaves a truncated image.
 #pragma once
 
+#include <cmam/texture/image.h>
+
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -24,6 +27,13 @@ struct RawImage {
 
 /// Reads an image; throws ImageIoError naming the file and the reason.
 RawImage read_image(const std::string& path);
+
+/// Reads a texture as pbrt-v3's imagemap does: flipped so that row 0 is v = 0, decoded from
+/// sRGB when `gamma` (default: when the file stores 8-bit data), multiplied by `scale`. Float
+/// textures (`is_float`) keep one channel, the luminance of the stored RGB (decoded after
+/// taking the luminance, as pbrt-v3 does); others keep RGB (grey files are replicated).
+texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma, float scale,
+                            texture::WrapMode wrap, bool* gamma_used = nullptr);
 
 /// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
 /// extension: .exr (32-bit float), .pfm (float), .png (8-bit sRGB, clamped), or anything else

@@ -37,6 +37,16 @@ Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
 /// Ray counts of one row, added to the shared totals once per row (no per-ray atomics).
 struct RayCounts {
     uint64_t camera = 0, secondary = 0, shadow = 0;
+    LookupCounts lookups;
+
+    void add_to(RenderStats* stats) const {
+        if (!stats) return;
+        stats->camera_rays += camera;
+        stats->secondary_rays += secondary;
+        stats->shadow_rays += shadow;
+        for (int k = 0; k < texture::kFilterKinds; ++k) stats->lookups_by_filter[k] += lookups.by_filter[k];
+        stats->lookups_point_sampled += lookups.point_sampled;
+    }
 };
 
 struct Tracer {
@@ -115,7 +125,7 @@ struct Tracer {
             SurfaceHit h;
             if (!scene.intersect(org, dir, 0, std::numeric_limits<float>::infinity(), &h)) return escaped();
             const Material& m = h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-            TexContext ctx{h.u, h.v, {}, {}};
+            TexContext ctx{h.u, h.v, {}, {}, counts ? &counts->lookups : nullptr};
             Bsdf bsdf;
             Vec3 wo = -dir;
             if (!make_bsdf(scene, m, h, ctx, &bsdf)) {
@@ -183,11 +193,7 @@ Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t see
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RenderStats* stats) {
     RayCounts c;
     Rgb L = trace_one(scene, org, dir, seed, &c);
-    if (stats) {
-        stats->camera_rays += c.camera;
-        stats->secondary_rays += c.secondary;
-        stats->shadow_rays += c.shadow;
-    }
+    c.add_to(stats);
     return L;
 }
 
@@ -229,11 +235,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                 }
             for (int c = 0; c < 3; ++c) out[3 * col + c] = static_cast<float>(sum[c] / spp);
         }
-        if (stats) {
-            stats->camera_rays += counts.camera;
-            stats->secondary_rays += counts.secondary;
-            stats->shadow_rays += counts.shadow;
-        }
+        counts.add_to(stats);
         int done = ++rows_done;
         if (options.progress) options.progress(done, fb.height);
     };

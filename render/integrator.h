@@ -14,6 +14,8 @@ namespace cmam::render {
 
 struct RenderStats {
     std::atomic<uint64_t> camera_rays{0}, secondary_rays{0}, shadow_rays{0};
+    std::atomic<uint64_t> lookups_by_filter[texture::kFilterKinds] = {};  // with a footprint
+    std::atomic<uint64_t> lookups_point_sampled{0};                      // without one
     uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
 };
 

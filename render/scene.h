@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmam/texture/footprint.h>
+#include <cmam/texture/filter.h>
 #include <cmam/texture/image.h>
 #include <map>
 #include <memory>
@@ -55,7 +56,8 @@ struct TextureNode {
     bool is_float = false;
     Rgb constant{};
     float su = 1, sv = 1, du = 0, dv = 0;       // uv mapping
-    const texture::Image* image = nullptr;       // Image: linear, scale applied
+    const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
+    texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
     TexInput tex1, tex2, amount;                 // Checkerboard, Scale, Mix
 };
 
@@ -118,7 +120,7 @@ public:
     std::vector<Material> materials;
     std::vector<Light> lights;
     std::vector<std::unique_ptr<Primitive>> primitives;
-    std::map<std::string, std::unique_ptr<texture::Image>> images;  // loaded once per settings
+    std::map<std::string, std::unique_ptr<texture::FilteredTexture>> images;  // loaded once per settings
     Material default_material;
 
     /// Creates the Embree scene from `primitives`; call once after filling them.

@@ -1,16 +1,17 @@
 #include "render/shading.h"
 
-#include <cmam/texture/filters.h>
 
 namespace cmam::render {
 
-texture::Texel lookup_image(const texture::Image& image, double s, double t,
-                            const texture::Footprint& footprint, texture::RayTag tag) {
-    // Until footprint producers and filters are wired in, every lookup is a bilinear point
-    // sample at level 0 (what an empty footprint means).
-    (void)footprint;
-    (void)tag;
-    return texture::bilinear(image, s, t);
+texture::Texel lookup_image(const texture::FilteredTexture& image, const texture::FilterOptions& filter, double s,
+                            double t, const texture::Footprint& footprint, texture::RayTag tag,
+                            LookupCounts* counts) {
+    (void)tag;  // consumed by the CMAM, which sits in front of this call
+    if (counts) {
+        if (footprint.kind == texture::Footprint::Kind::None) ++counts->point_sampled;
+        else ++counts->by_filter[static_cast<int>(filter.kind)];
+    }
+    return image.lookup(s, t, footprint, filter);
 }
 
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
@@ -20,8 +21,13 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
         case TextureNode::Kind::Constant: return n.constant;
         case TextureNode::Kind::Image: {
             double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
-            texture::Texel x = lookup_image(*n.image, s, t, ctx.footprint, ctx.tag);
-            if (n.image->channels() == 1) return Rgb(x[0]);
+            texture::Footprint fp = ctx.footprint;
+            if (fp.kind == texture::Footprint::Kind::Axes) {  // the uv mapping scales the axes too
+                fp.axis_a = {fp.axis_a.u * n.su, fp.axis_a.v * n.sv};
+                fp.axis_b = {fp.axis_b.u * n.su, fp.axis_b.v * n.sv};
+            }
+            texture::Texel x = lookup_image(*n.image, n.filter, s, t, fp, ctx.tag, ctx.counts);
+            if (n.image->image().channels() == 1) return Rgb(x[0]);
             return Rgb(x[0], x[1], x[2]);
         }
         case TextureNode::Kind::Checkerboard: {

@@ -7,16 +7,25 @@
 
 namespace cmam::render {
 
+/// Image lookups per filter (index: texture::FilterKind) plus those made without a footprint.
+struct LookupCounts {
+    uint64_t by_filter[texture::kFilterKinds] = {};
+    uint64_t point_sampled = 0;  // no footprint: bilinear at level 0 whatever the filter
+};
+
 /// What a texture lookup knows about the shading point.
 struct TexContext {
     float u = 0, v = 0;              // surface (u,v) of the hit
     texture::Footprint footprint{};  // texture-space footprint of the pixel (None: point sample)
     texture::RayTag tag{};           // the ray's tag (ID, recursion level)
+    LookupCounts* counts = nullptr;  // optional statistics
 };
 
-/// The texture lookup seam: filtered value of `image` at texture coordinates (s,t).
-texture::Texel lookup_image(const texture::Image& image, double s, double t,
-                            const texture::Footprint& footprint, texture::RayTag tag);
+/// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the
+/// footprint mapped through the same (u,v) -> (s,t) scale.
+texture::Texel lookup_image(const texture::FilteredTexture& image, const texture::FilterOptions& filter, double s,
+                            double t, const texture::Footprint& footprint, texture::RayTag tag,
+                            LookupCounts* counts);
 
 /// Evaluates a texture input (constant or node) at a shading point; float textures return
 /// their value in all three channels.

@@ -23,3 +23,19 @@ execute_process(COMMAND ${CMAM} check ${SCENES}/demo.pbrt RESULT_VARIABLE rc OUT
 if(NOT rc EQUAL 0 OR NOT out MATCHES "ok:")
   message(FATAL_ERROR "check failed: ${out}")
 endif()
+# cmam lookup: the JSON object carries the documented keys, and the value of a constant-footprint
+# lookup at level 0 is the bilinear texel value.
+execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv 0.3,0.6 --axes 0.02,0.005,0,0.01 --json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "lookup failed: ${err}")
+endif()
+foreach(key value levels texels_read ellipse_texels)
+  if(NOT out MATCHES "\"${key}\"")
+    message(FATAL_ERROR "lookup JSON lacks ${key}: ${out}")
+  endif()
+endforeach()
+execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv 0.3,nope RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "--uv: \"nope\" is not a number")
+  message(FATAL_ERROR "bad --uv must fail clearly: ${err}")
+endif()

@@ -48,6 +48,8 @@ public:
     const MipPyramid& pyramid() const;
     const SummedAreaTable& sat() const;
     std::size_t memory_bytes() const;  // level 0 + whatever has been built
+    bool pyramid_built() const { return m_pyramid != nullptr; }
+    bool sat_built() const { return m_sat != nullptr; }
 
     /// Filtered value at (u,v) (unwrapped uv; v = 0 is the bottom row).
     Texel lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
