@@ -33,6 +33,7 @@ test: deps
 bench: deps
 	@$(MAKE) --no-print-directory build
 	@$(BUILD)/bench/render_bench
+	@$(BUILD)/bench/filter_bench
 
 clean:
 	rm -rf build

@@ -54,20 +54,22 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
         double x_lo = (-bq - sq) / (2 * A), x_hi = (-bq + sq) / (2 * A);
         int s_lo = static_cast<int>(std::ceil(s0 + x_lo)), s_hi = static_cast<int>(std::floor(s0 + x_hi));
         int64_t jt = wrap_index(it, H, img.wrap_t());
+        // Q is evaluated directly per texel (not incrementally): the weight-table index
+        // floor(r2 * N) must not depend on accumulated rounding.
+        const double by = B * y, cyy = C * y * y;
+        const bool inside = jt >= 0 && s_lo >= 0 && s_hi < W;
+        const float* row = jt >= 0 ? img.texel(0, static_cast<int>(jt)) : nullptr;
         for (int is = s_lo; is <= s_hi; ++is) {
-            double x = is - s0;
-            double r2 = A * x * x + B * x * y + C * y * y;
+            const double x = is - s0;
+            const double r2 = A * x * x + by * x + cyy;
             if (r2 >= 1) continue;
             float w = lut[std::min(static_cast<int>(r2 * kEwaLutSize), kEwaLutSize - 1)];
             ++count;
-            if (jt < 0) {  // black row: weight counts, value 0
-                wsum += w;
-                continue;
-            }
-            int64_t js = wrap_index(is, W, img.wrap_s());
             wsum += w;
+            if (!row) continue;  // black row: weight counts, value 0
+            int64_t js = inside ? is : wrap_index(is, W, img.wrap_s());
             if (js < 0) continue;
-            const float* t = img.texel(static_cast<int>(js), static_cast<int>(jt));
+            const float* t = row + js * nc;
             for (int c = 0; c < nc; ++c) sum[c] += w * t[c];
         }
     }

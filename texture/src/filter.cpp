@@ -29,19 +29,29 @@ std::string_view to_string(FilterKind k) {
 FilteredTexture::FilteredTexture(Image level0) : m_image(std::move(level0)) {}
 
 const MipPyramid& FilteredTexture::pyramid() const {
-    std::call_once(m_pyr_once, [&] { m_pyramid = std::make_unique<MipPyramid>(m_image); });
+    if (MipPyramid* p = m_pyr_ready.load(std::memory_order_acquire)) return *p;
+    std::lock_guard<std::mutex> lock(m_build);
+    if (!m_pyramid) {
+        m_pyramid = std::make_unique<MipPyramid>(m_image);
+        m_pyr_ready.store(m_pyramid.get(), std::memory_order_release);
+    }
     return *m_pyramid;
 }
 
 const SummedAreaTable& FilteredTexture::sat() const {
-    std::call_once(m_sat_once, [&] { m_sat = std::make_unique<SummedAreaTable>(m_image); });
+    if (SummedAreaTable* p = m_sat_ready.load(std::memory_order_acquire)) return *p;
+    std::lock_guard<std::mutex> lock(m_build);
+    if (!m_sat) {
+        m_sat = std::make_unique<SummedAreaTable>(m_image);
+        m_sat_ready.store(m_sat.get(), std::memory_order_release);
+    }
     return *m_sat;
 }
 
 std::size_t FilteredTexture::memory_bytes() const {
     std::size_t n = m_image.memory_bytes();
-    if (m_pyramid) n += m_pyramid->memory_bytes() - m_image.memory_bytes();
-    if (m_sat) n += m_sat->memory_bytes();
+    if (pyramid_built()) n += m_pyramid->memory_bytes() - m_image.memory_bytes();
+    if (sat_built()) n += m_sat->memory_bytes();
     return n;
 }
 
@@ -103,8 +113,8 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
     switch (opts.kind) {
         case FilterKind::Trilinear: {
             double width = fp.kind == Footprint::Kind::Axes
-                               ? std::max(std::hypot(a.u * W, a.v * H), std::hypot(b.u * W, b.v * H))
-                               : std::hypot(rx1 - rx0, ry1 - ry0);  // diagonal of the points' box
+                               ? std::sqrt(std::max(a.u * a.u * W * W + a.v * a.v * H * H, b.u * b.u * W * W + b.v * b.v * H * H))
+                               : std::sqrt((rx1 - rx0) * (rx1 - rx0) + (ry1 - ry0) * (ry1 - ry0));  // box diagonal
             in.width = width;
             Texel t = pyramid().trilinear(u, v, width, &in.lambda);
             in.level_lo = static_cast<int>(std::floor(in.lambda));

@@ -71,16 +71,14 @@ bool usable(double x) { return std::isfinite(x) && std::abs(x) < kMaxCoord; }
 Texel nearest(const Image& image, double u, double v) {
     double s = u * image.width(), t = v * image.height();
     if (!usable(s) || !usable(t)) return image.mean();
-    return image.fetch(static_cast<int64_t>(std::floor(s)), static_cast<int64_t>(std::floor(t)));
+    return image.fetch(floor_to_int(s), floor_to_int(t));
 }
 
 Texel bilinear(const Image& image, double u, double v) {
     double s = u * image.width() - 0.5, t = v * image.height() - 0.5;
     if (!usable(s) || !usable(t)) return image.mean();
-    double fs0 = std::floor(s), ft0 = std::floor(t);
-    auto i0 = static_cast<int64_t>(fs0);
-    auto j0 = static_cast<int64_t>(ft0);
-    float fs = static_cast<float>(s - fs0), ft = static_cast<float>(t - ft0);
+    int64_t i0 = floor_to_int(s), j0 = floor_to_int(t);
+    float fs = static_cast<float>(s - static_cast<double>(i0)), ft = static_cast<float>(t - static_cast<double>(j0));
     // Tiled textures: move the lattice cell into the base period so the fast path applies.
     if (image.wrap_s() == WrapMode::Repeat) i0 = wrap_index(i0, image.width(), WrapMode::Repeat);
     if (image.wrap_t() == WrapMode::Repeat) j0 = wrap_index(j0, image.height(), WrapMode::Repeat);

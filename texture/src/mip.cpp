@@ -84,7 +84,7 @@ Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_use
         return level(L - 1).mean();
     }
     if (lambda_used) *lambda_used = lambda;
-    int l = static_cast<int>(std::floor(lambda));
+    int l = static_cast<int>(lambda);  // lambda > 0 here
     float f = static_cast<float>(lambda - l);
     Texel a = bilinear(l, u, v), b = bilinear(l + 1, u, v);
     Texel out{};

@@ -7,6 +7,7 @@
 #include <cmam/texture/mip.h>
 #include <cmam/texture/sat.h>
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -48,8 +49,8 @@ public:
     const MipPyramid& pyramid() const;
     const SummedAreaTable& sat() const;
     std::size_t memory_bytes() const;  // level 0 + whatever has been built
-    bool pyramid_built() const { return m_pyramid != nullptr; }
-    bool sat_built() const { return m_sat != nullptr; }
+    bool pyramid_built() const { return m_pyr_ready.load(std::memory_order_acquire) != nullptr; }
+    bool sat_built() const { return m_sat_ready.load(std::memory_order_acquire) != nullptr; }
 
     /// Filtered value at (u,v) (unwrapped uv; v = 0 is the bottom row).
     Texel lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
@@ -57,7 +58,9 @@ public:
 
 private:
     Image m_image;
-    mutable std::once_flag m_pyr_once, m_sat_once;
+    mutable std::mutex m_build;
+    mutable std::atomic<MipPyramid*> m_pyr_ready{nullptr};  // set once the pyramid is complete
+    mutable std::atomic<SummedAreaTable*> m_sat_ready{nullptr};
     mutable std::unique_ptr<MipPyramid> m_pyramid;
     mutable std::unique_ptr<SummedAreaTable> m_sat;
 };

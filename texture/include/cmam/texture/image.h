@@ -71,6 +71,12 @@ private:
     Texel m_mean{};
 };
 
+/// floor() for |x| < 2^62 without a libm call (baseline x86-64 has no rounding instruction).
+inline int64_t floor_to_int(double x) {
+    auto i = static_cast<int64_t>(x);
+    return i - (static_cast<double>(i) > x ? 1 : 0);
+}
+
 /// Maps index i into [0,n) for the given wrap mode; returns -1 for Black outside.
 inline int64_t wrap_index(int64_t i, int64_t n, WrapMode mode) {
     if (i >= 0 && i < n) return i;
