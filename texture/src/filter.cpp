@@ -65,13 +65,24 @@ bool finite(const Footprint& fp, double u, double v) {
         if (!std::isfinite(fp.points[i].u) || !std::isfinite(fp.points[i].v)) return false;
     return true;
 }
+// Bounding box of the footprint's points in level-0 texels: x0, y0, x1, y1.
+void points_box(const Footprint& fp, double W, double H, double* r) {
+    r[0] = r[2] = fp.points[0].u * W;
+    r[1] = r[3] = fp.points[0].v * H;
+    for (int i = 1; i < fp.point_count; ++i) {
+        r[0] = std::min(r[0], fp.points[i].u * W);
+        r[2] = std::max(r[2], fp.points[i].u * W);
+        r[1] = std::min(r[1], fp.points[i].v * H);
+        r[3] = std::max(r[3], fp.points[i].v * H);
+    }
+}
 }  // namespace
 
 Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
                               LookupInfo* info) const {
-    LookupInfo local;
-    LookupInfo& in = info ? *info : local;
-    in = LookupInfo{};
+    LookupInfo scratch;  // written only when the caller asks for it
+    LookupInfo& in = info ? *info : scratch;
+    if (info) *info = LookupInfo{};
     const double W = m_image.width(), H = m_image.height();
     if (!finite(fp, u, v)) {
         in.fallback = true;
@@ -86,65 +97,69 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
         in.texels_read = 4;
         return bilinear(m_image, u, v);
     }
-    // Reduce the footprint to two axis vectors (uv units) and, for SAT, a rectangle.
+    // Reduce the footprint to two axis vectors (uv units).
     Vec2d a = fp.axis_a, b = fp.axis_b;
-    double rx0, ry0, rx1, ry1;
-    if (fp.kind == Footprint::Kind::Axes) {
-        // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box.
-        double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W, ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
-        rx0 = u * W - hs;
-        rx1 = u * W + hs;
-        ry0 = v * H - ht;
-        ry1 = v * H + ht;
-    } else {
-        // Points: vectors from the current sample (first) to the others; box of all points.
+    if (fp.kind == Footprint::Kind::Points) {  // vectors from the current sample (first) to the others
         a = b = Vec2d{};
         if (fp.point_count > 1) a = {fp.points[1].u - fp.points[0].u, fp.points[1].v - fp.points[0].v};
         if (fp.point_count > 2) b = {fp.points[2].u - fp.points[0].u, fp.points[2].v - fp.points[0].v};
-        rx0 = rx1 = fp.points[0].u * W;
-        ry0 = ry1 = fp.points[0].v * H;
-        for (int i = 1; i < fp.point_count; ++i) {
-            rx0 = std::min(rx0, fp.points[i].u * W);
-            rx1 = std::max(rx1, fp.points[i].u * W);
-            ry0 = std::min(ry0, fp.points[i].v * H);
-            ry1 = std::max(ry1, fp.points[i].v * H);
-        }
     }
     switch (opts.kind) {
         case FilterKind::Trilinear: {
-            double width = fp.kind == Footprint::Kind::Axes
-                               ? std::sqrt(std::max(a.u * a.u * W * W + a.v * a.v * H * H, b.u * b.u * W * W + b.v * b.v * H * H))
-                               : std::sqrt((rx1 - rx0) * (rx1 - rx0) + (ry1 - ry0) * (ry1 - ry0));  // box diagonal
-            in.width = width;
-            Texel t = pyramid().trilinear(u, v, width, &in.lambda);
-            in.level_lo = static_cast<int>(std::floor(in.lambda));
-            in.level_hi = in.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-            in.texels_read = in.level_lo == in.level_hi ? 4 : 8;
-            if (in.lambda >= pyramid().levels() - 1) in.texels_read = 1;
+            double width2;
+            if (fp.kind == Footprint::Kind::Axes) {
+                width2 = std::max(a.u * a.u * W * W + a.v * a.v * H * H, b.u * b.u * W * W + b.v * b.v * H * H);
+            } else {  // diagonal of the points' bounding box
+                double rect[4];
+                points_box(fp, W, H, rect);
+                width2 = (rect[2] - rect[0]) * (rect[2] - rect[0]) + (rect[3] - rect[1]) * (rect[3] - rect[1]);
+            }
+            const MipPyramid& pyr = pyramid();
+            double lambda = 0;
+            Texel t = pyr.trilinear(u, v, std::sqrt(width2), &lambda);
+            if (info) {
+                in.width = std::sqrt(width2);
+                in.lambda = lambda;
+                in.level_lo = static_cast<int>(std::floor(lambda));
+                in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
+                in.texels_read = lambda >= pyr.levels() - 1 ? 1 : (in.level_lo == in.level_hi ? 4 : 8);
+            }
             return t;
         }
         case FilterKind::Sat: {
+            double r[4];
+            if (fp.kind == Footprint::Kind::Axes) {
+                // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box.
+                double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W, ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
+                r[0] = u * W - hs;
+                r[1] = v * H - ht;
+                r[2] = u * W + hs;
+                r[3] = v * H + ht;
+            } else {
+                points_box(fp, W, H, r);
+            }
             constexpr double kMax = 1073741824.0;  // 2^30 texels: beyond, sums lose all precision
-            if (!(std::max({std::abs(rx0), std::abs(rx1), std::abs(ry0), std::abs(ry1)}) < kMax)) {
+            if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) < kMax)) {
                 in.fallback = true;
                 in.texels_read = 1;
                 return m_image.mean();
             }
-            in.rect[0] = rx0;
-            in.rect[1] = ry0;
-            in.rect[2] = rx1;
-            in.rect[3] = ry1;
-            in.texels_read = 16;
-            return sat().average(rx0, ry0, rx1, ry1);
+            if (info) {
+                std::copy(r, r + 4, in.rect);
+                in.texels_read = 16;
+            }
+            return sat().average(r[0], r[1], r[2], r[3]);
         }
         case FilterKind::Ewa: {
             EwaResult r = ewa(pyramid(), u, v, a.u, a.v, b.u, b.v, opts.max_aniso);
-            in.lambda = r.lambda;
-            in.level_lo = static_cast<int>(std::floor(r.lambda));
-            in.level_hi = r.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-            in.texels_read = r.texels_read;
-            in.major = r.major;
-            in.minor = r.minor;
+            if (info) {
+                in.lambda = r.lambda;
+                in.level_lo = static_cast<int>(std::floor(r.lambda));
+                in.level_hi = r.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
+                in.texels_read = r.texels_read;
+                in.major = r.major;
+                in.minor = r.minor;
+            }
             return r.value;
         }
         default: break;

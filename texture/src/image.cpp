@@ -87,11 +87,12 @@ Texel bilinear(const Image& image, double u, double v) {
     // Fast path: all four texels inside the image.
     if (i0 >= 0 && j0 >= 0 && i0 + 1 < image.width() && j0 + 1 < image.height()) {
         const float* a = image.texel(static_cast<int>(i0), static_cast<int>(j0));
-        const float* b = a + nc;
-        const float* c = image.texel(static_cast<int>(i0), static_cast<int>(j0 + 1));
-        const float* d = c + nc;
-        for (int k = 0; k < nc; ++k)
-            out[k] = (1 - ft) * ((1 - fs) * a[k] + fs * b[k]) + ft * ((1 - fs) * c[k] + fs * d[k]);
+        const float* c = a + static_cast<std::ptrdiff_t>(image.width()) * nc;
+        const float w00 = (1 - fs) * (1 - ft), w10 = fs * (1 - ft), w01 = (1 - fs) * ft, w11 = fs * ft;
+        auto blend = [&](int k) { return w00 * a[k] + w10 * a[nc + k] + w01 * c[k] + w11 * c[nc + k]; };
+        if (nc == 3) return {blend(0), blend(1), blend(2), 0.0f};
+        if (nc == 1) return {blend(0), 0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < nc; ++k) out[k] = blend(k);
         return out;
     }
     Texel a = image.fetch(i0, j0), b = image.fetch(i0 + 1, j0);
