@@ -1,12 +1,12 @@
 // cmam — command-line front end: `cmam render`, `cmam check`, `cmam lookup`.
 // Libraries throw; this file is the only place that prints errors.
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <cstdlib>
+#include <iostream>
 #include <mutex>
 
 #include "pbrt/parser.h"
@@ -27,18 +27,23 @@ struct RenderArgs {
     bool stats = false;
 };
 
-void print_warning(const std::string& w) { std::cerr << w << "\n"; }
+void print_warning(const std::string& w) {
+    std::cerr << w << "\n";
+}
 
 std::string format_duration(double s) {
     char buf[64];
-    if (s < 60) std::snprintf(buf, sizeof buf, "%.1fs", s);
-    else std::snprintf(buf, sizeof buf, "%dm%02ds", int(s) / 60, int(s) % 60);
+    if (s < 60)
+        std::snprintf(buf, sizeof buf, "%.1fs", s);
+    else
+        std::snprintf(buf, sizeof buf, "%dm%02ds", int(s) / 60, int(s) % 60);
     return buf;
 }
 
 class ProgressBar {
-public:
-    explicit ProgressBar(bool enabled) : m_enabled(enabled), m_start(std::chrono::steady_clock::now()) {}
+  public:
+    explicit ProgressBar(bool enabled)
+        : m_enabled(enabled), m_start(std::chrono::steady_clock::now()) {}
     void update(int done, int total) {
         if (!m_enabled) return;
         std::lock_guard<std::mutex> lock(m_mutex);
@@ -46,19 +51,20 @@ public:
         int pct = int(frac * 100);
         if (pct == m_last && done != total) return;
         m_last = pct;
-        double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
+        double el =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
         double eta = frac > 0 ? el / frac - el : 0;
         constexpr int kWidth = 40;
         int fill = int(frac * kWidth);
         std::string bar(fill, '=');
         bar.resize(kWidth, ' ');
-        std::fprintf(stderr, "\r[%s] %3d%%  elapsed %s  ETA %s   ", bar.c_str(), pct, format_duration(el).c_str(),
-                     format_duration(eta).c_str());
+        std::fprintf(stderr, "\r[%s] %3d%%  elapsed %s  ETA %s   ", bar.c_str(), pct,
+                     format_duration(el).c_str(), format_duration(eta).c_str());
         if (done == total) std::fprintf(stderr, "\n");
         std::fflush(stderr);
     }
 
-private:
+  private:
     bool m_enabled;
     std::chrono::steady_clock::time_point m_start;
     std::mutex m_mutex;
@@ -75,11 +81,15 @@ void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
         pyramids += all - sat - tex->image().memory_bytes();
     }
     auto mb = [](std::size_t b) { return double(b) / (1 << 20); };
-    std::fprintf(stderr, "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB\n",
-                 scene.images.size(), mb(level0), mb(pyramids), mb(tables));
-    std::fprintf(stderr, "lookups: point-sampled (no footprint) %llu", (unsigned long long)stats.lookups_point_sampled);
+    std::fprintf(
+        stderr,
+        "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB\n",
+        scene.images.size(), mb(level0), mb(pyramids), mb(tables));
+    std::fprintf(stderr, "lookups: point-sampled (no footprint) %llu",
+                 (unsigned long long)stats.lookups_point_sampled);
     for (int k = 0; k < texture::kFilterKinds; ++k)
-        std::fprintf(stderr, ", %s %llu", std::string(texture::to_string(texture::FilterKind(k))).c_str(),
+        std::fprintf(stderr, ", %s %llu",
+                     std::string(texture::to_string(texture::FilterKind(k))).c_str(),
                      (unsigned long long)stats.lookups_by_filter[k]);
     std::fprintf(stderr, "\n");
 }
@@ -105,9 +115,10 @@ int run_render(const RenderArgs& a) {
     double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!a.quiet) {
         uint64_t rays = stats.total_rays();
-        std::fprintf(stderr, "%s: %dx%d, %d spp, wall %.3fs (render %.3fs), %llu rays, %.2f Mrays/s\n", out.c_str(),
-                     fb.width, fb.height, scene->sampler.spp(), wall_s, render_s, (unsigned long long)rays,
-                     render_s > 0 ? rays / render_s / 1e6 : 0.0);
+        std::fprintf(stderr,
+                     "%s: %dx%d, %d spp, wall %.3fs (render %.3fs), %llu rays, %.2f Mrays/s\n",
+                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, render_s,
+                     (unsigned long long)rays, render_s > 0 ? rays / render_s / 1e6 : 0.0);
     }
     if (a.stats) print_stats(*scene, stats);
     return 0;
@@ -124,7 +135,8 @@ std::vector<double> parse_numbers(const std::string& text, const char* flag) {
     std::size_t pos = 0;
     while (pos <= text.size()) {
         std::size_t comma = text.find(',', pos);
-        std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+        std::string item =
+            text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
         char* end = nullptr;
         double v = std::strtod(item.c_str(), &end);
         if (item.empty() || end != item.c_str() + item.size())
@@ -148,9 +160,13 @@ std::string json_escape(const std::string& s) {
 
 int run_lookup(const LookupArgs& a) {
     auto kind = texture::parse_filter(a.filter);
-    if (!kind) throw std::invalid_argument("--filter: unknown filter \"" + a.filter + "\" (expected nearest, bilinear, trilinear, sat or ewa)");
+    if (!kind)
+        throw std::invalid_argument("--filter: unknown filter \"" + a.filter +
+                                    "\" (expected nearest, bilinear, trilinear, sat or ewa)");
     auto wrap = texture::parse_wrap_mode(a.wrap);
-    if (!wrap) throw std::invalid_argument("--wrap: unknown wrap mode \"" + a.wrap + "\" (expected repeat, clamp, black or mirror)");
+    if (!wrap)
+        throw std::invalid_argument("--wrap: unknown wrap mode \"" + a.wrap +
+                                    "\" (expected repeat, clamp, black or mirror)");
     auto uv = parse_numbers(a.uv, "--uv");
     if (uv.size() != 2) throw std::invalid_argument("--uv needs two numbers: U,V");
     texture::Footprint fp;
@@ -161,7 +177,8 @@ int run_lookup(const LookupArgs& a) {
     } else if (!a.points.empty()) {
         auto pt = parse_numbers(a.points, "--points");
         if (pt.size() % 2 != 0 || pt.size() < 2 || pt.size() > 6)
-            throw std::invalid_argument("--points needs one to three U,V pairs (the current sample first)");
+            throw std::invalid_argument(
+                "--points needs one to three U,V pairs (the current sample first)");
         fp.kind = texture::Footprint::Kind::Points;
         fp.point_count = static_cast<int>(pt.size() / 2);
         for (int i = 0; i < fp.point_count; ++i) fp.points[i] = {pt[2 * i], pt[2 * i + 1]};
@@ -171,32 +188,44 @@ int run_lookup(const LookupArgs& a) {
     texture::LookupInfo info;
     texture::Texel v = tex.lookup(uv[0], uv[1], fp, {*kind, a.max_aniso}, &info);
     const texture::Image& img = tex.image();
-    bool region = fp.kind != texture::Footprint::Kind::None && *kind != texture::FilterKind::Nearest &&
-                  *kind != texture::FilterKind::Bilinear && !info.fallback;
+    bool region = fp.kind != texture::Footprint::Kind::None &&
+                  *kind != texture::FilterKind::Nearest && *kind != texture::FilterKind::Bilinear &&
+                  !info.fallback;
     if (a.json) {
-        std::printf("{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"filter\": \"%s\", \"uv\": [%.9g, %.9g], "
-                    "\"value\": [%.9g, %.9g, %.9g], \"levels\": [%d, %d], \"lambda\": %.9g, \"texels_read\": %d, "
-                    "\"fallback\": %s",
-                    json_escape(a.image).c_str(), img.width(), img.height(), std::string(texture::to_string(*kind)).c_str(), uv[0],
-                    uv[1], v[0], v[1], v[2], info.level_lo, info.level_hi, info.lambda, info.texels_read,
-                    info.fallback ? "true" : "false");
+        std::printf(
+            "{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"filter\": \"%s\", \"uv\": [%.9g, "
+            "%.9g], "
+            "\"value\": [%.9g, %.9g, %.9g], \"levels\": [%d, %d], \"lambda\": %.9g, "
+            "\"texels_read\": %d, "
+            "\"fallback\": %s",
+            json_escape(a.image).c_str(), img.width(), img.height(),
+            std::string(texture::to_string(*kind)).c_str(), uv[0], uv[1], v[0], v[1], v[2],
+            info.level_lo, info.level_hi, info.lambda, info.texels_read,
+            info.fallback ? "true" : "false");
         if (region && *kind == texture::FilterKind::Sat)
-            std::printf(", \"rectangle_texels\": [%.9g, %.9g, %.9g, %.9g]", info.rect[0], info.rect[1], info.rect[2], info.rect[3]);
+            std::printf(", \"rectangle_texels\": [%.9g, %.9g, %.9g, %.9g]", info.rect[0],
+                        info.rect[1], info.rect[2], info.rect[3]);
         if (region && *kind == texture::FilterKind::Ewa)
-            std::printf(", \"ellipse_texels\": {\"major\": %.9g, \"minor\": %.9g}", info.major, info.minor);
-        if (region && *kind == texture::FilterKind::Trilinear) std::printf(", \"width_texels\": %.9g", info.width);
+            std::printf(", \"ellipse_texels\": {\"major\": %.9g, \"minor\": %.9g}", info.major,
+                        info.minor);
+        if (region && *kind == texture::FilterKind::Trilinear)
+            std::printf(", \"width_texels\": %.9g", info.width);
         std::printf("}\n");
         return 0;
     }
     std::printf("value (linear RGB): %.6f %.6f %.6f\n", v[0], v[1], v[2]);
     std::printf("filter: %s, MIP levels %d..%d (lambda %.4f), texels read: %d%s\n",
-                std::string(texture::to_string(*kind)).c_str(), info.level_lo, info.level_hi, info.lambda,
-                info.texels_read, info.fallback ? " (non-finite input: texture mean)" : "");
-    if (!region) std::printf("footprint: none (bilinear at level 0)\n");
+                std::string(texture::to_string(*kind)).c_str(), info.level_lo, info.level_hi,
+                info.lambda, info.texels_read,
+                info.fallback ? " (non-finite input: texture mean)" : "");
+    if (!region)
+        std::printf("footprint: none (bilinear at level 0)\n");
     else if (*kind == texture::FilterKind::Sat)
-        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect[0], info.rect[2], info.rect[1], info.rect[3]);
+        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect[0],
+                    info.rect[2], info.rect[1], info.rect[3]);
     else if (*kind == texture::FilterKind::Ewa)
-        std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n", info.major, info.minor);
+        std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n",
+                    info.major, info.minor);
     else
         std::printf("footprint: width %.4f texels\n", info.width);
     return 0;
@@ -207,12 +236,16 @@ int run_check(const std::string& path) {
     auto scene = render::build_scene(desc, {}, print_warning);
     std::size_t tris = 0, quadrics = 0;
     for (const auto& p : scene->primitives) {
-        if (p->kind == render::Primitive::Kind::Triangles) tris += p->indices.size() / 3;
-        else ++quadrics;
+        if (p->kind == render::Primitive::Kind::Triangles)
+            tris += p->indices.size() / 3;
+        else
+            ++quadrics;
     }
-    std::printf("%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics, %zu lights, %zu materials, %zu textures\n",
-                path.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris, quadrics,
-                scene->lights.size(), scene->materials.size(), scene->textures.size());
+    std::printf(
+        "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics, %zu lights, %zu materials, %zu "
+        "textures\n",
+        path.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris,
+        quadrics, scene->lights.size(), scene->materials.size(), scene->textures.size());
     return 0;
 }
 
@@ -225,27 +258,40 @@ int main(int argc, char** argv) {
     RenderArgs ra;
     auto* render_cmd = app.add_subcommand("render", "Render a pbrt-v3 scene");
     render_cmd->add_option("scene", ra.scene, "Scene file (.pbrt)")->required();
-    render_cmd->add_option("-o,--output", ra.output, "Output image (.exr, .pfm, .png); default: the Film's filename");
-    render_cmd->add_option("--spp", ra.spp, "Samples per pixel (rounded to a square; 1 = pixel centre)")
+    render_cmd->add_option("-o,--output", ra.output,
+                           "Output image (.exr, .pfm, .png); default: the Film's filename");
+    render_cmd
+        ->add_option("--spp", ra.spp, "Samples per pixel (rounded to a square; 1 = pixel centre)")
         ->check(CLI::Range(1, 1 << 20));
-    render_cmd->add_option("--threads", ra.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+    render_cmd->add_option("--threads", ra.threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
     render_cmd->add_flag("--stats", ra.stats, "Print texture memory and lookup counts per filter");
 
     std::string check_path;
-    auto* check_cmd = app.add_subcommand("check", "Parse and build a scene, report problems, render nothing");
+    auto* check_cmd =
+        app.add_subcommand("check", "Parse and build a scene, report problems, render nothing");
     check_cmd->add_option("scene", check_path, "Scene file (.pbrt)")->required();
 
     LookupArgs la;
-    auto* lookup_cmd = app.add_subcommand("lookup", "Filter one texture lookup and show what the filter did");
+    auto* lookup_cmd =
+        app.add_subcommand("lookup", "Filter one texture lookup and show what the filter did");
     lookup_cmd->add_option("image", la.image, "Texture image")->required();
-    lookup_cmd->add_option("--uv", la.uv, "Lookup point U,V (v = 0 is the bottom row, as in pbrt-v3)");
-    auto* axes_opt = lookup_cmd->add_option("--axes", la.axes, "Footprint axes AU,AV,BU,BV in (u,v) units");
-    lookup_cmd->add_option("--points", la.points, "Footprint sample points U1,V1[,U2,V2[,U3,V3]], current first")
+    lookup_cmd->add_option("--uv", la.uv,
+                           "Lookup point U,V (v = 0 is the bottom row, as in pbrt-v3)");
+    auto* axes_opt =
+        lookup_cmd->add_option("--axes", la.axes, "Footprint axes AU,AV,BU,BV in (u,v) units");
+    lookup_cmd
+        ->add_option("--points", la.points,
+                     "Footprint sample points U1,V1[,U2,V2[,U3,V3]], current first")
         ->excludes(axes_opt);
-    lookup_cmd->add_option("--filter", la.filter, "nearest, bilinear, trilinear, sat or ewa")->capture_default_str();
-    lookup_cmd->add_option("--wrap", la.wrap, "repeat, clamp, black or mirror")->capture_default_str();
-    lookup_cmd->add_option("--maxaniso", la.max_aniso, "EWA maximum anisotropy")->capture_default_str()->check(CLI::Range(1.0, 1e6));
+    lookup_cmd->add_option("--filter", la.filter, "nearest, bilinear, trilinear, sat or ewa")
+        ->capture_default_str();
+    lookup_cmd->add_option("--wrap", la.wrap, "repeat, clamp, black or mirror")
+        ->capture_default_str();
+    lookup_cmd->add_option("--maxaniso", la.max_aniso, "EWA maximum anisotropy")
+        ->capture_default_str()
+        ->check(CLI::Range(1.0, 1e6));
     lookup_cmd->add_flag("--json", la.json, "One JSON object on stdout");
 
     CLI11_PARSE(app, argc, argv);

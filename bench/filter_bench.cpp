@@ -6,9 +6,9 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/texture.h>
 #include <benchmark/benchmark.h>
+#include <cmam/texture/filter.h>
 #include <unistd.h>
 
-#include <cmam/texture/filter.h>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -39,7 +39,9 @@ struct Fixture {
         ours = std::make_unique<FilteredTexture>(Image(kRes, kRes, 3, px));
         ours->pyramid();
         ours->sat();
-        std::string path = (std::filesystem::temp_directory_path() / ("cmam_bench_" + std::to_string(::getpid()) + ".exr")).string();
+        std::string path = (std::filesystem::temp_directory_path() /
+                            ("cmam_bench_" + std::to_string(::getpid()) + ".exr"))
+                               .string();
         OIIO::ImageBuf buf(OIIO::ImageSpec(kRes, kRes, 3, OIIO::TypeDesc::FLOAT), px.data());
         OIIO::ImageSpec config;
         config.tile_width = config.tile_height = 64;
@@ -84,16 +86,17 @@ std::vector<Query> queries(double size, double aniso) {
             pu += a * std::cos(th);
             pv += a * std::sin(th);
         }
-        q[i] = {float(pu - std::floor(pu)), float(pv - std::floor(pv)), float(a * std::cos(th)), float(a * std::sin(th)),
-                float(-b * std::sin(th)), float(b * std::cos(th))};
+        q[i] = {float(pu - std::floor(pu)), float(pv - std::floor(pv)), float(a * std::cos(th)),
+                float(a * std::sin(th)),    float(-b * std::sin(th)),   float(b * std::cos(th))};
     }
     return q;
 }
 
 void record(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * kBatch);
-    state.counters["ns/lookup"] = benchmark::Counter(double(state.iterations()) * kBatch,
-                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["ns/lookup"] =
+        benchmark::Counter(double(state.iterations()) * kBatch,
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 void BM_Ours(benchmark::State& state, FilterKind kind) {
@@ -142,7 +145,7 @@ BENCHMARK_CAPTURE(BM_Oiio, trilinear, false)->Apply(args);
 BENCHMARK_CAPTURE(BM_Oiio, aniso, true)->Apply(args);
 
 class SummaryReporter : public benchmark::ConsoleReporter {
-public:
+  public:
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
@@ -152,28 +155,33 @@ public:
     }
     void Finalize() override {
         ConsoleReporter::Finalize();
-        std::printf("\n%-12s %8s %10s %10s %10s %10s %10s  %s\n", "size/aniso", "ours-tri", "oiio-tri", "ratio",
-                    "ours-ewa", "oiio-aniso", "ratio", "(ns per lookup; ratio = our lookups/s over theirs)");
+        std::printf("\n%-12s %8s %10s %10s %10s %10s %10s  %s\n", "size/aniso", "ours-tri",
+                    "oiio-tri", "ratio", "ours-ewa", "oiio-aniso", "ratio",
+                    "(ns per lookup; ratio = our lookups/s over theirs)");
         double ewa_min = 1e30, ewa_max = 0, worst_tri = 1e30, worst_ewa = 1e30;
         for (int size : {1, 16, 256, 4096})
             for (int aniso : {1, 4, 16}) {
-                std::string key = "/" + std::to_string(size) + "/" + std::to_string(aniso) + "/min_time:0.100";
+                std::string key =
+                    "/" + std::to_string(size) + "/" + std::to_string(aniso) + "/min_time:0.100";
                 double ot = m_ns["BM_Ours/trilinear" + key], tt = m_ns["BM_Oiio/trilinear" + key];
                 double oe = m_ns["BM_Ours/ewa" + key], te = m_ns["BM_Oiio/aniso" + key];
                 if (ot <= 0 || tt <= 0 || oe <= 0 || te <= 0) continue;
-                std::printf("%5d/%-6d %8.1f %10.1f %9.2fx %10.1f %10.1f %9.2fx\n", size, aniso, ot, tt, tt / ot, oe, te, te / oe);
+                std::printf("%5d/%-6d %8.1f %10.1f %9.2fx %10.1f %10.1f %9.2fx\n", size, aniso, ot,
+                            tt, tt / ot, oe, te, te / oe);
                 worst_tri = std::min(worst_tri, tt / ot);
                 worst_ewa = std::min(worst_ewa, te / oe);
                 ewa_min = std::min(ewa_min, oe);
                 ewa_max = std::max(ewa_max, oe);
             }
         if (ewa_max > 0)
-            std::printf("\nworst trilinear ratio %.2fx (target >= 3x); worst EWA/aniso ratio %.2fx (target >= 1.5x); "
-                        "EWA slowest/fastest footprint %.2fx (target <= 2x)\n",
-                        worst_tri, worst_ewa, ewa_max / ewa_min);
+            std::printf(
+                "\nworst trilinear ratio %.2fx (target >= 3x); worst EWA/aniso ratio %.2fx (target "
+                ">= 1.5x); "
+                "EWA slowest/fastest footprint %.2fx (target <= 2x)\n",
+                worst_tri, worst_ewa, ewa_max / ewa_min);
     }
 
-private:
+  private:
     std::map<std::string, double> m_ns;
 };
 

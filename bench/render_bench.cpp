@@ -46,46 +46,61 @@ void BM_BareEmbreeDemo(benchmark::State& state) {
     uint64_t rays_total = 0;
     for (auto _ : state) {
         std::atomic<uint64_t> rays{0};
-        tbb::parallel_for(tbb::blocked_range<int>(film.y0, film.y1, 1), [&](const tbb::blocked_range<int>& r) {
-            uint64_t local = 0;
-            RTCIntersectContext ctx;
-            for (int py = r.begin(); py < r.end(); ++py)
-                for (int px = film.x0; px < film.x1; ++px)
-                    for (int s = 0; s < nx * ny; ++s) {
-                        render::Vec3 o, d;
-                        scene->camera.generate_ray(px + (s % nx + 0.5f) / nx, py + (s / nx + 0.5f) / ny, &o, &d);
-                        RTCRayHit rh{};
-                        rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
-                        rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
-                        rh.ray.tfar = std::numeric_limits<float>::infinity();
-                        rh.ray.mask = ~0u;
-                        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                        rtcInitIntersectContext(&ctx);
-                        rtcIntersect1(scene->embree_scene(), &ctx, &rh);
-                        ++local;
-                        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-                        render::Vec3 p = o + d * rh.ray.tfar;
-                        for (const auto& l : scene->lights) {
-                            if (l.type == render::Light::Type::Infinite) continue;
-                            render::Vec3 w = l.type == render::Light::Type::Distant ? l.direction : l.position - p;
-                            float tmax = l.type == render::Light::Type::Distant ? std::numeric_limits<float>::infinity() : 0.9999f;
-                            RTCRay sr{};
-                            render::Vec3 so = p + w * 1e-4f;
-                            sr.org_x = so.x; sr.org_y = so.y; sr.org_z = so.z;
-                            sr.dir_x = w.x; sr.dir_y = w.y; sr.dir_z = w.z;
-                            sr.tfar = tmax;
-                            sr.mask = ~0u;
+        tbb::parallel_for(
+            tbb::blocked_range<int>(film.y0, film.y1, 1), [&](const tbb::blocked_range<int>& r) {
+                uint64_t local = 0;
+                RTCIntersectContext ctx;
+                for (int py = r.begin(); py < r.end(); ++py)
+                    for (int px = film.x0; px < film.x1; ++px)
+                        for (int s = 0; s < nx * ny; ++s) {
+                            render::Vec3 o, d;
+                            scene->camera.generate_ray(px + (s % nx + 0.5f) / nx,
+                                                       py + (s / nx + 0.5f) / ny, &o, &d);
+                            RTCRayHit rh{};
+                            rh.ray.org_x = o.x;
+                            rh.ray.org_y = o.y;
+                            rh.ray.org_z = o.z;
+                            rh.ray.dir_x = d.x;
+                            rh.ray.dir_y = d.y;
+                            rh.ray.dir_z = d.z;
+                            rh.ray.tfar = std::numeric_limits<float>::infinity();
+                            rh.ray.mask = ~0u;
+                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                             rtcInitIntersectContext(&ctx);
-                            rtcOccluded1(scene->embree_scene(), &ctx, &sr);
+                            rtcIntersect1(scene->embree_scene(), &ctx, &rh);
                             ++local;
+                            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+                            render::Vec3 p = o + d * rh.ray.tfar;
+                            for (const auto& l : scene->lights) {
+                                if (l.type == render::Light::Type::Infinite) continue;
+                                render::Vec3 w = l.type == render::Light::Type::Distant
+                                                     ? l.direction
+                                                     : l.position - p;
+                                float tmax = l.type == render::Light::Type::Distant
+                                                 ? std::numeric_limits<float>::infinity()
+                                                 : 0.9999f;
+                                RTCRay sr{};
+                                render::Vec3 so = p + w * 1e-4f;
+                                sr.org_x = so.x;
+                                sr.org_y = so.y;
+                                sr.org_z = so.z;
+                                sr.dir_x = w.x;
+                                sr.dir_y = w.y;
+                                sr.dir_z = w.z;
+                                sr.tfar = tmax;
+                                sr.mask = ~0u;
+                                rtcInitIntersectContext(&ctx);
+                                rtcOccluded1(scene->embree_scene(), &ctx, &sr);
+                                ++local;
+                            }
                         }
-                    }
-            rays += local;
-        });
+                rays += local;
+            });
         rays_total += rays;
     }
     state.counters["rays/s"] = benchmark::Counter(double(rays_total), benchmark::Counter::kIsRate);
-    state.counters["Mrays/s"] = benchmark::Counter(double(rays_total) / 1e6, benchmark::Counter::kIsRate);
+    state.counters["Mrays/s"] =
+        benchmark::Counter(double(rays_total) / 1e6, benchmark::Counter::kIsRate);
     g_bare_rate = double(rays_total) / state.iterations();
 }
 
@@ -94,7 +109,7 @@ BENCHMARK(BM_BareEmbreeDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinT
 
 // Prints the ratio of the two rays/s figures after the runs.
 class RatioReporter : public benchmark::ConsoleReporter {
-public:
+  public:
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
@@ -107,10 +122,11 @@ public:
     void Finalize() override {
         ConsoleReporter::Finalize();
         if (m_render > 0 && m_bare > 0)
-            std::printf("\nwhole render / bare Embree loop (rays/s): %.1f%%  (target >= 70%%)\n", 100.0 * m_render / m_bare);
+            std::printf("\nwhole render / bare Embree loop (rays/s): %.1f%%  (target >= 70%%)\n",
+                        100.0 * m_render / m_bare);
     }
 
-private:
+  private:
     double m_render = 0, m_bare = 0;
 };
 

@@ -21,13 +21,13 @@ struct FileLoc {
 /// The one exception type of the scene parser and the scene builder. `what()` is the complete,
 /// printable message: "file:line:col: error: message".
 class SceneError : public std::runtime_error {
-public:
+  public:
     SceneError(const FileLoc& loc, const std::string& message);
     explicit SceneError(const std::string& message);  // not tied to a location
     const std::string& message() const { return m_message; }
     const FileLoc& loc() const { return m_loc; }
 
-private:
+  private:
     FileLoc m_loc;
     std::string m_message;
 };

@@ -23,18 +23,30 @@ std::optional<ParamType> parse_param_type(const std::string& n) {
 
 const char* to_string(ParamType t) {
     switch (t) {
-        case ParamType::Integer: return "integer";
-        case ParamType::Float: return "float";
-        case ParamType::Point2: return "point2";
-        case ParamType::Vector2: return "vector2";
-        case ParamType::Point3: return "point3";
-        case ParamType::Vector3: return "vector3";
-        case ParamType::Normal: return "normal";
-        case ParamType::Rgb: return "rgb";
-        case ParamType::Spectrum: return "spectrum";
-        case ParamType::Bool: return "bool";
-        case ParamType::String: return "string";
-        case ParamType::Texture: return "texture";
+        case ParamType::Integer:
+            return "integer";
+        case ParamType::Float:
+            return "float";
+        case ParamType::Point2:
+            return "point2";
+        case ParamType::Vector2:
+            return "vector2";
+        case ParamType::Point3:
+            return "point3";
+        case ParamType::Vector3:
+            return "vector3";
+        case ParamType::Normal:
+            return "normal";
+        case ParamType::Rgb:
+            return "rgb";
+        case ParamType::Spectrum:
+            return "spectrum";
+        case ParamType::Bool:
+            return "bool";
+        case ParamType::String:
+            return "string";
+        case ParamType::Texture:
+            return "texture";
     }
     return "?";
 }
@@ -43,15 +55,20 @@ namespace {
 std::size_t arity(ParamType t) {
     switch (t) {
         case ParamType::Point2:
-        case ParamType::Vector2: return 2;
+        case ParamType::Vector2:
+            return 2;
         case ParamType::Point3:
         case ParamType::Vector3:
         case ParamType::Normal:
-        case ParamType::Rgb: return 3;
-        default: return 1;
+        case ParamType::Rgb:
+            return 3;
+        default:
+            return 1;
     }
 }
-std::string q(const std::string& s) { return "\"" + s + "\""; }
+std::string q(const std::string& s) {
+    return "\"" + s + "\"";
+}
 }  // namespace
 
 void ParamSet::add(Param p) {
@@ -69,8 +86,8 @@ void ParamSet::add(Param p) {
                                         std::to_string(p.numbers.size()) + " numbers");
     } else if (p.numbers.size() % k != 0) {
         throw SceneError(p.loc, std::string(to_string(p.type)) + " parameter " + q(p.name) +
-                                    " needs a multiple of " + std::to_string(k) +
-                                    " values, got " + std::to_string(p.numbers.size()));
+                                    " needs a multiple of " + std::to_string(k) + " values, got " +
+                                    std::to_string(p.numbers.size()));
     }
     if (p.type == ParamType::Integer)
         for (double x : p.numbers)
@@ -92,7 +109,8 @@ const Param* ParamSet::find_typed(const std::string& name,
     if (!p) return nullptr;
     if (std::find(types.begin(), types.end(), p->type) == types.end()) {
         std::string expected;
-        for (ParamType t : types) expected += (expected.empty() ? "" : " or ") + std::string(to_string(t));
+        for (ParamType t : types)
+            expected += (expected.empty() ? "" : " or ") + std::string(to_string(t));
         throw SceneError(p->loc, "parameter " + q(name) + " has type " + p->type_name +
                                      ", expected " + expected);
     }
@@ -103,9 +121,9 @@ const Param* ParamSet::find_typed(const std::string& name,
 namespace {
 void expect_single(const Param& p, std::size_t n, std::size_t expected = 1) {
     if (n != expected)
-        throw SceneError(p.loc, "parameter " + q(p.name) + " expects " +
-                                    std::to_string(expected) + " value" +
-                                    (expected == 1 ? "" : "s") + ", got " + std::to_string(n));
+        throw SceneError(p.loc, "parameter " + q(p.name) + " expects " + std::to_string(expected) +
+                                    " value" + (expected == 1 ? "" : "s") + ", got " +
+                                    std::to_string(n));
 }
 }  // namespace
 
@@ -139,8 +157,7 @@ std::string ParamSet::get_string(const std::string& name, const std::string& def
 
 std::array<double, 3> ParamSet::get_point3(const std::string& name,
                                            std::array<double, 3> def) const {
-    const Param* p =
-        find_typed(name, {ParamType::Point3, ParamType::Vector3, ParamType::Normal});
+    const Param* p = find_typed(name, {ParamType::Point3, ParamType::Vector3, ParamType::Normal});
     if (!p) return def;
     expect_single(*p, p->numbers.size(), 3);
     return {p->numbers[0], p->numbers[1], p->numbers[2]};
@@ -156,9 +173,9 @@ std::optional<Rgb> ParamSet::get_rgb(const std::string& name) const {
                    static_cast<float>(p->numbers[2])};
     }
     if (!p->strings.empty())
-        throw SceneError(p->loc, "spectrum " + q(name) + " from file or named spectrum " +
-                                     q(p->strings[0]) +
-                                     " is not supported; give rgb values or (wavelength, value) pairs");
+        throw SceneError(
+            p->loc, "spectrum " + q(name) + " from file or named spectrum " + q(p->strings[0]) +
+                        " is not supported; give rgb values or (wavelength, value) pairs");
     return spectrum_to_rgb(p->numbers);
 }
 
@@ -186,8 +203,7 @@ std::optional<std::vector<double>> ParamSet::get_floats(const std::string& name)
 }
 
 std::optional<std::vector<double>> ParamSet::get_point3s(const std::string& name) const {
-    const Param* p =
-        find_typed(name, {ParamType::Point3, ParamType::Vector3, ParamType::Normal});
+    const Param* p = find_typed(name, {ParamType::Point3, ParamType::Vector3, ParamType::Normal});
     if (!p) return std::nullopt;
     return p->numbers;
 }
@@ -226,8 +242,12 @@ double cie_x(double l) {
     return 1.056 * g(l, 599.8, 37.9, 31.0) + 0.362 * g(l, 442.0, 16.0, 26.7) -
            0.065 * g(l, 501.1, 20.4, 26.2);
 }
-double cie_y(double l) { return 0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1); }
-double cie_z(double l) { return 1.217 * g(l, 437.0, 11.8, 36.0) + 0.681 * g(l, 459.0, 26.0, 13.8); }
+double cie_y(double l) {
+    return 0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1);
+}
+double cie_z(double l) {
+    return 1.217 * g(l, 437.0, 11.8, 36.0) + 0.681 * g(l, 459.0, 26.0, 13.8);
+}
 
 double interpolate(const std::vector<std::pair<double, double>>& s, double l) {
     if (l <= s.front().first) return s.front().second;

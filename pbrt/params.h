@@ -12,8 +12,20 @@
 
 namespace cmam::pbrt {
 
-enum class ParamType { Integer, Float, Point2, Vector2, Point3, Vector3, Normal, Rgb, Spectrum,
-                       Bool, String, Texture };
+enum class ParamType {
+    Integer,
+    Float,
+    Point2,
+    Vector2,
+    Point3,
+    Vector3,
+    Normal,
+    Rgb,
+    Spectrum,
+    Bool,
+    String,
+    Texture
+};
 
 /// Parses a pbrt-v3 type name (including the aliases point, vector, color, normal3).
 std::optional<ParamType> parse_param_type(const std::string& name);
@@ -23,7 +35,7 @@ struct Param {
     ParamType type{};
     std::string type_name;  // as written
     std::string name;
-    FileLoc loc;            // of the "type name" declaration
+    FileLoc loc;  // of the "type name" declaration
     std::vector<double> numbers;
     std::vector<std::string> strings;
     std::vector<bool> bools;
@@ -39,7 +51,7 @@ struct TextureRef {
 };
 
 class ParamSet {
-public:
+  public:
     /// Adds a parameter; throws SceneError on a duplicate name or a malformed value list.
     void add(Param p);
     bool empty() const { return m_params.empty(); }
@@ -68,7 +80,7 @@ public:
     void check_unused(const std::string& what, const WarningSink& warn,
                       const std::vector<std::string>& ignored = {}) const;
 
-private:
+  private:
     std::vector<Param> m_params;
     const Param* find_typed(const std::string& name, std::initializer_list<ParamType> types) const;
 };

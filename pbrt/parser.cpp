@@ -18,7 +18,9 @@ std::string resolve_path(const FileLoc& loc, const std::string& name) {
 
 namespace {
 
-std::string q(const std::string& s) { return "\"" + s + "\""; }
+std::string q(const std::string& s) {
+    return "\"" + s + "\"";
+}
 
 struct GraphicsState {
     Mat4 ctm = Mat4::identity();
@@ -42,7 +44,7 @@ const char* kSupportedDirectives =
     "ObjectBegin, ObjectEnd, ObjectInstance";
 
 class Parser {
-public:
+  public:
     explicit Parser(const WarningSink& warn) : m_warn(warn) {}
 
     SceneDesc run(Tokenizer root) {
@@ -60,7 +62,7 @@ public:
         return std::move(m_desc);
     }
 
-private:
+  private:
     struct Source {
         Tokenizer tokens;
         std::string canonical;
@@ -109,7 +111,8 @@ private:
     }
     Token expect_any(const Token& after, const char* what) {
         auto t = next();
-        if (!t) throw SceneError(after.loc, "premature end of file: " + after.text + " needs " + what);
+        if (!t)
+            throw SceneError(after.loc, "premature end of file: " + after.text + " needs " + what);
         return *t;
     }
     std::string expect_string(const Token& dir, const char* what) {
@@ -130,8 +133,8 @@ private:
             auto r = std::from_chars(b, e, v);
             if (r.ec == std::errc() && r.ptr == e && b != e) return v;
         }
-        throw SceneError(t.loc, context + " expects a number, got " +
-                                    (t.quoted ? q(t.text) : t.text));
+        throw SceneError(t.loc,
+                         context + " expects a number, got " + (t.quoted ? q(t.text) : t.text));
     }
     std::vector<double> numbers(const Token& dir, int n, bool allow_brackets) {
         bool bracket = false;
@@ -144,8 +147,8 @@ private:
         if (bracket) {
             Token t = expect_any(dir, "']'");
             if (!t.is("]"))
-                throw SceneError(t.loc, dir.text + " expects " + std::to_string(n) +
-                                            " numbers, then ']'");
+                throw SceneError(t.loc,
+                                 dir.text + " expects " + std::to_string(n) + " numbers, then ']'");
         }
         return v;
     }
@@ -163,17 +166,20 @@ private:
                 std::size_t c = decl.text.find_first_not_of(" \t", b);
                 std::size_t d = c == std::string::npos ? c : decl.text.find_first_of(" \t", c);
                 if (a == std::string::npos || b == std::string::npos || c == std::string::npos ||
-                    (d != std::string::npos && decl.text.find_first_not_of(" \t", d) != std::string::npos))
-                    throw SceneError(decl.loc, "expected a parameter declaration \"type name\", got " +
-                                                   q(decl.text));
+                    (d != std::string::npos &&
+                     decl.text.find_first_not_of(" \t", d) != std::string::npos))
+                    throw SceneError(
+                        decl.loc,
+                        "expected a parameter declaration \"type name\", got " + q(decl.text));
                 type_name = decl.text.substr(a, b - a);
                 name = decl.text.substr(c, d == std::string::npos ? std::string::npos : d - c);
             }
             auto type = parse_param_type(type_name);
             if (!type)
-                throw SceneError(decl.loc, "unknown parameter type " + q(type_name) +
-                                               " (expected integer, float, point2, vector2, point3, "
-                                               "vector3, normal, rgb, spectrum, bool, string, texture)");
+                throw SceneError(decl.loc,
+                                 "unknown parameter type " + q(type_name) +
+                                     " (expected integer, float, point2, vector2, point3, "
+                                     "vector3, normal, rgb, spectrum, bool, string, texture)");
             Param p;
             p.type = *type;
             p.type_name = type_name;
@@ -182,18 +188,23 @@ private:
             auto add_value = [&](const Token& v) {
                 bool want_string = p.type == ParamType::String || p.type == ParamType::Texture;
                 if (p.type == ParamType::Bool) {
-                    if (v.text == "true") p.bools.push_back(true);
-                    else if (v.text == "false") p.bools.push_back(false);
-                    else throw SceneError(v.loc, "bool parameter " + q(name) +
-                                                     " expects \"true\" or \"false\", got " + v.text);
+                    if (v.text == "true")
+                        p.bools.push_back(true);
+                    else if (v.text == "false")
+                        p.bools.push_back(false);
+                    else
+                        throw SceneError(v.loc, "bool parameter " + q(name) +
+                                                    " expects \"true\" or \"false\", got " +
+                                                    v.text);
                 } else if (want_string || (p.type == ParamType::Spectrum && v.quoted)) {
                     if (!v.quoted)
                         throw SceneError(v.loc, std::string(to_string(p.type)) + " parameter " +
-                                                    q(name) + " expects a quoted string, got " + v.text);
+                                                    q(name) + " expects a quoted string, got " +
+                                                    v.text);
                     p.strings.push_back(v.text);
                 } else {
-                    p.numbers.push_back(to_number(v, std::string(to_string(p.type)) +
-                                                         " parameter " + q(name)));
+                    p.numbers.push_back(
+                        to_number(v, std::string(to_string(p.type)) + " parameter " + q(name)));
                 }
             };
             Token v = expect_any(decl, "a value");
@@ -223,17 +234,20 @@ private:
     }
 
     void need_world(const Token& dir, bool inside) {
-        if (m_world_ended)
-            throw SceneError(dir.loc, dir.text + " after WorldEnd");
+        if (m_world_ended) throw SceneError(dir.loc, dir.text + " after WorldEnd");
         if (inside && !m_world_begun)
-            throw SceneError(dir.loc, dir.text + " is only allowed inside the world block (after WorldBegin)");
+            throw SceneError(
+                dir.loc, dir.text + " is only allowed inside the world block (after WorldBegin)");
         if (!inside && m_world_begun)
-            throw SceneError(dir.loc, dir.text + " is not allowed inside the world block (before WorldBegin only)");
+            throw SceneError(
+                dir.loc,
+                dir.text + " is not allowed inside the world block (before WorldBegin only)");
     }
 
     void directive(const Token& dir) {
         if (dir.quoted || dir.text == "[" || dir.text == "]")
-            throw SceneError(dir.loc, "expected a directive, got " + (dir.quoted ? q(dir.text) : dir.text));
+            throw SceneError(dir.loc,
+                             "expected a directive, got " + (dir.quoted ? q(dir.text) : dir.text));
         const std::string& d = dir.text;
         if (d == "Translate") {
             auto v = numbers(dir, 3, false);
@@ -249,7 +263,8 @@ private:
         } else if (d == "LookAt") {
             auto v = numbers(dir, 9, false);
             try {
-                m_gs.ctm = m_gs.ctm * look_at({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
+                m_gs.ctm =
+                    m_gs.ctm * look_at({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
             } catch (const std::domain_error& e) {
                 throw SceneError(dir.loc, e.what());
             }
@@ -280,22 +295,27 @@ private:
         } else if (d == "WorldEnd") {
             need_world(dir, true);
             if (!m_stack.empty())
-                throw SceneError(m_stack.back().loc,
-                                 std::string(m_stack.back().attribute ? "AttributeBegin" : "TransformBegin") +
-                                     " is not closed before WorldEnd");
+                throw SceneError(
+                    m_stack.back().loc,
+                    std::string(m_stack.back().attribute ? "AttributeBegin" : "TransformBegin") +
+                        " is not closed before WorldEnd");
             m_world_ended = true;
         } else if (d == "AttributeBegin" || d == "TransformBegin") {
             m_stack.push_back({d == "AttributeBegin", dir.loc, m_gs});
         } else if (d == "AttributeEnd" || d == "TransformEnd") {
             bool attr = d == "AttributeEnd";
             if (m_stack.empty())
-                throw SceneError(dir.loc, d + " without matching " + (attr ? "AttributeBegin" : "TransformBegin"));
+                throw SceneError(dir.loc, d + " without matching " +
+                                              (attr ? "AttributeBegin" : "TransformBegin"));
             if (m_stack.back().attribute != attr)
-                throw SceneError(dir.loc, d + " does not match " +
-                                              (m_stack.back().attribute ? "AttributeBegin" : "TransformBegin") +
-                                              " at " + m_stack.back().loc.to_string());
-            if (attr) m_gs = m_stack.back().saved;
-            else m_gs.ctm = m_stack.back().saved.ctm;
+                throw SceneError(
+                    dir.loc, d + " does not match " +
+                                 (m_stack.back().attribute ? "AttributeBegin" : "TransformBegin") +
+                                 " at " + m_stack.back().loc.to_string());
+            if (attr)
+                m_gs = m_stack.back().saved;
+            else
+                m_gs.ctm = m_stack.back().saved.ctm;
             m_stack.pop_back();
         } else if (d == "Include") {
             std::string name = expect_string(dir, "a quoted file name");
@@ -304,7 +324,8 @@ private:
             std::string canon = std::filesystem::weakly_canonical(path, ec).string();
             for (const auto& f : m_files)
                 if (f->canonical == canon)
-                    throw SceneError(dir.loc, "Include cycle: " + q(name) + " is already being read");
+                    throw SceneError(dir.loc,
+                                     "Include cycle: " + q(name) + " is already being read");
             if (m_peeked) throw SceneError(dir.loc, "internal: lookahead across Include");
             push_file(Tokenizer::from_file(path, dir.loc));
         } else if (d == "Camera") {
@@ -336,13 +357,18 @@ private:
             TextureDesc t;
             t.name = expect_string(dir, "a quoted texture name");
             std::string kind = expect_string(dir, "\"float\" or \"spectrum\"");
-            if (kind == "float") t.is_float = true;
-            else if (kind == "spectrum" || kind == "color" || kind == "rgb") t.is_float = false;
-            else throw SceneError(dir.loc, "texture type must be \"float\" or \"spectrum\", got " + q(kind));
+            if (kind == "float")
+                t.is_float = true;
+            else if (kind == "spectrum" || kind == "color" || kind == "rgb")
+                t.is_float = false;
+            else
+                throw SceneError(dir.loc,
+                                 "texture type must be \"float\" or \"spectrum\", got " + q(kind));
             t.entity = entity(dir);
             t.world_from_texture = m_gs.ctm;
             t.scope = m_gs.textures;
-            auto& names = t.is_float ? m_gs.textures.float_textures : m_gs.textures.spectrum_textures;
+            auto& names =
+                t.is_float ? m_gs.textures.float_textures : m_gs.textures.spectrum_textures;
             if (names.count(t.name)) warn(dir.loc, "texture " + q(t.name) + " redefined");
             names[t.name] = static_cast<int>(m_desc.textures.size());
             m_desc.textures.push_back(std::move(t));
@@ -361,10 +387,13 @@ private:
             m.entity.params = param_list();
             m.entity.given = true;
             const Param* type = m.entity.params.find("type");
-            if (!type) throw SceneError(dir.loc, "MakeNamedMaterial " + q(m.name) + " needs a \"string type\" parameter");
+            if (!type)
+                throw SceneError(dir.loc, "MakeNamedMaterial " + q(m.name) +
+                                              " needs a \"string type\" parameter");
             m.entity.type = m.entity.params.get_string("type", "");
             m.scope = m_gs.textures;
-            if (m_gs.named_materials.count(m.name)) warn(dir.loc, "named material " + q(m.name) + " redefined");
+            if (m_gs.named_materials.count(m.name))
+                warn(dir.loc, "named material " + q(m.name) + " redefined");
             m_gs.named_materials[m.name] = static_cast<int>(m_desc.materials.size());
             m_desc.materials.push_back(std::move(m));
         } else if (d == "NamedMaterial") {
@@ -381,8 +410,10 @@ private:
             s.world_from_object = m_gs.ctm;
             s.reverse_orientation = m_gs.reverse_orientation;
             s.material = m_gs.material;
-            if (m_in_object) m_instances[m_object_name].push_back(std::move(s));
-            else m_desc.shapes.push_back(std::move(s));
+            if (m_in_object)
+                m_instances[m_object_name].push_back(std::move(s));
+            else
+                m_desc.shapes.push_back(std::move(s));
         } else if (d == "LightSource") {
             need_world(dir, true);
             LightDesc l;
@@ -391,36 +422,44 @@ private:
             m_desc.lights.push_back(std::move(l));
         } else if (d == "ObjectBegin") {
             need_world(dir, true);
-            if (m_in_object) throw SceneError(dir.loc, "ObjectBegin inside the definition of object " + q(m_object_name));
+            if (m_in_object)
+                throw SceneError(dir.loc,
+                                 "ObjectBegin inside the definition of object " + q(m_object_name));
             m_object_name = expect_string(dir, "a quoted object name");
-            if (m_instances.count(m_object_name)) warn(dir.loc, "object " + q(m_object_name) + " redefined");
+            if (m_instances.count(m_object_name))
+                warn(dir.loc, "object " + q(m_object_name) + " redefined");
             m_instances[m_object_name].clear();
             m_in_object = true;
             m_object_loc = dir.loc;
-            m_stack.push_back({true, dir.loc, m_gs});  // pbrt-v3: ObjectBegin implies AttributeBegin
+            m_stack.push_back(
+                {true, dir.loc, m_gs});  // pbrt-v3: ObjectBegin implies AttributeBegin
         } else if (d == "ObjectEnd") {
             if (!m_in_object) throw SceneError(dir.loc, "ObjectEnd without ObjectBegin");
             if (m_stack.empty() || m_stack.back().loc.line != m_object_loc.line ||
                 m_stack.back().loc.file != m_object_loc.file)
-                throw SceneError(dir.loc, "ObjectEnd does not match the attribute blocks opened inside object " +
-                                              q(m_object_name));
+                throw SceneError(
+                    dir.loc, "ObjectEnd does not match the attribute blocks opened inside object " +
+                                 q(m_object_name));
             m_gs = m_stack.back().saved;
             m_stack.pop_back();
             m_in_object = false;
         } else if (d == "ObjectInstance") {
             need_world(dir, true);
             std::string name = expect_string(dir, "a quoted object name");
-            if (m_in_object) throw SceneError(dir.loc, "ObjectInstance inside an object definition");
+            if (m_in_object)
+                throw SceneError(dir.loc, "ObjectInstance inside an object definition");
             auto it = m_instances.find(name);
-            if (it == m_instances.end()) throw SceneError(dir.loc, "object " + q(name) + " is not defined");
+            if (it == m_instances.end())
+                throw SceneError(dir.loc, "object " + q(name) + " is not defined");
             for (const ShapeDesc& s : it->second) {
                 ShapeDesc c = s;
                 c.world_from_object = m_gs.ctm * s.world_from_object;
                 m_desc.shapes.push_back(std::move(c));
             }
         } else if (d == "AreaLightSource") {
-            throw SceneError(dir.loc, "AreaLightSource is not supported (cmam's Whitted integrator "
-                                      "supports point, spot, distant and infinite lights)");
+            throw SceneError(dir.loc,
+                             "AreaLightSource is not supported (cmam's Whitted integrator "
+                             "supports point, spot, distant and infinite lights)");
         } else if (d == "ActiveTransform") {
             Token t = expect_any(dir, "All, StartTime or EndTime");
             warn(dir.loc, "ActiveTransform " + t.text + " ignored: cmam renders no motion blur");
@@ -436,7 +475,8 @@ private:
             if (peek() && peek()->quoted) next();
             warn(dir.loc, "MediumInterface ignored: cmam renders no participating media");
         } else {
-            throw SceneError(dir.loc, "unknown directive " + d + " (supported: " + kSupportedDirectives + ")");
+            throw SceneError(
+                dir.loc, "unknown directive " + d + " (supported: " + kSupportedDirectives + ")");
         }
     }
 };
@@ -447,7 +487,8 @@ SceneDesc parse_file(const std::string& path, const WarningSink& warn) {
     return Parser(warn).run(Tokenizer::from_file(path, FileLoc{}));
 }
 
-SceneDesc parse_string(const std::string& text, const std::string& filename, const WarningSink& warn) {
+SceneDesc parse_string(const std::string& text, const std::string& filename,
+                       const WarningSink& warn) {
     return Parser(warn).run(Tokenizer(filename, text));
 }
 

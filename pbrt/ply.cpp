@@ -14,24 +14,41 @@ namespace {
 enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 bool parse_scalar(const std::string& s, Scalar* out) {
-    if (s == "char" || s == "int8") *out = Scalar::I8;
-    else if (s == "uchar" || s == "uint8") *out = Scalar::U8;
-    else if (s == "short" || s == "int16") *out = Scalar::I16;
-    else if (s == "ushort" || s == "uint16") *out = Scalar::U16;
-    else if (s == "int" || s == "int32") *out = Scalar::I32;
-    else if (s == "uint" || s == "uint32") *out = Scalar::U32;
-    else if (s == "float" || s == "float32") *out = Scalar::F32;
-    else if (s == "double" || s == "float64") *out = Scalar::F64;
-    else return false;
+    if (s == "char" || s == "int8")
+        *out = Scalar::I8;
+    else if (s == "uchar" || s == "uint8")
+        *out = Scalar::U8;
+    else if (s == "short" || s == "int16")
+        *out = Scalar::I16;
+    else if (s == "ushort" || s == "uint16")
+        *out = Scalar::U16;
+    else if (s == "int" || s == "int32")
+        *out = Scalar::I32;
+    else if (s == "uint" || s == "uint32")
+        *out = Scalar::U32;
+    else if (s == "float" || s == "float32")
+        *out = Scalar::F32;
+    else if (s == "double" || s == "float64")
+        *out = Scalar::F64;
+    else
+        return false;
     return true;
 }
 
 int size_of(Scalar s) {
     switch (s) {
-        case Scalar::I8: case Scalar::U8: return 1;
-        case Scalar::I16: case Scalar::U16: return 2;
-        case Scalar::I32: case Scalar::U32: case Scalar::F32: return 4;
-        case Scalar::F64: return 8;
+        case Scalar::I8:
+        case Scalar::U8:
+            return 1;
+        case Scalar::I16:
+        case Scalar::U16:
+            return 2;
+        case Scalar::I32:
+        case Scalar::U32:
+        case Scalar::F32:
+            return 4;
+        case Scalar::F64:
+            return 8;
     }
     return 0;
 }
@@ -51,8 +68,9 @@ struct Element {
 enum class Format { Ascii, BinaryLE, BinaryBE };
 
 class Reader {
-public:
-    Reader(std::istream& in, Format f, const std::string& path) : m_in(in), m_format(f), m_path(path) {}
+  public:
+    Reader(std::istream& in, Format f, const std::string& path)
+        : m_in(in), m_format(f), m_path(path) {}
 
     double read(Scalar s) {
         if (m_format == Format::Ascii) {
@@ -66,20 +84,49 @@ public:
         bool swap = (m_format == Format::BinaryBE) == (std::endian::native == std::endian::little);
         if (swap) std::reverse(buf, buf + n);
         switch (s) {
-            case Scalar::I8: { int8_t v; std::memcpy(&v, buf, 1); return v; }
-            case Scalar::U8: return buf[0];
-            case Scalar::I16: { int16_t v; std::memcpy(&v, buf, 2); return v; }
-            case Scalar::U16: { uint16_t v; std::memcpy(&v, buf, 2); return v; }
-            case Scalar::I32: { int32_t v; std::memcpy(&v, buf, 4); return v; }
-            case Scalar::U32: { uint32_t v; std::memcpy(&v, buf, 4); return v; }
-            case Scalar::F32: { float v; std::memcpy(&v, buf, 4); return v; }
-            case Scalar::F64: { double v; std::memcpy(&v, buf, 8); return v; }
+            case Scalar::I8: {
+                int8_t v;
+                std::memcpy(&v, buf, 1);
+                return v;
+            }
+            case Scalar::U8:
+                return buf[0];
+            case Scalar::I16: {
+                int16_t v;
+                std::memcpy(&v, buf, 2);
+                return v;
+            }
+            case Scalar::U16: {
+                uint16_t v;
+                std::memcpy(&v, buf, 2);
+                return v;
+            }
+            case Scalar::I32: {
+                int32_t v;
+                std::memcpy(&v, buf, 4);
+                return v;
+            }
+            case Scalar::U32: {
+                uint32_t v;
+                std::memcpy(&v, buf, 4);
+                return v;
+            }
+            case Scalar::F32: {
+                float v;
+                std::memcpy(&v, buf, 4);
+                return v;
+            }
+            case Scalar::F64: {
+                double v;
+                std::memcpy(&v, buf, 8);
+                return v;
+            }
         }
         return 0;
     }
     [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
 
-private:
+  private:
     std::istream& m_in;
     Format m_format;
     const std::string& m_path;
@@ -107,10 +154,14 @@ PlyMesh read_ply(const std::string& path) {
         if (word == "format") {
             std::string f;
             ls >> f;
-            if (f == "ascii") format = Format::Ascii;
-            else if (f == "binary_little_endian") format = Format::BinaryLE;
-            else if (f == "binary_big_endian") format = Format::BinaryBE;
-            else throw PlyError(path + ": unknown PLY format \"" + f + "\"");
+            if (f == "ascii")
+                format = Format::Ascii;
+            else if (f == "binary_little_endian")
+                format = Format::BinaryLE;
+            else if (f == "binary_big_endian")
+                format = Format::BinaryBE;
+            else
+                throw PlyError(path + ": unknown PLY format \"" + f + "\"");
             have_format = true;
         } else if (word == "element") {
             Element e;
@@ -151,14 +202,22 @@ PlyMesh read_ply(const std::string& path) {
             int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
             for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
                 const std::string& n = e.props[k].name;
-                if (n == "x") ix = k;
-                else if (n == "y") iy = k;
-                else if (n == "z") iz = k;
-                else if (n == "nx") inx = k;
-                else if (n == "ny") iny = k;
-                else if (n == "nz") inz = k;
-                else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") iu = k;
-                else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") iv = k;
+                if (n == "x")
+                    ix = k;
+                else if (n == "y")
+                    iy = k;
+                else if (n == "z")
+                    iz = k;
+                else if (n == "nx")
+                    inx = k;
+                else if (n == "ny")
+                    iny = k;
+                else if (n == "nz")
+                    inz = k;
+                else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s")
+                    iu = k;
+                else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t")
+                    iv = k;
             }
             if (ix < 0 || iy < 0 || iz < 0) r.fail("vertex element lacks x, y, z properties");
             bool normals = inx >= 0 && iny >= 0 && inz >= 0;
@@ -175,8 +234,11 @@ PlyMesh read_ply(const std::string& path) {
                         vals[k] = r.read(p.type);
                     }
                 }
-                mesh.positions.insert(mesh.positions.end(), {float(vals[ix]), float(vals[iy]), float(vals[iz])});
-                if (normals) mesh.normals.insert(mesh.normals.end(), {float(vals[inx]), float(vals[iny]), float(vals[inz])});
+                mesh.positions.insert(mesh.positions.end(),
+                                      {float(vals[ix]), float(vals[iy]), float(vals[iz])});
+                if (normals)
+                    mesh.normals.insert(mesh.normals.end(),
+                                        {float(vals[inx]), float(vals[iny]), float(vals[inz])});
                 if (uvs) mesh.uvs.insert(mesh.uvs.end(), {float(vals[iu]), float(vals[iv])});
             }
         } else if (e.name == "face") {
@@ -194,9 +256,11 @@ PlyMesh read_ply(const std::string& path) {
                     if (n == 3) {
                         mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
                     } else if (n == 4) {
-                        mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
+                        mesh.indices.insert(mesh.indices.end(),
+                                            {f[0], f[1], f[2], f[0], f[2], f[3]});
                     } else {
-                        r.fail("face with " + std::to_string(n) + " vertices (only triangles and quads are supported)");
+                        r.fail("face with " + std::to_string(n) +
+                               " vertices (only triangles and quads are supported)");
                     }
                 }
             }

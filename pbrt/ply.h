@@ -18,7 +18,7 @@ struct PlyMesh {
 
 /// Error reading a PLY file; what() names the file and the reason.
 class PlyError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 

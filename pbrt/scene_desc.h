@@ -32,20 +32,20 @@ struct TextureDesc {
     bool is_float = false;  // "float" or "spectrum"
     Entity entity;          // entity.type is the class ("imagemap", "checkerboard", ...)
     Mat4 world_from_texture;
-    TextureScope scope;     // textures visible when it was declared
+    TextureScope scope;  // textures visible when it was declared
 };
 
 struct MaterialDesc {
-    Entity entity;          // entity.type is the material type ("matte", ...)
-    TextureScope scope;     // textures visible when it was declared
-    std::string name;       // for MakeNamedMaterial
+    Entity entity;       // entity.type is the material type ("matte", ...)
+    TextureScope scope;  // textures visible when it was declared
+    std::string name;    // for MakeNamedMaterial
 };
 
 struct ShapeDesc {
     Entity entity;
     Mat4 world_from_object;
     bool reverse_orientation = false;
-    int material = -1;      // index into SceneDesc::materials; -1 is the default matte
+    int material = -1;  // index into SceneDesc::materials; -1 is the default matte
 };
 
 struct LightDesc {

@@ -63,17 +63,33 @@ std::optional<Token> Tokenizer::next() {
                     if (m_pos >= m_text.size()) throw SceneError(tok.loc, "unterminated string");
                     char e = advance();
                     switch (e) {
-                        case 'n': tok.text += '\n'; break;
-                        case 't': tok.text += '\t'; break;
-                        case 'b': tok.text += '\b'; break;
-                        case 'f': tok.text += '\f'; break;
-                        case 'r': tok.text += '\r'; break;
-                        case '\\': tok.text += '\\'; break;
-                        case '\'': tok.text += '\''; break;
-                        case '"': tok.text += '"'; break;
+                        case 'n':
+                            tok.text += '\n';
+                            break;
+                        case 't':
+                            tok.text += '\t';
+                            break;
+                        case 'b':
+                            tok.text += '\b';
+                            break;
+                        case 'f':
+                            tok.text += '\f';
+                            break;
+                        case 'r':
+                            tok.text += '\r';
+                            break;
+                        case '\\':
+                            tok.text += '\\';
+                            break;
+                        case '\'':
+                            tok.text += '\'';
+                            break;
+                        case '"':
+                            tok.text += '"';
+                            break;
                         default:
-                            throw SceneError(tok.loc, std::string("unknown escape \\") + e +
-                                                          " in string");
+                            throw SceneError(tok.loc,
+                                             std::string("unknown escape \\") + e + " in string");
                     }
                     continue;
                 }
@@ -83,8 +99,8 @@ std::optional<Token> Tokenizer::next() {
         }
         while (m_pos < m_text.size()) {
             char d = m_text[m_pos];
-            if (std::isspace(static_cast<unsigned char>(d)) || d == '"' || d == '[' ||
-                d == ']' || d == '#')
+            if (std::isspace(static_cast<unsigned char>(d)) || d == '"' || d == '[' || d == ']' ||
+                d == '#')
                 break;
             tok.text += advance();
         }

@@ -20,7 +20,7 @@ struct Token {
 };
 
 class Tokenizer {
-public:
+  public:
     /// Tokenizes `contents`, reporting locations against `filename`.
     Tokenizer(std::string filename, std::string contents);
     /// Reads a whole file; throws SceneError located at `included_from` when it cannot.
@@ -30,7 +30,7 @@ public:
     std::optional<Token> next();
     const std::string& filename() const { return *m_file; }
 
-private:
+  private:
     std::shared_ptr<const std::string> m_file;
     std::string m_text;
     std::size_t m_pos = 0;

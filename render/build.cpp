@@ -17,7 +17,9 @@ using pbrt::TextureScope;
 
 namespace {
 
-std::string q(const std::string& s) { return "\"" + s + "\""; }
+std::string q(const std::string& s) {
+    return "\"" + s + "\"";
+}
 
 std::array<double, 12> to34(const Mat4& m) {
     std::array<double, 12> r{};
@@ -27,7 +29,7 @@ std::array<double, 12> to34(const Mat4& m) {
 }
 
 class Builder {
-public:
+  public:
     Builder(const pbrt::SceneDesc& d, const BuildOptions& o, const pbrt::WarningSink& w)
         : m_desc(d), m_opts(o), m_warn(w) {}
 
@@ -38,18 +40,21 @@ public:
         sampler();
         filter();
         integrator();
-        if (m_desc.accelerator.given) m_desc.accelerator.params.check_unused("Accelerator", m_warn, names_of(m_desc.accelerator));
+        if (m_desc.accelerator.given)
+            m_desc.accelerator.params.check_unused("Accelerator", m_warn,
+                                                   names_of(m_desc.accelerator));
         for (std::size_t i = 0; i < m_desc.textures.size(); ++i) texture(m_desc.textures[i]);
         for (const auto& m : m_desc.materials) m_scene->materials.push_back(material(m));
         for (const auto& s : m_desc.shapes) shape(s);
         for (const auto& l : m_desc.lights) light(l);
         if (m_desc.lights.empty() && !m_desc.shapes.empty() && m_warn)
-            m_warn(pbrt::format_warning(m_desc.camera.loc, "the scene has no lights; it will render black"));
+            m_warn(pbrt::format_warning(m_desc.camera.loc,
+                                        "the scene has no lights; it will render black"));
         m_scene->commit();
         return std::move(m_scene);
     }
 
-private:
+  private:
     const pbrt::SceneDesc& m_desc;
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;
@@ -72,12 +77,14 @@ private:
         f.xres = e.params.get_int("xresolution", 640);
         f.yres = e.params.get_int("yresolution", 480);
         if (f.xres <= 0 || f.yres <= 0 || f.xres > 65536 || f.yres > 65536)
-            throw SceneError(e.params.find("xresolution") ? e.params.find("xresolution")->loc : e.loc,
-                             "film resolution must be between 1 and 65536");
+            throw SceneError(
+                e.params.find("xresolution") ? e.params.find("xresolution")->loc : e.loc,
+                "film resolution must be between 1 and 65536");
         f.filename = e.params.get_string("filename", "pbrt.exr");
         double cw[4] = {0, 1, 0, 1};
         if (auto c = e.params.get_floats("cropwindow")) {
-            if (c->size() != 4) throw SceneError(e.params.find("cropwindow")->loc, "cropwindow needs 4 values");
+            if (c->size() != 4)
+                throw SceneError(e.params.find("cropwindow")->loc, "cropwindow needs 4 values");
             for (int i = 0; i < 4; ++i) cw[i] = std::clamp((*c)[i], 0.0, 1.0);
         }
         f.x0 = static_cast<int>(std::ceil(f.xres * std::min(cw[0], cw[1])));
@@ -86,34 +93,46 @@ private:
         f.y1 = static_cast<int>(std::ceil(f.yres * std::max(cw[2], cw[3])));
         if (f.width() <= 0 || f.height() <= 0)
             throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
-        e.params.check_unused("Film \"image\"", m_warn, {"diagonal", "maxsampleluminance", "scale", "pixelbounds"});
+        e.params.check_unused("Film \"image\"", m_warn,
+                              {"diagonal", "maxsampleluminance", "scale", "pixelbounds"});
     }
 
     void camera() {
         const Entity& e = m_desc.camera;
         if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
         if (e.type != "perspective")
-            throw SceneError(e.loc, "unsupported Camera " + q(e.type) + " (supported: \"perspective\")");
+            throw SceneError(e.loc,
+                             "unsupported Camera " + q(e.type) + " (supported: \"perspective\")");
         Camera& c = m_scene->camera;
         c.xres = m_scene->film.xres;
         c.yres = m_scene->film.yres;
         double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
         if (frame > 1) {
-            c.screen[0] = float(-frame); c.screen[1] = float(frame); c.screen[2] = -1; c.screen[3] = 1;
+            c.screen[0] = float(-frame);
+            c.screen[1] = float(frame);
+            c.screen[2] = -1;
+            c.screen[3] = 1;
         } else {
-            c.screen[0] = -1; c.screen[1] = 1; c.screen[2] = float(-1 / frame); c.screen[3] = float(1 / frame);
+            c.screen[0] = -1;
+            c.screen[1] = 1;
+            c.screen[2] = float(-1 / frame);
+            c.screen[3] = float(1 / frame);
         }
         if (auto sw = e.params.get_floats("screenwindow")) {
-            if (sw->size() != 4) throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
+            if (sw->size() != 4)
+                throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
             for (int i = 0; i < 4; ++i) c.screen[i] = float((*sw)[i]);
         }
         double fov = e.params.get_float("fov", 90);
         double halffov = e.params.get_float("halffov", -1);
         if (halffov > 0) fov = 2 * halffov;
-        if (!(fov > 0 && fov < 180)) throw SceneError(e.params.find("fov") ? e.params.find("fov")->loc : e.loc, "fov must be in (0, 180) degrees");
+        if (!(fov > 0 && fov < 180))
+            throw SceneError(e.params.find("fov") ? e.params.find("fov")->loc : e.loc,
+                             "fov must be in (0, 180) degrees");
         c.tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
         if (e.params.get_float("lensradius", 0) != 0)
-            warn(e.params.find("lensradius")->loc, "lensradius ignored: cmam renders a pinhole camera");
+            warn(e.params.find("lensradius")->loc,
+                 "lensradius ignored: cmam renders a pinhole camera");
         Mat4 wc;
         try {
             wc = m_desc.camera_from_world.inverse();
@@ -122,7 +141,8 @@ private:
         }
         auto m = to34(wc);
         for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
-        e.params.check_unused("Camera \"perspective\"", m_warn, {"focaldistance", "shutteropen", "shutterclose"});
+        e.params.check_unused("Camera \"perspective\"", m_warn,
+                              {"focaldistance", "shutteropen", "shutterclose"});
     }
 
     void sampler() {
@@ -134,22 +154,25 @@ private:
             s.xsamples = e.params.get_int("xsamples", 4);
             s.ysamples = e.params.get_int("ysamples", 4);
             s.jitter = e.params.get_bool("jitter", true);
-            if (s.xsamples <= 0 || s.ysamples <= 0) throw SceneError(e.loc, "xsamples and ysamples must be positive");
+            if (s.xsamples <= 0 || s.ysamples <= 0)
+                throw SceneError(e.loc, "xsamples and ysamples must be positive");
             e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions"});
-        } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" || e.type == "02sequence" ||
-                   e.type == "lowdiscrepancy" || e.type == "maxmindist") {
+        } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" ||
+                   e.type == "02sequence" || e.type == "lowdiscrepancy" || e.type == "maxmindist") {
             int n = e.params.get_int("pixelsamples", 16);
             if (n <= 0) throw SceneError(e.loc, "pixelsamples must be positive");
             int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
             s.xsamples = s.ysamples = k;
-            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " + std::to_string(k) + "x" +
-                            std::to_string(k) + " jittered samples per pixel");
+            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " +
+                            std::to_string(k) + "x" + std::to_string(k) +
+                            " jittered samples per pixel");
             e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
         } else {
             throw SceneError(e.loc, "unknown Sampler " + q(e.type));
         }
         if (m_opts.spp_override > 0) {
-            int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
+            int k =
+                std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
             s.xsamples = s.ysamples = k;
             s.jitter = k > 1;
         }
@@ -161,9 +184,12 @@ private:
         if (e.type == "box") {
             double xw = e.params.get_float("xwidth", 0.5), yw = e.params.get_float("ywidth", 0.5);
             if (xw != 0.5 || yw != 0.5)
-                warn(e.loc, "box filter width other than 0.5 is rendered with width 0.5 (each sample counts for its own pixel)");
+                warn(e.loc,
+                     "box filter width other than 0.5 is rendered with width 0.5 (each sample "
+                     "counts for its own pixel)");
             e.params.check_unused("PixelFilter \"box\"", m_warn);
-        } else if (e.type == "gaussian" || e.type == "mitchell" || e.type == "sinc" || e.type == "triangle") {
+        } else if (e.type == "gaussian" || e.type == "mitchell" || e.type == "sinc" ||
+                   e.type == "triangle") {
             warn(e.loc, "PixelFilter " + q(e.type) + " is rendered as \"box\"");
             e.params.check_unused("PixelFilter", m_warn, names_of(e));
         } else {
@@ -175,16 +201,22 @@ private:
         const Entity& e = m_desc.integrator;
         if (!e.given) {
             if (!m_desc.shapes.empty())
-                warn(m_desc.camera.loc, "no Integrator given: pbrt-v3 would path trace (\"path\"); cmam renders \"whitted\"");
+                warn(m_desc.camera.loc,
+                     "no Integrator given: pbrt-v3 would path trace (\"path\"); cmam renders "
+                     "\"whitted\"");
             return;
         }
-        if (e.type != "whitted") warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
+        if (e.type != "whitted")
+            warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
         if (e.params.find("maxdepth")) m_scene->max_depth = e.params.get_int("maxdepth", 5);
-        e.params.check_unused("Integrator " + q(e.type), m_warn, e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));
+        e.params.check_unused(
+            "Integrator " + q(e.type), m_warn,
+            e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));
     }
 
     // --- textures ---------------------------------------------------------------------
-    TexInput spectrum_input(const Entity& e, const TextureScope& scope, const std::string& name, Rgb def) {
+    TexInput spectrum_input(const Entity& e, const TextureScope& scope, const std::string& name,
+                            Rgb def) {
         if (auto ref = e.params.get_texture(name)) {
             auto it = scope.spectrum_textures.find(ref->name);
             if (it == scope.spectrum_textures.end())
@@ -194,7 +226,8 @@ private:
         if (auto c = e.params.get_rgb(name)) return {-1, Rgb((*c)[0], (*c)[1], (*c)[2])};
         return {-1, def};
     }
-    TexInput float_input(const Entity& e, const TextureScope& scope, const std::string& name, float def) {
+    TexInput float_input(const Entity& e, const TextureScope& scope, const std::string& name,
+                         float def) {
         if (auto ref = e.params.get_texture(name)) {
             auto it = scope.float_textures.find(ref->name);
             if (it == scope.float_textures.end())
@@ -208,7 +241,8 @@ private:
         std::string mapping = e.params.get_string("mapping", "uv");
         if (mapping != "uv") {
             const auto* p = e.params.find("mapping");
-            throw SceneError(p ? p->loc : e.loc, "unsupported texture mapping " + q(mapping) + " (supported: \"uv\")");
+            throw SceneError(p ? p->loc : e.loc,
+                             "unsupported texture mapping " + q(mapping) + " (supported: \"uv\")");
         }
         n->su = float(e.params.get_float("uscale", 1));
         n->sv = float(e.params.get_float("vscale", 1));
@@ -224,12 +258,15 @@ private:
         std::string wrap_name = e.params.get_string("wrap", "repeat");
         auto wrap = texture::parse_wrap_mode(wrap_name);
         if (!wrap || *wrap == texture::WrapMode::Mirror)
-            throw SceneError(e.params.find("wrap")->loc, "unknown wrap mode " + q(wrap_name) + " (expected \"repeat\", \"black\" or \"clamp\")");
+            throw SceneError(e.params.find("wrap")->loc,
+                             "unknown wrap mode " + q(wrap_name) +
+                                 " (expected \"repeat\", \"black\" or \"clamp\")");
         float scale = float(e.params.get_float("scale", 1));
         std::optional<bool> gamma;
         if (e.params.find("gamma")) gamma = e.params.get_bool("gamma", true);
-        std::string key = std::filesystem::weakly_canonical(path).string() + "|" + (is_float ? "f" : "s") + "|" +
-                          std::string(texture::to_string(*wrap)) + "|" + std::to_string(scale) + "|" +
+        std::string key = std::filesystem::weakly_canonical(path).string() + "|" +
+                          (is_float ? "f" : "s") + "|" + std::string(texture::to_string(*wrap)) +
+                          "|" + std::to_string(scale) + "|" +
                           (gamma ? (*gamma ? "1" : "0") : "default");
         auto it = m_scene->images.find(key);
         if (it != m_scene->images.end()) return it->second.get();
@@ -249,9 +286,11 @@ private:
         const Entity& e = t.entity;
         TextureNode n;
         n.is_float = t.is_float;
-        const std::string what = std::string(t.is_float ? "float" : "spectrum") + " texture " + q(e.type);
+        const std::string what =
+            std::string(t.is_float ? "float" : "spectrum") + " texture " + q(e.type);
         auto input = [&](const std::string& name, float def) {
-            return t.is_float ? float_input(e, t.scope, name, def) : spectrum_input(e, t.scope, name, Rgb(def));
+            return t.is_float ? float_input(e, t.scope, name, def)
+                              : spectrum_input(e, t.scope, name, Rgb(def));
         };
         if (e.type == "imagemap") {
             n.kind = TextureNode::Kind::Image;
@@ -262,20 +301,25 @@ private:
                                                                   : texture::FilterKind::Ewa;
             n.filter.max_aniso = e.params.get_float("maxanisotropy", 8);
             if (!(n.filter.max_aniso >= 1))
-                throw SceneError(e.params.find("maxanisotropy")->loc, "maxanisotropy must be at least 1");
+                throw SceneError(e.params.find("maxanisotropy")->loc,
+                                 "maxanisotropy must be at least 1");
         } else if (e.type == "constant") {
             n.kind = TextureNode::Kind::Constant;
             n.constant = input("value", 1).value;
         } else if (e.type == "checkerboard") {
             n.kind = TextureNode::Kind::Checkerboard;
             int dim = e.params.get_int("dimension", 2);
-            if (dim != 2) throw SceneError(e.params.find("dimension")->loc, "only 2-D checkerboards are supported");
+            if (dim != 2)
+                throw SceneError(e.params.find("dimension")->loc,
+                                 "only 2-D checkerboards are supported");
             uv_mapping(e, &n);
             n.tex1 = input("tex1", 1);
             n.tex2 = input("tex2", 0);
             std::string aa = e.params.get_string("aamode", "closedform");
             if (aa != "closedform" && aa != "none")
-                throw SceneError(e.params.find("aamode")->loc, "unknown aamode " + q(aa) + " (expected \"closedform\" or \"none\")");
+                throw SceneError(
+                    e.params.find("aamode")->loc,
+                    "unknown aamode " + q(aa) + " (expected \"closedform\" or \"none\")");
         } else if (e.type == "scale") {
             n.kind = TextureNode::Kind::Scale;
             n.tex1 = input("tex1", 1);
@@ -287,7 +331,8 @@ private:
             n.amount = float_input(e, t.scope, "amount", 0.5f);
         } else {
             throw SceneError(e.loc, "unsupported texture class " + q(e.type) +
-                                        " (supported: \"imagemap\", \"checkerboard\", \"constant\", \"scale\", \"mix\")");
+                                        " (supported: \"imagemap\", \"checkerboard\", "
+                                        "\"constant\", \"scale\", \"mix\")");
         }
         e.params.check_unused(what, m_warn);
         m_scene->textures.push_back(n);
@@ -310,11 +355,13 @@ private:
             m.type = Material::Type::Glass;
             m.kr = spectrum_input(e, s, "Kr", Rgb(1));
             m.kt = spectrum_input(e, s, "Kt", Rgb(1));
-            m.eta = e.params.find("eta") ? float_input(e, s, "eta", 1.5f) : float_input(e, s, "index", 1.5f);
+            m.eta = e.params.find("eta") ? float_input(e, s, "eta", 1.5f)
+                                         : float_input(e, s, "index", 1.5f);
             for (const char* r : {"uroughness", "vroughness"}) {
                 TexInput rough = float_input(e, s, r, 0);
                 if (rough.node >= 0 || rough.value.r != 0)
-                    warn(e.params.find(r)->loc, std::string(r) + " ignored: glass is rendered perfectly smooth");
+                    warn(e.params.find(r)->loc,
+                         std::string(r) + " ignored: glass is rendered perfectly smooth");
             }
             e.params.get_bool("remaproughness", true);
         } else if (t == "plastic") {
@@ -326,8 +373,9 @@ private:
         } else if (t == "none" || t.empty()) {
             m.type = Material::Type::None;
         } else {
-            throw SceneError(e.loc, "unsupported material " + q(t) +
-                                        " (supported: \"matte\", \"mirror\", \"glass\", \"plastic\", \"none\")");
+            throw SceneError(
+                e.loc, "unsupported material " + q(t) +
+                           " (supported: \"matte\", \"mirror\", \"glass\", \"plastic\", \"none\")");
         }
         if (e.params.find("type")) e.params.get_string("type", "");
         e.params.check_unused("material " + q(t), m_warn, {"bumpmap"});
@@ -363,13 +411,15 @@ private:
                 prim->zmax = std::max(z0, z1);
                 prim->theta_zmin = std::acos(std::clamp(prim->zmin / r, -1.0, 1.0));
                 prim->theta_zmax = std::acos(std::clamp(prim->zmax / r, -1.0, 1.0));
-                if (prim->theta_zmin == prim->theta_zmax) throw SceneError(e.loc, "sphere has zmin == zmax");
+                if (prim->theta_zmin == prim->theta_zmax)
+                    throw SceneError(e.loc, "sphere has zmin == zmax");
             } else {
                 prim->kind = Primitive::Kind::Disk;
                 prim->height = e.params.get_float("height", 0);
                 prim->inner_radius = e.params.get_float("innerradius", 0);
                 if (prim->inner_radius < 0 || prim->inner_radius >= r)
-                    throw SceneError(e.params.find("innerradius")->loc, "innerradius must be in [0, radius)");
+                    throw SceneError(e.params.find("innerradius")->loc,
+                                     "innerradius must be in [0, radius)");
             }
             e.params.check_unused("shape " + q(e.type), m_warn, ignored);
         } else if (e.type == "trianglemesh" || e.type == "plymesh") {
@@ -390,7 +440,8 @@ private:
                 N = std::move(mesh.normals);
                 UV = std::move(mesh.uvs);
                 idx = std::move(mesh.indices);
-                e.params.check_unused("shape \"plymesh\"", m_warn, {"alpha", "shadowalpha", "displacement", "edgelength"});
+                e.params.check_unused("shape \"plymesh\"", m_warn,
+                                      {"alpha", "shadowalpha", "displacement", "edgelength"});
             } else {
                 auto p = e.params.get_point3s("P");
                 if (!p) throw SceneError(e.loc, "trianglemesh needs a \"point3 P\" parameter");
@@ -404,20 +455,30 @@ private:
                     throw SceneError(e.loc, "trianglemesh needs an \"integer indices\" parameter");
                 }
                 if (idx.size() % 3 != 0)
-                    throw SceneError(e.params.find("indices")->loc, "indices count " + std::to_string(idx.size()) + " is not a multiple of 3");
+                    throw SceneError(
+                        e.params.find("indices")->loc,
+                        "indices count " + std::to_string(idx.size()) + " is not a multiple of 3");
                 for (int i : idx)
                     if (i < 0 || static_cast<std::size_t>(i) >= nv)
-                        throw SceneError(e.params.find("indices")->loc, "index " + std::to_string(i) + " out of range (" + std::to_string(nv) + " vertices)");
+                        throw SceneError(e.params.find("indices")->loc,
+                                         "index " + std::to_string(i) + " out of range (" +
+                                             std::to_string(nv) + " vertices)");
                 if (auto n = e.params.get_point3s("N")) {
-                    if (n->size() != P.size()) throw SceneError(e.params.find("N")->loc, "N must have one normal per vertex of P");
+                    if (n->size() != P.size())
+                        throw SceneError(e.params.find("N")->loc,
+                                         "N must have one normal per vertex of P");
                     for (double x : *n) N.push_back(float(x));
                 }
                 const char* uvname = e.params.find("uv") ? "uv" : "st";
                 if (auto uv = e.params.get_point2s(uvname)) {
-                    if (uv->size() != 2 * nv) throw SceneError(e.params.find(uvname)->loc, std::string(uvname) + " must have one (u,v) pair per vertex of P");
+                    if (uv->size() != 2 * nv)
+                        throw SceneError(
+                            e.params.find(uvname)->loc,
+                            std::string(uvname) + " must have one (u,v) pair per vertex of P");
                     for (double x : *uv) UV.push_back(float(x));
                 }
-                e.params.check_unused("shape \"trianglemesh\"", m_warn, {"alpha", "shadowalpha", "S", "faceIndices"});
+                e.params.check_unused("shape \"trianglemesh\"", m_warn,
+                                      {"alpha", "shadowalpha", "S", "faceIndices"});
             }
             std::size_t nv = P.size() / 3;
             prim->positions.resize(nv);
@@ -444,20 +505,25 @@ private:
             }
             // Drop degenerate triangles (pbrt-v3 cannot hit them either).
             for (std::size_t t = 0; t + 2 < idx.size(); t += 3) {
-                Vec3 a = prim->positions[idx[t]], b = prim->positions[idx[t + 1]], c = prim->positions[idx[t + 2]];
+                Vec3 a = prim->positions[idx[t]], b = prim->positions[idx[t + 1]],
+                     c = prim->positions[idx[t + 2]];
                 if (length(cross(b - a, c - a)) == 0) continue;
-                prim->indices.insert(prim->indices.end(), {uint32_t(idx[t]), uint32_t(idx[t + 1]), uint32_t(idx[t + 2])});
+                prim->indices.insert(prim->indices.end(), {uint32_t(idx[t]), uint32_t(idx[t + 1]),
+                                                           uint32_t(idx[t + 2])});
             }
             if (prim->indices.empty()) return;
         } else {
-            throw SceneError(e.loc, "unsupported shape " + q(e.type) +
-                                        " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
+            throw SceneError(
+                e.loc, "unsupported shape " + q(e.type) +
+                           " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
         }
         m_scene->primitives.push_back(std::move(prim));
     }
 
     // --- lights ---------------------------------------------------------------------------
-    static Vec3 to_vec(const std::array<double, 3>& a) { return Vec3(float(a[0]), float(a[1]), float(a[2])); }
+    static Vec3 to_vec(const std::array<double, 3>& a) {
+        return Vec3(float(a[0]), float(a[1]), float(a[2]));
+    }
 
     void light(const pbrt::LightDesc& d) {
         const Entity& e = d.entity;
@@ -476,10 +542,12 @@ private:
             l.intensity = (I ? Rgb((*I)[0], (*I)[1], (*I)[2]) : Rgb(1)) * scale;
             auto from = e.params.get_point3("from", {0, 0, 0});
             auto to = e.params.get_point3("to", {0, 0, 1});
-            double cone = e.params.get_float("coneangle", 30), delta = e.params.get_float("conedelta", 5);
+            double cone = e.params.get_float("coneangle", 30),
+                   delta = e.params.get_float("conedelta", 5);
             l.position = to_vec(m.apply_point(from));
             Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
-            if (length(axis) == 0) throw SceneError(e.loc, "spot light \"from\" and \"to\" coincide");
+            if (length(axis) == 0)
+                throw SceneError(e.loc, "spot light \"from\" and \"to\" coincide");
             l.direction = normalize(axis);
             l.cos_total = float(std::cos(cone * std::numbers::pi / 180));
             l.cos_falloff_start = float(std::cos((cone - delta) * std::numbers::pi / 180));
@@ -490,18 +558,23 @@ private:
             auto from = e.params.get_point3("from", {0, 0, 0});
             auto to = e.params.get_point3("to", {0, 0, 1});
             Vec3 w = to_vec(m.apply_vector({from[0] - to[0], from[1] - to[1], from[2] - to[2]}));
-            if (length(w) == 0) throw SceneError(e.loc, "distant light \"from\" and \"to\" coincide");
+            if (length(w) == 0)
+                throw SceneError(e.loc, "distant light \"from\" and \"to\" coincide");
             l.direction = normalize(w);
         } else if (e.type == "infinite") {
             l.type = Light::Type::Infinite;
             if (const auto* mp = e.params.find("mapname"))
-                throw SceneError(mp->loc, "infinite light environment maps are not supported (give a constant \"rgb L\")");
+                throw SceneError(mp->loc,
+                                 "infinite light environment maps are not supported (give a "
+                                 "constant \"rgb L\")");
             auto L = e.params.get_rgb("L");
             l.intensity = (L ? Rgb((*L)[0], (*L)[1], (*L)[2]) : Rgb(1)) * scale;
-            e.params.get_int("samples", 1);  // pbrt-v3's sample count hint; one sample per lookup here
+            e.params.get_int("samples",
+                             1);  // pbrt-v3's sample count hint; one sample per lookup here
         } else {
-            throw SceneError(e.loc, "unsupported light " + q(e.type) +
-                                        " (supported: \"point\", \"spot\", \"distant\", \"infinite\")");
+            throw SceneError(e.loc,
+                             "unsupported light " + q(e.type) +
+                                 " (supported: \"point\", \"spot\", \"distant\", \"infinite\")");
         }
         e.params.check_unused("light " + q(e.type), m_warn);
         m_scene->lights.push_back(l);
@@ -516,8 +589,9 @@ void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
     Vec3 d(sx * tan_half_fov, sy * tan_half_fov, 1);
     const auto& m = world_from_camera;
     *org = Vec3(m[3], m[7], m[11]);
-    *dir = normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
-                          m[8] * d.x + m[9] * d.y + m[10] * d.z));
+    *dir =
+        normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                       m[8] * d.x + m[9] * d.y + m[10] * d.z));
 }
 
 std::size_t Scene::texture_memory_bytes() const {

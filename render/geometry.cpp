@@ -13,7 +13,8 @@ namespace {
 using D3 = std::array<double, 3>;
 
 D3 xform_point(const std::array<double, 12>& m, const D3& p) {
-    return {m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3], m[4] * p[0] + m[5] * p[1] + m[6] * p[2] + m[7],
+    return {m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3],
+            m[4] * p[0] + m[5] * p[1] + m[6] * p[2] + m[7],
             m[8] * p[0] + m[9] * p[1] + m[10] * p[2] + m[11]};
 }
 D3 xform_vector(const std::array<double, 12>& m, const D3& v) {
@@ -32,7 +33,8 @@ double phi_of(double x, double y) {
 }
 
 /// Nearest object-space hit parameter in (tmin, tmax) for a quadric; returns false on a miss.
-bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, double tmax, double* t_out) {
+bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, double tmax,
+                 double* t_out) {
     if (prim.kind == Primitive::Kind::Sphere) {
         double r = prim.radius;
         double a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
@@ -48,7 +50,8 @@ bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, d
             if (!(t > tmin && t < tmax)) continue;
             D3 p = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
             if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * r;
-            if ((prim.zmin > -r && p[2] < prim.zmin) || (prim.zmax < r && p[2] > prim.zmax)) continue;
+            if ((prim.zmin > -r && p[2] < prim.zmin) || (prim.zmax < r && p[2] > prim.zmax))
+                continue;
             if (prim.phi_max < 2 * std::numbers::pi && phi_of(p[0], p[1]) > prim.phi_max) continue;
             *t_out = t;
             return true;
@@ -61,7 +64,8 @@ bool quadric_hit(const Primitive& prim, const D3& o, const D3& d, double tmin, d
     if (!(t > tmin && t < tmax)) return false;
     double x = o[0] + t * d[0], y = o[1] + t * d[1];
     double dist2 = x * x + y * y;
-    if (dist2 > prim.radius * prim.radius || dist2 < prim.inner_radius * prim.inner_radius) return false;
+    if (dist2 > prim.radius * prim.radius || dist2 < prim.inner_radius * prim.inner_radius)
+        return false;
     if (prim.phi_max < 2 * std::numbers::pi && phi_of(x, y) > prim.phi_max) return false;
     *t_out = t;
     return true;
@@ -74,7 +78,8 @@ void quadric_bounds(const RTCBoundsFunctionArguments* args) {
     double z1 = prim->kind == Primitive::Kind::Sphere ? prim->zmax : prim->height;
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
     for (int c = 0; c < 8; ++c) {
-        D3 p = xform_point(prim->world_from_object, {c & 1 ? r : -r, c & 2 ? r : -r, c & 4 ? z1 : z0});
+        D3 p =
+            xform_point(prim->world_from_object, {c & 1 ? r : -r, c & 2 ? r : -r, c & 4 ? z1 : z0});
         for (int k = 0; k < 3; ++k) {
             lo[k] = std::min(lo[k], p[k]);
             hi[k] = std::max(hi[k], p[k]);
@@ -99,11 +104,14 @@ void quadric_intersect(const RTCIntersectFunctionNArguments* args) {
     RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
-        D3 o = {RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
-        D3 d = {RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        D3 o = {RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                RTCRayN_org_z(ray, args->N, i)};
+        D3 d = {RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+                RTCRayN_dir_z(ray, args->N, i)};
         double t;
-        if (!quadric_hit(*prim, xform_point(prim->object_from_world, o), xform_vector(prim->object_from_world, d),
-                         RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t))
+        if (!quadric_hit(*prim, xform_point(prim->object_from_world, o),
+                         xform_vector(prim->object_from_world, d), RTCRayN_tnear(ray, args->N, i),
+                         RTCRayN_tfar(ray, args->N, i), &t))
             continue;
         RTCRayN_tfar(ray, args->N, i) = static_cast<float>(t);
         RTCHitN_Ng_x(hit, args->N, i) = 0;
@@ -122,20 +130,26 @@ void quadric_occluded(const RTCOccludedFunctionNArguments* args) {
     RTCRayN* ray = args->ray;
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
-        D3 o = {RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
-        D3 d = {RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        D3 o = {RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                RTCRayN_org_z(ray, args->N, i)};
+        D3 d = {RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+                RTCRayN_dir_z(ray, args->N, i)};
         double t;
-        if (quadric_hit(*prim, xform_point(prim->object_from_world, o), xform_vector(prim->object_from_world, d),
-                        RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i), &t))
+        if (quadric_hit(*prim, xform_point(prim->object_from_world, o),
+                        xform_vector(prim->object_from_world, d), RTCRayN_tnear(ray, args->N, i),
+                        RTCRayN_tfar(ray, args->N, i), &t))
             RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
     }
 }
 
 void embree_error(void*, RTCError code, const char* str) {
-    throw std::runtime_error(std::string("Embree error ") + std::to_string(code) + ": " + (str ? str : ""));
+    throw std::runtime_error(std::string("Embree error ") + std::to_string(code) + ": " +
+                             (str ? str : ""));
 }
 
-Vec3 to_vec(const D3& d) { return Vec3(float(d[0]), float(d[1]), float(d[2])); }
+Vec3 to_vec(const D3& d) {
+    return Vec3(float(d[0]), float(d[1]), float(d[2]));
+}
 
 }  // namespace
 
@@ -158,15 +172,17 @@ void Scene::commit() {
         RTCGeometry g;
         if (prim.kind == Primitive::Kind::Triangles) {
             g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                  3 * sizeof(float), prim.positions.size()));
+            auto* v = static_cast<float*>(
+                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                        3 * sizeof(float), prim.positions.size()));
             for (std::size_t i = 0; i < prim.positions.size(); ++i) {
                 v[3 * i] = prim.positions[i].x;
                 v[3 * i + 1] = prim.positions[i].y;
                 v[3 * i + 2] = prim.positions[i].z;
             }
-            auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                       3 * sizeof(uint32_t), prim.indices.size() / 3));
+            auto* idx = static_cast<uint32_t*>(
+                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                        3 * sizeof(uint32_t), prim.indices.size() / 3));
             std::copy(prim.indices.begin(), prim.indices.end(), idx);
         } else {
             g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_USER);
@@ -200,7 +216,8 @@ bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) c
     return ray.tfar < 0;
 }
 
-bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax, SurfaceHit* out) const {
+bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
+                      SurfaceHit* out) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};

@@ -1,12 +1,12 @@
 #include "render/image_io.h"
 
 #include <OpenImageIO/imageio.h>
-
 #include <cmam/texture/image.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 namespace cmam::render {
 
@@ -17,27 +17,30 @@ RawImage read_image(const std::string& path) {
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
         std::string why = OIIO::geterror();
-        throw ImageIoError("cannot read image \"" + path + "\": " + (why.empty() ? "unknown format" : why));
+        throw ImageIoError("cannot read image \"" + path +
+                           "\": " + (why.empty() ? "unknown format" : why));
     }
     const OIIO::ImageSpec& spec = in->spec();
     RawImage img;
     img.width = spec.width;
     img.height = spec.height;
     img.channels = spec.nchannels;
-    img.is_8bit = spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::INT8;
+    img.is_8bit = spec.format.basetype == OIIO::TypeDesc::UINT8 ||
+                  spec.format.basetype == OIIO::TypeDesc::INT8;
     if (img.width <= 0 || img.height <= 0 || img.channels <= 0)
         throw ImageIoError("cannot read image \"" + path + "\": empty image");
     img.pixels.resize(static_cast<std::size_t>(img.width) * img.height * img.channels);
     if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
         std::string why = in->geterror();
-        throw ImageIoError("cannot read image \"" + path + "\": " + (why.empty() ? "corrupt data" : why));
+        throw ImageIoError("cannot read image \"" + path +
+                           "\": " + (why.empty() ? "corrupt data" : why));
     }
     in->close();
     return img;
 }
 
-texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt, float scale,
-                            texture::WrapMode wrap, bool* gamma_used) {
+texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt,
+                            float scale, texture::WrapMode wrap, bool* gamma_used) {
     RawImage raw = read_image(path);
     bool gamma = gamma_opt.value_or(raw.is_8bit);
     if (gamma_used) *gamma_used = gamma;
@@ -53,7 +56,8 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
                 float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
                 dst[0] = scale * (gamma ? texture::srgb_to_linear(yv) : yv);
             } else {
-                for (int c = 0; c < 3; ++c) dst[c] = scale * (gamma ? texture::srgb_to_linear(rgb[c]) : rgb[c]);
+                for (int c = 0; c < 3; ++c)
+                    dst[c] = scale * (gamma ? texture::srgb_to_linear(rgb[c]) : rgb[c]);
             }
         }
     }
@@ -87,17 +91,19 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
     fs::path target(path);
     fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
     if (!fs::is_directory(dir))
-        throw ImageIoError("cannot write \"" + path + "\": directory \"" + dir.string() + "\" does not exist");
+        throw ImageIoError("cannot write \"" + path + "\": directory \"" + dir.string() +
+                           "\" does not exist");
     // The temporary keeps the extension so format plug-ins that check it are satisfied.
-    fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + ext);
+    fs::path tmp =
+        dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + ext);
     try {
         if (ext == ".pfm") {
             write_pfm(tmp.string(), w, h, rgb);
         } else {
             auto out = OIIO::ImageOutput::create(path);
             if (!out)
-                throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" + ext +
-                                   "\" (use .exr, .pfm or .png)");
+                throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" +
+                                   ext + "\" (use .exr, .pfm or .png)");
             bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
             OIIO::ImageSpec spec(w, h, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
             std::vector<unsigned char> bytes;
@@ -107,7 +113,8 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
                 for (std::size_t i = 0; i < rgb.size(); ++i) {
                     float v = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
                     float e = texture::linear_to_srgb(v);
-                    bytes[i] = static_cast<unsigned char>(std::clamp(e * 255.0f + 0.5f, 0.0f, 255.0f));
+                    bytes[i] =
+                        static_cast<unsigned char>(std::clamp(e * 255.0f + 0.5f, 0.0f, 255.0f));
                 }
             } else {
                 spec.attribute("oiio:ColorSpace", "Linear");
@@ -116,7 +123,8 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
                 throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());
             bool ok = is_float ? out->write_image(OIIO::TypeDesc::FLOAT, rgb.data())
                                : out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
-            if (!ok || !out->close()) throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());
+            if (!ok || !out->close())
+                throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());
         }
         fs::rename(tmp, target);
     } catch (...) {

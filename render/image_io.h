@@ -13,7 +13,7 @@
 namespace cmam::render {
 
 class ImageIoError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
@@ -32,8 +32,8 @@ RawImage read_image(const std::string& path);
 /// sRGB when `gamma` (default: when the file stores 8-bit data), multiplied by `scale`. Float
 /// textures (`is_float`) keep one channel, the luminance of the stored RGB (decoded after
 /// taking the luminance, as pbrt-v3 does); others keep RGB (grey files are replicated).
-texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma, float scale,
-                            texture::WrapMode wrap, bool* gamma_used = nullptr);
+texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma,
+                            float scale, texture::WrapMode wrap, bool* gamma_used = nullptr);
 
 /// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
 /// extension: .exr (32-bit float), .pfm (float), .png (8-bit sRGB, clamped), or anything else

@@ -14,7 +14,7 @@ namespace {
 
 /// Small counter-based generator (SplitMix64): reproducible streams per pixel sample.
 class Rng {
-public:
+  public:
     explicit Rng(uint64_t seed) : m_state(seed) {}
     uint64_t next_u64() {
         uint64_t z = (m_state += 0x9E3779B97F4A7C15ull);
@@ -24,11 +24,13 @@ public:
     }
     float next_float() { return std::min(float(next_u64() >> 40) * 0x1.0p-24f, 0x1.fffffep-1f); }
 
-private:
+  private:
     uint64_t m_state;
 };
 
-float ray_epsilon(const Vec3& p) { return 1e-4f * (1 + max_abs(p)); }
+float ray_epsilon(const Vec3& p) {
+    return 1e-4f * (1 + max_abs(p));
+}
 
 Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
     return h.p + faceforward(h.ng, w) * ray_epsilon(h.p);
@@ -44,7 +46,8 @@ struct RayCounts {
         stats->camera_rays += camera;
         stats->secondary_rays += secondary;
         stats->shadow_rays += shadow;
-        for (int k = 0; k < texture::kFilterKinds; ++k) stats->lookups_by_filter[k] += lookups.by_filter[k];
+        for (int k = 0; k < texture::kFilterKinds; ++k)
+            stats->lookups_by_filter[k] += lookups.by_filter[k];
         stats->lookups_point_sampled += lookups.point_sampled;
     }
 };
@@ -87,7 +90,8 @@ struct Tracer {
                         float c = dot(-wi, light.direction);
                         if (c < light.cos_total) continue;
                         if (c < light.cos_falloff_start) {
-                            float delta = (c - light.cos_total) / (light.cos_falloff_start - light.cos_total);
+                            float delta =
+                                (c - light.cos_total) / (light.cos_falloff_start - light.cos_total);
                             li = li * ((delta * delta) * (delta * delta));
                         }
                     }
@@ -102,7 +106,8 @@ struct Tracer {
                     // value as pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
                     float u1 = rng.next_float(), u2 = rng.next_float();
                     float r = std::sqrt(u1), phi = 2 * kPi * u2;
-                    Vec3 local(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u1)));
+                    Vec3 local(r * std::cos(phi), r * std::sin(phi),
+                               std::sqrt(std::max(0.0f, 1 - u1)));
                     Frame f = Frame::from_z(faceforward(h.ng, wo));
                     wi = f.to_world(local);
                     pdf = local.z * kInvPi;
@@ -123,8 +128,10 @@ struct Tracer {
     Rgb li(Vec3 org, Vec3 dir, int depth) {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             SurfaceHit h;
-            if (!scene.intersect(org, dir, 0, std::numeric_limits<float>::infinity(), &h)) return escaped();
-            const Material& m = h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
+            if (!scene.intersect(org, dir, 0, std::numeric_limits<float>::infinity(), &h))
+                return escaped();
+            const Material& m =
+                h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
             TexContext ctx{h.u, h.v, {}, {}, counts ? &counts->lookups : nullptr};
             Bsdf bsdf;
             Vec3 wo = -dir;
@@ -181,7 +188,8 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
-Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RayCounts* counts) {
+Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
+              RayCounts* counts) {
     Rng rng(seed);
     Tracer t{scene, counts, rng};
     if (counts) ++counts->camera;
@@ -190,7 +198,8 @@ Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t see
 
 }  // namespace
 
-Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RenderStats* stats) {
+Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
+                   RenderStats* stats) {
     RayCounts c;
     Rgb L = trace_one(scene, org, dir, seed, &c);
     c.add_to(stats);
@@ -208,7 +217,8 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
 
     std::unique_ptr<tbb::global_control> limit;
     if (options.threads > 0)
-        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, options.threads);
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      options.threads);
     std::atomic<int> rows_done{0};
 
     auto render_row = [&](int row) {
@@ -217,7 +227,8 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         RayCounts counts;
         for (int col = 0; col < fb.width; ++col) {
             int px = film.x0 + col;
-            uint64_t pixel_seed = mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
+            uint64_t pixel_seed =
+                mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
             Rng jitter(pixel_seed);
             double sum[3] = {0, 0, 0};
             for (int sy = 0; sy < ny; ++sy)
@@ -227,8 +238,10 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                     float fx = px + (sx + jx) / nx, fy = py + (sy + jy) / ny;
                     Vec3 org, dir;
                     scene.camera.generate_ray(fx, fy, &org, &dir);
-                    Rgb L = trace_one(scene, org, dir, mix_seed(pixel_seed, uint64_t(sy * nx + sx) + 1), &counts);
-                    if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
+                    Rgb L = trace_one(scene, org, dir,
+                                      mix_seed(pixel_seed, uint64_t(sy * nx + sx) + 1), &counts);
+                    if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b))
+                        L = Rgb();
                     sum[0] += L.r;
                     sum[1] += L.g;
                     sum[2] += L.b;
@@ -240,9 +253,10 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         if (options.progress) options.progress(done, fb.height);
     };
 
-    tbb::parallel_for(tbb::blocked_range<int>(0, fb.height, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int row = r.begin(); row < r.end(); ++row) render_row(row);
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, fb.height, 1),
+                      [&](const tbb::blocked_range<int>& r) {
+                          for (int row = r.begin(); row < r.end(); ++row) render_row(row);
+                      });
     return fb;
 }
 

@@ -15,7 +15,7 @@ namespace cmam::render {
 struct RenderStats {
     std::atomic<uint64_t> camera_rays{0}, secondary_rays{0}, shadow_rays{0};
     std::atomic<uint64_t> lookups_by_filter[texture::kFilterKinds] = {};  // with a footprint
-    std::atomic<uint64_t> lookups_point_sampled{0};                      // without one
+    std::atomic<uint64_t> lookups_point_sampled{0};                       // without one
     uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
 };
 
@@ -34,6 +34,7 @@ struct Framebuffer {
 Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats);
 
 /// Radiance along one camera ray (exposed for tests).
-Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed, RenderStats* stats);
+Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
+                   RenderStats* stats);
 
 }  // namespace cmam::render

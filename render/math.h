@@ -20,18 +20,37 @@ struct Vec3 {
     Vec3 operator-() const { return {-x, -y, -z}; }
     Vec3 operator*(float s) const { return {x * s, y * s, z * s}; }
     Vec3 operator/(float s) const { return {x / s, y / s, z / s}; }
-    Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
+    Vec3& operator+=(const Vec3& o) {
+        x += o.x;
+        y += o.y;
+        z += o.z;
+        return *this;
+    }
 };
-inline Vec3 operator*(float s, const Vec3& v) { return v * s; }
-inline float dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline float absdot(const Vec3& a, const Vec3& b) { return std::abs(dot(a, b)); }
+inline Vec3 operator*(float s, const Vec3& v) {
+    return v * s;
+}
+inline float dot(const Vec3& a, const Vec3& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline float absdot(const Vec3& a, const Vec3& b) {
+    return std::abs(dot(a, b));
+}
 inline Vec3 cross(const Vec3& a, const Vec3& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline float length(const Vec3& v) { return std::sqrt(dot(v, v)); }
-inline Vec3 normalize(const Vec3& v) { return v / length(v); }
-inline Vec3 faceforward(const Vec3& n, const Vec3& v) { return dot(n, v) < 0 ? -n : n; }
-inline float max_abs(const Vec3& v) { return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}); }
+inline float length(const Vec3& v) {
+    return std::sqrt(dot(v, v));
+}
+inline Vec3 normalize(const Vec3& v) {
+    return v / length(v);
+}
+inline Vec3 faceforward(const Vec3& n, const Vec3& v) {
+    return dot(n, v) < 0 ? -n : n;
+}
+inline float max_abs(const Vec3& v) {
+    return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+}
 
 /// Linear RGB radiance or reflectance (pbrt-v3's RGBSpectrum).
 struct Rgb {
@@ -44,11 +63,18 @@ struct Rgb {
     Rgb operator*(const Rgb& o) const { return {r * o.r, g * o.g, b * o.b}; }
     Rgb operator*(float s) const { return {r * s, g * s, b * s}; }
     Rgb operator/(float s) const { return {r / s, g / s, b / s}; }
-    Rgb& operator+=(const Rgb& o) { r += o.r; g += o.g; b += o.b; return *this; }
+    Rgb& operator+=(const Rgb& o) {
+        r += o.r;
+        g += o.g;
+        b += o.b;
+        return *this;
+    }
     bool is_black() const { return r == 0 && g == 0 && b == 0; }
     float luminance() const { return 0.212671f * r + 0.715160f * g + 0.072169f * b; }
 };
-inline Rgb operator*(float s, const Rgb& c) { return c * s; }
+inline Rgb operator*(float s, const Rgb& c) {
+    return c * s;
+}
 
 /// Orthonormal frame with z along a given normal (for BSDF-local directions).
 struct Frame {
@@ -58,7 +84,8 @@ struct Frame {
         float sign = std::copysign(1.0f, n.z);
         float a = -1.0f / (sign + n.z);
         float b = n.x * n.y * a;
-        return {Vec3(1 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3(b, sign + n.y * n.y * a, -n.y), n};
+        return {Vec3(1 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+                Vec3(b, sign + n.y * n.y * a, -n.y), n};
     }
     Vec3 to_local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
     Vec3 to_world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }

@@ -2,12 +2,12 @@
 // Built from a pbrt::SceneDesc by build_scene(); rendering reads it from many threads.
 #pragma once
 
+#include <cmam/texture/filter.h>
+#include <cmam/texture/footprint.h>
+#include <cmam/texture/image.h>
 #include <embree3/rtcore.h>
 
 #include <array>
-#include <cmam/texture/footprint.h>
-#include <cmam/texture/filter.h>
-#include <cmam/texture/image.h>
 #include <map>
 #include <memory>
 #include <string>
@@ -55,10 +55,10 @@ struct TextureNode {
     Kind kind = Kind::Constant;
     bool is_float = false;
     Rgb constant{};
-    float su = 1, sv = 1, du = 0, dv = 0;       // uv mapping
+    float su = 1, sv = 1, du = 0, dv = 0;             // uv mapping
     const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
     texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
-    TexInput tex1, tex2, amount;                 // Checkerboard, Scale, Mix
+    TexInput tex1, tex2, amount;                      // Checkerboard, Scale, Mix
 };
 
 struct Material {
@@ -71,9 +71,9 @@ struct Material {
 struct Light {
     enum class Type { Point, Spot, Distant, Infinite };
     Type type = Type::Point;
-    Rgb intensity{};    // I for point/spot, L for distant/infinite (scale applied)
-    Vec3 position{};    // point, spot
-    Vec3 direction{};   // distant: towards the light; spot: axis (from -> to)
+    Rgb intensity{};   // I for point/spot, L for distant/infinite (scale applied)
+    Vec3 position{};   // point, spot
+    Vec3 direction{};  // distant: towards the light; spot: axis (from -> to)
     float cos_total = 0, cos_falloff_start = 0;
 };
 
@@ -81,8 +81,8 @@ struct Light {
 struct Primitive {
     enum class Kind { Triangles, Sphere, Disk };
     Kind kind = Kind::Triangles;
-    int material = -1;       // -1 is the default matte
-    bool flip = false;       // reverse_orientation xor transform swaps handedness
+    int material = -1;  // -1 is the default matte
+    bool flip = false;  // reverse_orientation xor transform swaps handedness
     // Triangles (world space)
     std::vector<Vec3> positions, normals;
     std::vector<std::array<float, 2>> uvs;
@@ -96,8 +96,8 @@ struct Primitive {
 /// A surface hit, in world space, oriented as pbrt-v3 orients it.
 struct SurfaceHit {
     Vec3 p;
-    Vec3 ng;        // geometric normal
-    Vec3 ns;        // shading normal (same side as ng)
+    Vec3 ng;  // geometric normal
+    Vec3 ns;  // shading normal (same side as ng)
     float u = 0, v = 0;
     float t = 0;
     const Primitive* prim = nullptr;
@@ -106,7 +106,7 @@ struct SurfaceHit {
 struct RenderStats;
 
 class Scene {
-public:
+  public:
     Scene();
     ~Scene();
     Scene(const Scene&) = delete;
@@ -120,7 +120,8 @@ public:
     std::vector<Material> materials;
     std::vector<Light> lights;
     std::vector<std::unique_ptr<Primitive>> primitives;
-    std::map<std::string, std::unique_ptr<texture::FilteredTexture>> images;  // loaded once per settings
+    std::map<std::string, std::unique_ptr<texture::FilteredTexture>>
+        images;  // loaded once per settings
     Material default_material;
 
     /// Creates the Embree scene from `primitives`; call once after filling them.
@@ -132,7 +133,7 @@ public:
     RTCScene embree_scene() const { return m_scene; }
     std::size_t texture_memory_bytes() const;
 
-private:
+  private:
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
 };

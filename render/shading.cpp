@@ -1,15 +1,17 @@
 #include "render/shading.h"
 
-
 namespace cmam::render {
 
-texture::Texel lookup_image(const texture::FilteredTexture& image, const texture::FilterOptions& filter, double s,
-                            double t, const texture::Footprint& footprint, texture::RayTag tag,
+texture::Texel lookup_image(const texture::FilteredTexture& image,
+                            const texture::FilterOptions& filter, double s, double t,
+                            const texture::Footprint& footprint, texture::RayTag tag,
                             LookupCounts* counts) {
     (void)tag;  // consumed by the CMAM, which sits in front of this call
     if (counts) {
-        if (footprint.kind == texture::Footprint::Kind::None) ++counts->point_sampled;
-        else ++counts->by_filter[static_cast<int>(filter.kind)];
+        if (footprint.kind == texture::Footprint::Kind::None)
+            ++counts->point_sampled;
+        else
+            ++counts->by_filter[static_cast<int>(filter.kind)];
     }
     return image.lookup(s, t, footprint, filter);
 }
@@ -18,7 +20,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
     if (in.node < 0) return in.value;
     const TextureNode& n = scene.textures[static_cast<std::size_t>(in.node)];
     switch (n.kind) {
-        case TextureNode::Kind::Constant: return n.constant;
+        case TextureNode::Kind::Constant:
+            return n.constant;
         case TextureNode::Kind::Image: {
             double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
             texture::Footprint fp = ctx.footprint;
@@ -32,7 +35,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
         }
         case TextureNode::Kind::Checkerboard: {
             double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
-            auto parity = static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
+            auto parity =
+                static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
             return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);
         }
         case TextureNode::Kind::Scale:
@@ -74,7 +78,9 @@ bool refract(const Vec3& wi, const Vec3& n, float eta, Vec3* wt) {
 
 namespace {
 
-Rgb clamp0(const Rgb& c) { return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)}; }
+Rgb clamp0(const Rgb& c) {
+    return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
+}
 
 // Trowbridge-Reitz (GGX) microfacet distribution, isotropic, local frame (pbrt-v3).
 float tr_d(const Vec3& wh, float alpha) {
@@ -116,8 +122,10 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
             float sin_o = std::sqrt(std::max(0.0f, 1 - wo.z * wo.z));
             float max_cos = 0;
             if (sin_i > 1e-4f && sin_o > 1e-4f) {
-                float cpi = std::clamp(wi.x / sin_i, -1.0f, 1.0f), spi = std::clamp(wi.y / sin_i, -1.0f, 1.0f);
-                float cpo = std::clamp(wo.x / sin_o, -1.0f, 1.0f), spo = std::clamp(wo.y / sin_o, -1.0f, 1.0f);
+                float cpi = std::clamp(wi.x / sin_i, -1.0f, 1.0f),
+                      spi = std::clamp(wi.y / sin_i, -1.0f, 1.0f);
+                float cpo = std::clamp(wo.x / sin_o, -1.0f, 1.0f),
+                      spo = std::clamp(wo.y / sin_o, -1.0f, 1.0f);
                 max_cos = std::max(0.0f, cpi * cpo + spi * spo);
             }
             float sin_alpha, tan_beta;
@@ -144,7 +152,8 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
     return out;
 }
 
-bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, const TexContext& ctx, Bsdf* b) {
+bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, const TexContext& ctx,
+               Bsdf* b) {
     if (m.type == Material::Type::None) return false;
     *b = Bsdf{};
     b->frame = Frame::from_z(hit.ns);
@@ -176,7 +185,8 @@ bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, con
             b->kt = clamp0(eval_texture(scene, m.kt, ctx));
             b->eta = eval_texture(scene, m.eta, ctx).r;
             break;
-        case Material::Type::None: return false;
+        case Material::Type::None:
+            return false;
     }
     return true;
 }

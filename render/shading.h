@@ -23,8 +23,9 @@ struct TexContext {
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the
 /// footprint mapped through the same (u,v) -> (s,t) scale.
-texture::Texel lookup_image(const texture::FilteredTexture& image, const texture::FilterOptions& filter, double s,
-                            double t, const texture::Footprint& footprint, texture::RayTag tag,
+texture::Texel lookup_image(const texture::FilteredTexture& image,
+                            const texture::FilterOptions& filter, double s, double t,
+                            const texture::Footprint& footprint, texture::RayTag tag,
                             LookupCounts* counts);
 
 /// Evaluates a texture input (constant or node) at a shading point; float textures return
@@ -33,8 +34,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx);
 
 /// A BSDF instantiated at a hit (pbrt-v3 BxDF combinations of the supported materials).
 struct Bsdf {
-    Frame frame;        // shading frame, z = shading normal
-    Vec3 ng;            // geometric normal
+    Frame frame;  // shading frame, z = shading normal
+    Vec3 ng;      // geometric normal
     // Diffuse lobe (Lambertian, or Oren-Nayar when on_b != 0)
     Rgb kd{};
     float on_a = 1, on_b = 0;

@@ -9,10 +9,10 @@ using namespace cmam;
 using namespace cmam::render;
 
 TEST(Fresnel, DielectricReferenceValues) {
-    EXPECT_NEAR(fresnel_dielectric(1, 1, 1.5f), 0.04, 1e-6);         // normal incidence
-    EXPECT_NEAR(fresnel_dielectric(-1, 1, 1.5f), 0.04, 1e-6);        // from inside, same
-    EXPECT_NEAR(fresnel_dielectric(0, 1, 1.5f), 1.0, 1e-6);          // grazing
-    EXPECT_FLOAT_EQ(fresnel_dielectric(-0.5f, 1, 1.5f), 1.0f);       // total internal reflection
+    EXPECT_NEAR(fresnel_dielectric(1, 1, 1.5f), 0.04, 1e-6);    // normal incidence
+    EXPECT_NEAR(fresnel_dielectric(-1, 1, 1.5f), 0.04, 1e-6);   // from inside, same
+    EXPECT_NEAR(fresnel_dielectric(0, 1, 1.5f), 1.0, 1e-6);     // grazing
+    EXPECT_FLOAT_EQ(fresnel_dielectric(-0.5f, 1, 1.5f), 1.0f);  // total internal reflection
     // 45 degrees into glass: Rs = 0.0920, Rp = 0.0085 (textbook values)
     float c = std::sqrt(0.5f);
     EXPECT_NEAR(fresnel_dielectric(c, 1, 1.5f), (0.092013 + 0.008466) / 2, 2e-5);

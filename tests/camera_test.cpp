@@ -19,7 +19,8 @@ void expect_dir(const Vec3& d, Vec3 e, float eps = 1e-6f) {
 TEST(Camera, CentreAndEdgesOfASquareImage) {
     auto s = test::scene_from(
         "LookAt 0 0 0  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 90 "
-        "Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 100 WorldBegin WorldEnd");
+        "Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 100 WorldBegin "
+        "WorldEnd");
     Vec3 o, d;
     s->camera.generate_ray(50, 50, &o, &d);
     expect_dir(d, Vec3(0, 0, 1));
@@ -31,9 +32,10 @@ TEST(Camera, CentreAndEdgesOfASquareImage) {
 
 TEST(Camera, FovSpansTheShorterAxis) {
     for (auto [xr, yr] : {std::pair{200, 100}, std::pair{100, 200}}) {
-        auto s = test::scene_from("Camera \"perspective\" \"float fov\" 60 Film \"image\" \"integer xresolution\" " +
-                                  std::to_string(xr) + " \"integer yresolution\" " + std::to_string(yr) +
-                                  " WorldBegin WorldEnd");
+        auto s = test::scene_from(
+            "Camera \"perspective\" \"float fov\" 60 Film \"image\" \"integer xresolution\" " +
+            std::to_string(xr) + " \"integer yresolution\" " + std::to_string(yr) +
+            " WorldBegin WorldEnd");
         Vec3 o, d;
         float t = float(std::tan(30 * kDeg));
         if (xr > yr) {
@@ -52,7 +54,8 @@ TEST(Camera, FovSpansTheShorterAxis) {
 
 TEST(Camera, LookAtPlacesTheCamera) {
     auto s = test::scene_from(
-        "LookAt 1 2 3  1 2 -7  0 1 0 Camera \"perspective\" Film \"image\" \"integer xresolution\" 10 "
+        "LookAt 1 2 3  1 2 -7  0 1 0 Camera \"perspective\" Film \"image\" \"integer xresolution\" "
+        "10 "
         "\"integer yresolution\" 10 WorldBegin WorldEnd");
     Vec3 o, d;
     s->camera.generate_ray(5, 5, &o, &d);
@@ -67,7 +70,8 @@ TEST(Camera, LookAtPlacesTheCamera) {
 TEST(Camera, ScreenWindowAndCrop) {
     auto s = test::scene_from(
         "Camera \"perspective\" \"float fov\" 90 \"float screenwindow\" [0 1 0 1] "
-        "Film \"image\" \"integer xresolution\" 10 \"integer yresolution\" 10 \"float cropwindow\" [0.5 1 0 0.25] "
+        "Film \"image\" \"integer xresolution\" 10 \"integer yresolution\" 10 \"float cropwindow\" "
+        "[0.5 1 0 0.25] "
         "WorldBegin WorldEnd");
     Vec3 o, d;
     s->camera.generate_ray(0, 10, &o, &d);  // bottom-left of the window is screen (0,0)

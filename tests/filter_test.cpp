@@ -10,12 +10,16 @@
 using namespace cmam::texture;
 
 namespace {
-Image tex2x2(WrapMode w) { return Image(2, 2, 1, {1, 2, 3, 4}, w, w); }
+Image tex2x2(WrapMode w) {
+    return Image(2, 2, 1, {1, 2, 3, 4}, w, w);
+}
 // T-MIP-1 texture, rows j = 0..3.
 Image tmip1(WrapMode w = WrapMode::Repeat) {
     return Image(4, 4, 1, {3, 0, 1, 2, 5, 7, 4, 1, 0, 2, 6, 3, 1, 1, 0, 4}, w, w);
 }
-double avg(const SummedAreaTable& s, double x0, double x1, double y0, double y1) { return s.average(x0, y0, x1, y1)[0]; }
+double avg(const SummedAreaTable& s, double x0, double x1, double y0, double y1) {
+    return s.average(x0, y0, x1, y1)[0];
+}
 }  // namespace
 
 // ---- summed-area tables -------------------------------------------------------------------
@@ -38,13 +42,15 @@ TEST_P(SatStorage, TSat2RepeatWrap) {
     EXPECT_NEAR(s.integral(1.75, 1.75, 2.25, 2.25)[0], 0.625, 1e-6);
     EXPECT_NEAR(s.integral(0, 0, 4, 2)[0], 20, 1e-5);
     EXPECT_NEAR(s.integral(-3, -1, 5, 3)[0], 80, 1e-5);
-    EXPECT_NEAR(avg(s, 1e6 + 0.5, 1e6 + 1.5, -1e6 + 0.5, -1e6 + 1.5), 2.5, 1e-6);  // far away: no cancellation
+    EXPECT_NEAR(avg(s, 1e6 + 0.5, 1e6 + 1.5, -1e6 + 0.5, -1e6 + 1.5), 2.5,
+                1e-6);  // far away: no cancellation
 }
 
 TEST_P(SatStorage, TSat3UnitBoxEqualsBilinear) {
     Image t = tex2x2(WrapMode::Repeat);
     SummedAreaTable s(t, GetParam());
-    for (auto [cs, ct, expected] : {std::tuple{1.0, 1.0, 2.5}, {0.7, 1.2, 2.6}, {0.2, 0.3, 1.7}, {1.9, 0.1, 2.4}}) {
+    for (auto [cs, ct, expected] :
+         {std::tuple{1.0, 1.0, 2.5}, {0.7, 1.2, 2.6}, {0.2, 0.3, 1.7}, {1.9, 0.1, 2.4}}) {
         EXPECT_NEAR(avg(s, cs - 0.5, cs + 0.5, ct - 0.5, ct + 0.5), expected, 1e-6);
         EXPECT_NEAR(bilinear(t, cs / 2, ct / 2)[0], expected, 1e-6);
     }
@@ -71,22 +77,27 @@ TEST_P(SatStorage, RandomRectanglesMatchBruteForce) {
             int x0 = coord(rng), x1 = coord(rng), y0 = coord(rng), y1 = coord(rng);
             double brute = 0;
             for (int j = std::min(y0, y1); j < std::max(y0, y1); ++j)
-                for (int i = std::min(x0, x1); i < std::max(x0, x1); ++i) brute += img.fetch(i, j)[0];
-            EXPECT_NEAR(s.integral(x0, y0, x1, y1)[0], brute, 1e-3 * (1 + std::abs(brute))) << to_string(w);
+                for (int i = std::min(x0, x1); i < std::max(x0, x1); ++i)
+                    brute += img.fetch(i, j)[0];
+            EXPECT_NEAR(s.integral(x0, y0, x1, y1)[0], brute, 1e-3 * (1 + std::abs(brute)))
+                << to_string(w);
         }
     }
 }
 
 INSTANTIATE_TEST_SUITE_P(Storage, SatStorage,
-                         ::testing::Values(SummedAreaTable::Storage::Double, SummedAreaTable::Storage::MeanOffsetFloat));
+                         ::testing::Values(SummedAreaTable::Storage::Double,
+                                           SummedAreaTable::Storage::MeanOffsetFloat));
 
 TEST(Sat, TSat5PrecisionGate) {
     const int n = 1024;
     std::vector<float> px(n * n);
     for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) px[j * n + i] = float(((long long)i * i + 3LL * j * j + 5LL * i * j) % 256) / 255.0f;
+        for (int i = 0; i < n; ++i)
+            px[j * n + i] = float(((long long)i * i + 3LL * j * j + 5LL * i * j) % 256) / 255.0f;
     Image img(n, n, 1, px);
-    SummedAreaTable d(img, SummedAreaTable::Storage::Double), f(img, SummedAreaTable::Storage::MeanOffsetFloat);
+    SummedAreaTable d(img, SummedAreaTable::Storage::Double),
+        f(img, SummedAreaTable::Storage::MeanOffsetFloat);
     EXPECT_EQ(f.memory_bytes(), std::size_t(n + 1) * (n + 1) * 4);  // 4 bytes per channel per entry
     double worst_d = 0, worst_f = 0;
     for (int j = 0; j < n; j += 3)
@@ -127,7 +138,8 @@ TEST(Mip, TMip2RampKeepsTheHalfTexelConvention) {
         EXPECT_NEAR(p.bilinear(l, 0.5, 0.5)[0], 7.5, 1e-5) << l;
         EXPECT_NEAR(p.bilinear(l, 0.25, 0.5)[0], 3.5, 1e-5) << l;
     }
-    for (double w = 0.5; w < 40; w *= 1.37) EXPECT_NEAR(p.trilinear(0.5, 0.5, w)[0], 7.5, 1e-5) << w;
+    for (double w = 0.5; w < 40; w *= 1.37)
+        EXPECT_NEAR(p.trilinear(0.5, 0.5, w)[0], 7.5, 1e-5) << w;
 }
 
 TEST(Mip, NonPowerOfTwoLevelsPreserveTheMeanAndStayInside) {
@@ -141,7 +153,8 @@ TEST(Mip, NonPowerOfTwoLevelsPreserveTheMeanAndStayInside) {
         for (int l = 0; l < p.levels(); ++l) {
             EXPECT_EQ(p.level(l).width(), std::max(1, w >> l));
             EXPECT_EQ(p.level(l).height(), std::max(1, h >> l));
-            EXPECT_NEAR(p.level(l).mean()[0], mean, 1e-5) << w << "x" << h << " level " << l;  // no black bleeding
+            EXPECT_NEAR(p.level(l).mean()[0], mean, 1e-5)
+                << w << "x" << h << " level " << l;  // no black bleeding
         }
         EXPECT_EQ(p.level(p.levels() - 1).width() * p.level(p.levels() - 1).height(), 1);
     }
@@ -213,7 +226,8 @@ TEST(Ewa, TMip2RampIsSymmetric) {
     for (int j = 0; j < 16; ++j)
         for (int i = 0; i < 16; ++i) px[j * 16 + i] = float(i);
     MipPyramid p(Image(16, 16, 1, px, WrapMode::Clamp, WrapMode::Clamp));
-    for (auto [au, av, bu, bv] : {std::tuple{0.1, 0.02, -0.01, 0.05}, {0.05, 0.0, 0.0, 0.05}, {0.2, 0.2, 0.01, -0.01}})
+    for (auto [au, av, bu, bv] :
+         {std::tuple{0.1, 0.02, -0.01, 0.05}, {0.05, 0.0, 0.0, 0.05}, {0.2, 0.2, 0.01, -0.01}})
         EXPECT_NEAR(ewa(p, 0.5, 0.5, au, av, bu, bv).value[0], 7.5, 1e-4);
 }
 
@@ -236,8 +250,9 @@ class FilterWrap : public ::testing::TestWithParam<std::tuple<FilterKind, WrapMo
 TEST_P(FilterWrap, ConstantTextureGivesTheConstant) {
     auto [kind, wrap] = GetParam();
     FilteredTexture t(Image(17, 11, 3, std::vector<float>(17 * 11 * 3, 0.375f), wrap, wrap));
-    for (Footprint fp : {Footprint::none(), Footprint::axes({0.01, 0}, {0, 0.02}), Footprint::axes({0.3, 0.1}, {-0.05, 0.2}),
-                         Footprint::axes({3, 0}, {0, 3}), Footprint::axes({0.2, 0}, {0, 0})})
+    for (Footprint fp : {Footprint::none(), Footprint::axes({0.01, 0}, {0, 0.02}),
+                         Footprint::axes({0.3, 0.1}, {-0.05, 0.2}), Footprint::axes({3, 0}, {0, 3}),
+                         Footprint::axes({0.2, 0}, {0, 0})})
         for (double u : {0.01, 0.5, 0.93})
             for (double v : {0.02, 0.5, 0.97}) {
                 Texel x = t.lookup(u, v, fp, {kind, 8});
@@ -260,7 +275,8 @@ TEST_P(FilterWrap, NonFiniteInputsReturnTheMean) {
     EXPECT_TRUE(info.fallback);
     EXPECT_FLOAT_EQ(t.lookup(0.5, 0.5, Footprint::axes({inf, 0}, {0, 0.1}), {kind})[0], 2.5f);
     EXPECT_FLOAT_EQ(t.lookup(0.5, 0.5, Footprint::axes({0.1, nan}, {0, 0.1}), {kind})[0], 2.5f);
-    EXPECT_TRUE(std::isfinite(t.lookup(1e300, -1e300, Footprint::axes({1e300, 0}, {0, 1e-300}), {kind})[0]));
+    EXPECT_TRUE(std::isfinite(
+        t.lookup(1e300, -1e300, Footprint::axes({1e300, 0}, {0, 1e-300}), {kind})[0]));
 }
 
 TEST(Filter, SymmetricFootprintOnALinearRampGivesTheCentre) {
@@ -269,23 +285,27 @@ TEST(Filter, SymmetricFootprintOnALinearRampGivesTheCentre) {
     for (int j = 0; j < 64; ++j)
         for (int i = 0; i < 64; ++i) px[j * 64 + i] = float(i + 0.5);  // value = s at texel centres
     FilteredTexture t(Image(64, 64, 1, px, WrapMode::Clamp, WrapMode::Clamp));
-    for (FilterKind kind : {FilterKind::Bilinear, FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa}) {
-        Texel x = t.lookup(0.5, 0.5, Footprint::axes({4.0 / 64, 1.0 / 64}, {-1.0 / 64, 3.0 / 64}), {kind});
+    for (FilterKind kind :
+         {FilterKind::Bilinear, FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa}) {
+        Texel x = t.lookup(0.5, 0.5, Footprint::axes({4.0 / 64, 1.0 / 64}, {-1.0 / 64, 3.0 / 64}),
+                           {kind});
         EXPECT_NEAR(x[0], 32.0, 1e-3) << to_string(kind);
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(All, FilterWrap,
-                         ::testing::Combine(::testing::Values(FilterKind::Nearest, FilterKind::Bilinear,
-                                                              FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa),
-                                            ::testing::Values(WrapMode::Repeat, WrapMode::Clamp, WrapMode::Black)),
-                         [](const auto& info) {
-                             return std::string(to_string(std::get<0>(info.param))) + "_" +
-                                    std::string(to_string(std::get<1>(info.param)));
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    All, FilterWrap,
+    ::testing::Combine(::testing::Values(FilterKind::Nearest, FilterKind::Bilinear,
+                                         FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa),
+                       ::testing::Values(WrapMode::Repeat, WrapMode::Clamp, WrapMode::Black)),
+    [](const auto& info) {
+        return std::string(to_string(std::get<0>(info.param))) + "_" +
+               std::string(to_string(std::get<1>(info.param)));
+    });
 
 TEST(Filter, ParseAndPrintRoundTrip) {
-    for (int k = 0; k < kFilterKinds; ++k) EXPECT_EQ(parse_filter(to_string(FilterKind(k))), FilterKind(k));
+    for (int k = 0; k < kFilterKinds; ++k)
+        EXPECT_EQ(parse_filter(to_string(FilterKind(k))), FilterKind(k));
     EXPECT_FALSE(parse_filter("gaussian"));
 }
 

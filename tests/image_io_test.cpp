@@ -1,12 +1,12 @@
 // Image output formats round-trip; writes are atomic (temp file + rename).
-#include <gtest/gtest.h>
+#include "render/image_io.h"
 
 #include <cmam/texture/image.h>
-#include <filesystem>
-#include <fstream>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "render/image_io.h"
+#include <filesystem>
+#include <fstream>
 
 using namespace cmam::render;
 namespace fs = std::filesystem;
@@ -15,13 +15,16 @@ namespace {
 struct TempDir {
     fs::path path;
     TempDir() {
-        path = fs::temp_directory_path() / ("cmam_io_" + std::to_string(::getpid()) + "_" +
-                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        path = fs::temp_directory_path() /
+               ("cmam_io_" + std::to_string(::getpid()) + "_" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
         fs::remove_all(path);
         fs::create_directories(path);
     }
     ~TempDir() { fs::remove_all(path); }
-    std::size_t entries() const { return std::distance(fs::directory_iterator(path), fs::directory_iterator()); }
+    std::size_t entries() const {
+        return std::distance(fs::directory_iterator(path), fs::directory_iterator());
+    }
 };
 
 std::vector<float> gradient(int w, int h) {
@@ -71,7 +74,8 @@ TEST(ImageIo, FailedWriteLeavesTheOldFileAndNoTemporary) {
     std::string s((std::istreambuf_iterator<char>(in)), {});
     EXPECT_EQ(s, "old contents");
     EXPECT_EQ(d.entries(), 1u);
-    EXPECT_THROW(write_image((d.path / "nodir" / "x.png").string(), 2, 2, gradient(2, 2)), ImageIoError);
+    EXPECT_THROW(write_image((d.path / "nodir" / "x.png").string(), 2, 2, gradient(2, 2)),
+                 ImageIoError);
 }
 
 TEST(ImageIo, OverwriteReplacesWholeFile) {
@@ -93,6 +97,7 @@ TEST(ImageIo, UnreadableImagesNameFileAndReason) {
         read_image(p);
         FAIL();
     } catch (const ImageIoError& e) {
-        EXPECT_EQ(std::string(e.what()).rfind("cannot read image \"" + p + "\": ", 0), 0u) << e.what();
+        EXPECT_EQ(std::string(e.what()).rfind("cannot read image \"" + p + "\": ", 0), 0u)
+            << e.what();
     }
 }

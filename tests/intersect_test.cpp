@@ -1,9 +1,9 @@
 // Sphere, disk, triangle and PLY intersections with pbrt-v3's (u,v) and normal orientation.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "scene_util.h"
 
@@ -28,7 +28,7 @@ TEST(Sphere, UvParameterization) {
     EXPECT_NEAR(h.t, 8, 1e-5);
     EXPECT_NEAR(h.u, 0, 1e-6);
     EXPECT_NEAR(h.v, 0.5, 1e-6);
-    EXPECT_NEAR(h.ng.x, 1, 1e-6);  // outward
+    EXPECT_NEAR(h.ng.x, 1, 1e-6);                 // outward
     h = hit(*s, Vec3(0, 10, 0), Vec3(0, -1, 0));  // phi = pi/2
     EXPECT_NEAR(h.u, 0.25, 1e-6);
     h = hit(*s, Vec3(0, 0, 10), Vec3(0, 0, -1));  // north pole: v = 1
@@ -58,14 +58,16 @@ TEST(Sphere, TransformedAndReversed) {
 }
 
 TEST(Disk, UvAndNormal) {
-    auto s = world("Shape \"disk\" \"float radius\" 2 \"float innerradius\" 1 \"float height\" 0.5");
+    auto s =
+        world("Shape \"disk\" \"float radius\" 2 \"float innerradius\" 1 \"float height\" 0.5");
     SurfaceHit h = hit(*s, Vec3(1.5f, 0, 3), Vec3(0, 0, -1));
     EXPECT_NEAR(h.t, 2.5, 1e-5);
     EXPECT_NEAR(h.u, 0, 1e-6);
     EXPECT_NEAR(h.v, 0.5, 1e-6);  // (radius - r) / (radius - innerradius)
     EXPECT_NEAR(h.ng.z, 1, 1e-6);
     render::SurfaceHit none;
-    EXPECT_FALSE(s->intersect(Vec3(0.5f, 0, 3), Vec3(0, 0, -1), 0, 1e30f, &none));  // inside the hole
+    EXPECT_FALSE(
+        s->intersect(Vec3(0.5f, 0, 3), Vec3(0, 0, -1), 0, 1e30f, &none));  // inside the hole
 }
 
 TEST(Triangle, BarycentricUvAndDefaultUv) {
@@ -77,7 +79,8 @@ TEST(Triangle, BarycentricUvAndDefaultUv) {
     EXPECT_NEAR(h.v, 0.5 + 0.25 * 0.5, 1e-6);
     EXPECT_NEAR(std::abs(h.ng.z), 1, 1e-6);
     EXPECT_NEAR(h.ng.z, 1, 1e-6);  // counter-clockwise seen from +z
-    auto d = world("Shape \"trianglemesh\" \"point3 P\" [0 0 0  4 0 0  4 4 0] \"integer indices\" [0 1 2]");
+    auto d = world(
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  4 0 0  4 4 0] \"integer indices\" [0 1 2]");
     h = hit(*d, Vec3(3, 1, 5), Vec3(0, 0, -1));
     // pbrt-v3 default uv (0,0),(1,0),(1,1): u = b1 + b2, v = b2
     EXPECT_NEAR(h.u, 0.75, 1e-6);
@@ -94,11 +97,13 @@ TEST(Triangle, ShadingNormalsOrientTheGeometricNormal) {
 }
 
 TEST(PlyMesh, IntersectsWithItsUv) {
-    std::filesystem::path p = std::filesystem::temp_directory_path() / ("cmam_quad_" + std::to_string(::getpid()) + ".ply");
-    std::ofstream(p) << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-                        "property float z\nproperty float s\nproperty float t\nelement face 1\n"
-                        "property list uchar int vertex_indices\nend_header\n"
-                        "-1 -1 0 0 0\n1 -1 0 1 0\n1 1 0 1 1\n-1 1 0 0 1\n4 0 1 2 3\n";
+    std::filesystem::path p = std::filesystem::temp_directory_path() /
+                              ("cmam_quad_" + std::to_string(::getpid()) + ".ply");
+    std::ofstream(p)
+        << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+           "property float z\nproperty float s\nproperty float t\nelement face 1\n"
+           "property list uchar int vertex_indices\nend_header\n"
+           "-1 -1 0 0 0\n1 -1 0 1 0\n1 1 0 1 1\n-1 1 0 0 1\n4 0 1 2 3\n";
     auto s = world("Shape \"plymesh\" \"string filename\" \"" + p.string() + "\"");
     SurfaceHit h = hit(*s, Vec3(0.5f, -0.5f, 2), Vec3(0, 0, -1));
     EXPECT_NEAR(h.u, 0.75, 1e-6);

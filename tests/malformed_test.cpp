@@ -13,7 +13,8 @@ namespace fs = std::filesystem;
 
 namespace {
 std::string replace_all(std::string s, const std::string& from, const std::string& to) {
-    for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size())) s.replace(p, from.size(), to);
+    for (std::size_t p = s.find(from); p != std::string::npos; p = s.find(from, p + to.size()))
+        s.replace(p, from.size(), to);
     return s;
 }
 }  // namespace
@@ -29,7 +30,8 @@ TEST(Malformed, EachFileReportsItsExactLocatedError) {
         std::string first;
         std::getline(in, first);
         bool prefix = first.rfind("# expect-prefix: ", 0) == 0;
-        ASSERT_TRUE(prefix || first.rfind("# expect: ", 0) == 0) << "first line must state the expected error";
+        ASSERT_TRUE(prefix || first.rfind("# expect: ", 0) == 0)
+            << "first line must state the expected error";
         std::string expected = first.substr(prefix ? 17 : 10);
         expected = replace_all(replace_all(expected, "{file}", file), "{dir}", dir.string());
         try {
@@ -37,8 +39,10 @@ TEST(Malformed, EachFileReportsItsExactLocatedError) {
             render::build_scene(d, {}, {});
             ADD_FAILURE() << "no error reported";
         } catch (const pbrt::SceneError& err) {
-            if (prefix) EXPECT_EQ(std::string(err.what()).substr(0, expected.size()), expected);
-            else EXPECT_EQ(std::string(err.what()), expected);
+            if (prefix)
+                EXPECT_EQ(std::string(err.what()).substr(0, expected.size()), expected);
+            else
+                EXPECT_EQ(std::string(err.what()), expected);
         }
         ++n;
     }

@@ -1,7 +1,7 @@
 // Parser on valid input: parameters, graphics state, named materials and textures, instancing.
-#include <gtest/gtest.h>
-
 #include "pbrt/parser.h"
+
+#include <gtest/gtest.h>
 
 using namespace cmam::pbrt;
 
@@ -15,7 +15,8 @@ SceneDesc parse_world(const std::string& body, const WarningSink& warn = {}) {
 TEST(Parser, ParameterTypesAndAliases) {
     SceneDesc d = parse_world(
         "Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] "
-        "\"normal N\" [0 0 1 0 0 1 0 0 1] \"point2 uv\" [0 0 1 0 0 1] \"bool b\" true \"string s\" \"x\" "
+        "\"normal N\" [0 0 1 0 0 1 0 0 1] \"point2 uv\" [0 0 1 0 0 1] \"bool b\" true \"string s\" "
+        "\"x\" "
         "\"color c\" [1 2 3] \"vector3 v\" [1 2 3] \"spectrum sp\" [400 1 700 1]");
     const ParamSet& p = d.shapes[0].entity.params;
     EXPECT_EQ(p.get_point3s("P")->size(), 9u);
@@ -40,7 +41,8 @@ TEST(Parser, SingleValuesWithoutBrackets) {
 TEST(Parser, AttributesScopeMaterialsTransformsAndOrientation) {
     SceneDesc d = parse_world(
         "Material \"mirror\"\n"
-        "AttributeBegin Material \"glass\" Translate 1 0 0 ReverseOrientation Shape \"sphere\" AttributeEnd\n"
+        "AttributeBegin Material \"glass\" Translate 1 0 0 ReverseOrientation Shape \"sphere\" "
+        "AttributeEnd\n"
         "Shape \"sphere\"\n"
         "TransformBegin Translate 0 2 0 Material \"matte\" TransformEnd Shape \"sphere\"");
     ASSERT_EQ(d.shapes.size(), 3u);
@@ -79,8 +81,10 @@ TEST(Parser, ObjectInstancesAreFlattenedWithTheirTransforms) {
         "Translate 5 0 0 ObjectInstance \"ball\"\n"
         "Translate 5 0 0 ObjectInstance \"ball\"");
     ASSERT_EQ(d.shapes.size(), 2u);
-    EXPECT_EQ(d.shapes[0].world_from_object.apply_point({0, 0, 0}), (std::array<double, 3>{5, 1, 0}));
-    EXPECT_EQ(d.shapes[1].world_from_object.apply_point({0, 0, 0}), (std::array<double, 3>{10, 1, 0}));
+    EXPECT_EQ(d.shapes[0].world_from_object.apply_point({0, 0, 0}),
+              (std::array<double, 3>{5, 1, 0}));
+    EXPECT_EQ(d.shapes[1].world_from_object.apply_point({0, 0, 0}),
+              (std::array<double, 3>{10, 1, 0}));
 }
 
 TEST(Parser, OptionsAndEntities) {
@@ -97,10 +101,13 @@ TEST(Parser, OptionsAndEntities) {
 
 TEST(Parser, IgnoredDirectivesWarnWithLocation) {
     std::vector<std::string> warnings;
-    parse_world("TransformTimes 0 1\nActiveTransform All", [&](const std::string& w) { warnings.push_back(w); });
+    parse_world("TransformTimes 0 1\nActiveTransform All",
+                [&](const std::string& w) { warnings.push_back(w); });
     ASSERT_EQ(warnings.size(), 2u);
-    EXPECT_EQ(warnings[0], "t.pbrt:3:1: warning: TransformTimes ignored: cmam renders no motion blur");
-    EXPECT_EQ(warnings[1], "t.pbrt:4:1: warning: ActiveTransform All ignored: cmam renders no motion blur");
+    EXPECT_EQ(warnings[0],
+              "t.pbrt:3:1: warning: TransformTimes ignored: cmam renders no motion blur");
+    EXPECT_EQ(warnings[1],
+              "t.pbrt:4:1: warning: ActiveTransform All ignored: cmam renders no motion blur");
 }
 
 TEST(Parser, UnusedParameterErrorNamesEntity) {
@@ -111,14 +118,18 @@ TEST(Parser, UnusedParameterErrorNamesEntity) {
         p.check_unused("shape \"sphere\"", {});
         FAIL();
     } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(), "t.pbrt:3:33: error: unknown parameter \"bogus\" for shape \"sphere\"");
+        EXPECT_STREQ(e.what(),
+                     "t.pbrt:3:33: error: unknown parameter \"bogus\" for shape \"sphere\"");
     }
 }
 
 TEST(Parser, KnownButUnsupportedParameterWarns) {
     SceneDesc d = parse_world("Shape \"sphere\" \"texture alpha\" \"a\"");
     std::vector<std::string> w;
-    d.shapes[0].entity.params.check_unused("shape \"sphere\"", [&](const std::string& s) { w.push_back(s); }, {"alpha"});
+    d.shapes[0].entity.params.check_unused(
+        "shape \"sphere\"", [&](const std::string& s) { w.push_back(s); }, {"alpha"});
     ASSERT_EQ(w.size(), 1u);
-    EXPECT_EQ(w[0], "t.pbrt:3:16: warning: parameter \"alpha\" of shape \"sphere\" is not supported by cmam; ignored");
+    EXPECT_EQ(w[0],
+              "t.pbrt:3:16: warning: parameter \"alpha\" of shape \"sphere\" is not supported by "
+              "cmam; ignored");
 }

@@ -1,31 +1,33 @@
 // PLY reader: ASCII and binary, uv property names, quads, bad input.
+#include "pbrt/ply.h"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
-
-#include "pbrt/ply.h"
 
 using namespace cmam::pbrt;
 namespace fs = std::filesystem;
 
 namespace {
 std::string write_temp(const std::string& name, const std::string& bytes) {
-    fs::path p = fs::temp_directory_path() / ("cmam_ply_" + std::to_string(::getpid()) + "_" + name);
+    fs::path p =
+        fs::temp_directory_path() / ("cmam_ply_" + std::to_string(::getpid()) + "_" + name);
     std::ofstream(p, std::ios::binary) << bytes;
     return p.string();
 }
 }  // namespace
 
 TEST(Ply, AsciiQuadWithTextureUV) {
-    std::string path = write_temp("a.ply",
-                                  "ply\nformat ascii 1.0\ncomment hi\nelement vertex 4\n"
-                                  "property float x\nproperty float y\nproperty float z\n"
-                                  "property float texture_u\nproperty float texture_v\n"
-                                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                                  "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n4 0 1 2 3\n");
+    std::string path =
+        write_temp("a.ply",
+                   "ply\nformat ascii 1.0\ncomment hi\nelement vertex 4\n"
+                   "property float x\nproperty float y\nproperty float z\n"
+                   "property float texture_u\nproperty float texture_v\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                   "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n4 0 1 2 3\n");
     PlyMesh m = read_ply(path);
     EXPECT_EQ(m.positions.size(), 12u);
     EXPECT_TRUE(m.normals.empty());
@@ -36,8 +38,10 @@ TEST(Ply, AsciiQuadWithTextureUV) {
 
 TEST(Ply, BinaryLittleEndianWithNormalsAndExtraElement) {
     std::string header =
-        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-        "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\n"
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float "
+        "y\n"
+        "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float "
+        "u\n"
         "property float v\nelement face 1\nproperty list uchar int vertex_indices\n"
         "element material 1\nproperty list uchar float stuff\nend_header\n";
     std::string body;
@@ -62,18 +66,22 @@ TEST(Ply, BinaryLittleEndianWithNormalsAndExtraElement) {
 }
 
 TEST(Ply, ErrorsNameTheFile) {
-    std::string path = write_temp("c.ply",
-                                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                                  "end_header\n0 0 0\n3 0 1 2\n");
+    std::string path =
+        write_temp("c.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                   "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                   "end_header\n0 0 0\n3 0 1 2\n");
     try {
         read_ply(path);
         FAIL();
     } catch (const PlyError& e) {
         EXPECT_EQ(std::string(e.what()), path + ": face index 1 out of range (1 vertices)");
     }
-    std::string trunc = write_temp("d.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                                            "property float z\nend_header\n0 0 0\n1 1\n");
+    std::string trunc =
+        write_temp("d.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                   "property float z\nend_header\n0 0 0\n1 1\n");
     EXPECT_THROW(read_ply(trunc), PlyError);
-    EXPECT_THROW(read_ply(write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n")), PlyError);
+    EXPECT_THROW(read_ply(write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n")),
+                 PlyError);
 }

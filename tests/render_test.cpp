@@ -29,7 +29,9 @@ std::string plane_with(const std::string& lights) {
 }  // namespace
 
 TEST(Analytic, LambertianPlaneUnderAPointLight) {
-    auto s = test::scene_from(plane_with("LightSource \"point\" \"point from\" [1 2 3] \"rgb I\" [10 10 10]"), "t.pbrt", 1);
+    auto s = test::scene_from(
+        plane_with("LightSource \"point\" \"point from\" [1 2 3] \"rgb I\" [10 10 10]"), "t.pbrt",
+        1);
     RenderOptions o;
     RenderStats st;
     Framebuffer fb = render::render(*s, o, &st);
@@ -46,7 +48,8 @@ TEST(Analytic, LambertianPlaneUnderAPointLight) {
             double expected_r = 0.5 / 3.14159265358979 * 10 * cosl / d2;
             double expected_b = 0.8 / 3.14159265358979 * 10 * cosl / d2;
             const float* px = &fb.rgb[(y * 32 + x) * 3];
-            worst = std::max({worst, std::abs(px[0] - expected_r) / expected_r, std::abs(px[2] - expected_b) / expected_b});
+            worst = std::max({worst, std::abs(px[0] - expected_r) / expected_r,
+                              std::abs(px[2] - expected_b) / expected_b});
         }
     EXPECT_LT(worst, 1e-4);
     EXPECT_EQ(st.camera_rays, 32u * 32u);
@@ -56,13 +59,17 @@ TEST(Analytic, LambertianPlaneUnderAPointLight) {
 TEST(Analytic, LambertianPlaneUnderADistantLightAndUniformSky) {
     // Distant light at 60 degrees from the normal: E = L cos 60. Sky L_sky over the upper
     // hemisphere adds pi * L_sky irradiance (sampled stochastically: compare the image mean).
-    auto s = test::scene_from(plane_with("LightSource \"distant\" \"point from\" [0 0 0] \"point to\" [0 -0.8660254 -0.5] "
-                                         "\"rgb L\" [3 3 3]"),
-                              "t.pbrt", 1);
+    auto s = test::scene_from(
+        plane_with(
+            "LightSource \"distant\" \"point from\" [0 0 0] \"point to\" [0 -0.8660254 -0.5] "
+            "\"rgb L\" [3 3 3]"),
+        "t.pbrt", 1);
     Framebuffer fb = render::render(*s, {}, nullptr);
-    for (std::size_t i = 0; i < fb.rgb.size(); i += 3) EXPECT_NEAR(fb.rgb[i], 0.5 / 3.14159265 * 3 * 0.5, 1e-6);
+    for (std::size_t i = 0; i < fb.rgb.size(); i += 3)
+        EXPECT_NEAR(fb.rgb[i], 0.5 / 3.14159265 * 3 * 0.5, 1e-6);
 
-    auto sky = test::scene_from(plane_with("LightSource \"infinite\" \"rgb L\" [0.7 0.7 0.7]"), "t.pbrt", 16);
+    auto sky = test::scene_from(plane_with("LightSource \"infinite\" \"rgb L\" [0.7 0.7 0.7]"),
+                                "t.pbrt", 16);
     Framebuffer fs = render::render(*sky, {}, nullptr);
     double mean = 0;
     for (std::size_t i = 0; i < fs.rgb.size(); i += 3) mean += fs.rgb[i];
@@ -72,9 +79,10 @@ TEST(Analytic, LambertianPlaneUnderADistantLightAndUniformSky) {
 
 TEST(Analytic, SpotLightFalloff) {
     // Spot straight down from (0,0,5): full inside conedelta, zero outside coneangle.
-    auto s = test::scene_from(plane_with("LightSource \"spot\" \"point from\" [0 0 5] \"point to\" [0 0 0] "
-                                         "\"float coneangle\" 30 \"float conedelta\" 10 \"rgb I\" [25 25 25]"),
-                              "t.pbrt", 1);
+    auto s = test::scene_from(
+        plane_with("LightSource \"spot\" \"point from\" [0 0 5] \"point to\" [0 0 0] "
+                   "\"float coneangle\" 30 \"float conedelta\" 10 \"rgb I\" [25 25 25]"),
+        "t.pbrt", 1);
     Rgb centre = trace_radiance(*s, Vec3(0, 0, 10), Vec3(0, 0, -1), 1, nullptr);
     EXPECT_NEAR(centre.r, 0.5 / 3.14159265 * 25 / 25, 1e-6);
     Rgb outside = trace_radiance(*s, Vec3(4, 0, 10), Vec3(0, 0, -1), 1, nullptr);  // 38.7 degrees
@@ -83,16 +91,20 @@ TEST(Analytic, SpotLightFalloff) {
     float x = 5 * std::tan(25 * 3.14159265f / 180);
     Rgb mid = trace_radiance(*s, Vec3(x, 0, 10), Vec3(0, 0, -1), 1, nullptr);
     float c = std::cos(25 * 3.14159265f / 180);
-    float delta = (c - std::cos(30 * 3.14159265f / 180)) / (std::cos(20 * 3.14159265f / 180) - std::cos(30 * 3.14159265f / 180));
+    float delta = (c - std::cos(30 * 3.14159265f / 180)) /
+                  (std::cos(20 * 3.14159265f / 180) - std::cos(30 * 3.14159265f / 180));
     float d2 = 25 + x * x;
     EXPECT_NEAR(mid.r, 0.5 / 3.14159265 * 25 * std::pow(delta, 4) * c / d2, 1e-6);
 }
 
 TEST(Analytic, ShadowsBlockDirectLight) {
-    auto s = test::scene_from(plane_with("LightSource \"point\" \"point from\" [0 0 5] \"rgb I\" [10 10 10] "
-                                         "AttributeBegin Translate 0 0 2.5 Shape \"sphere\" \"float radius\" 0.5 AttributeEnd"),
-                              "t.pbrt", 1);
-    Rgb under = trace_radiance(*s, Vec3(0.1f, 0.1f, -1), Vec3(0, 0, 1), 1, nullptr);  // from below: back side
+    auto s = test::scene_from(
+        plane_with(
+            "LightSource \"point\" \"point from\" [0 0 5] \"rgb I\" [10 10 10] "
+            "AttributeBegin Translate 0 0 2.5 Shape \"sphere\" \"float radius\" 0.5 AttributeEnd"),
+        "t.pbrt", 1);
+    Rgb under = trace_radiance(*s, Vec3(0.1f, 0.1f, -1), Vec3(0, 0, 1), 1,
+                               nullptr);  // from below: back side
     EXPECT_EQ(under.r, 0);
     Rgb shadowed = trace_radiance(*s, Vec3(0.6f, 0, 10), Vec3(0, 0, -1), 1, nullptr);
     EXPECT_NEAR(shadowed.r, 0.0, 1e-7) << "point (0.6,0,0) is in the sphere's shadow";
@@ -106,7 +118,10 @@ TEST(Determinism, OneAndTwoThreadsGiveIdenticalImages) {
     BuildOptions bo;
     bo.spp_override = 4;
     auto s = build_scene(d, bo, {});
-    s->film.x0 = 200; s->film.x1 = 360; s->film.y0 = 150; s->film.y1 = 270;  // a crop keeps the test quick
+    s->film.x0 = 200;
+    s->film.x1 = 360;
+    s->film.y0 = 150;
+    s->film.y1 = 270;  // a crop keeps the test quick
     RenderOptions one, two;
     one.threads = 1;
     two.threads = 2;
@@ -124,7 +139,8 @@ TEST(Scenes, EveryBundledSceneBuilds) {
         if (e.path().extension() != ".pbrt") continue;
         SCOPED_TRACE(e.path().string());
         std::vector<std::string> warnings;
-        pbrt::SceneDesc d = pbrt::parse_file(e.path().string(), [&](const std::string& w) { warnings.push_back(w); });
+        pbrt::SceneDesc d = pbrt::parse_file(e.path().string(),
+                                             [&](const std::string& w) { warnings.push_back(w); });
         auto s = build_scene(d, {}, [&](const std::string& w) { warnings.push_back(w); });
         EXPECT_FALSE(s->primitives.empty());
         EXPECT_TRUE(warnings.empty()) << warnings.front();

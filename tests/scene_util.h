@@ -9,7 +9,8 @@
 
 namespace cmam::test {
 
-inline std::unique_ptr<render::Scene> scene_from(const std::string& text, const std::string& filename = "t.pbrt",
+inline std::unique_ptr<render::Scene> scene_from(const std::string& text,
+                                                 const std::string& filename = "t.pbrt",
                                                  int spp = 0) {
     pbrt::SceneDesc d = pbrt::parse_string(text, filename);
     render::BuildOptions o;

@@ -9,7 +9,9 @@ using namespace cmam::texture;
 
 namespace {
 // The 2x2 texture of algorithms.md §12: T(0,0)=1, T(1,0)=2, T(0,1)=3, T(1,1)=4.
-Image tex2x2(WrapMode w = WrapMode::Repeat) { return Image(2, 2, 1, {1, 2, 3, 4}, w, w); }
+Image tex2x2(WrapMode w = WrapMode::Repeat) {
+    return Image(2, 2, 1, {1, 2, 3, 4}, w, w);
+}
 }  // namespace
 
 TEST(WrapIndex, AllModes) {
@@ -73,7 +75,8 @@ TEST(Bilinear, ConstantTextureAnyWhere) {
 TEST(Srgb, DecodeReferenceValues) {
     EXPECT_NEAR(srgb_to_linear(128.0f / 255), 0.215861, 1e-6);  // T-COL-1
     EXPECT_NEAR(linear_to_srgb(0.5f), 0.735357, 1e-6);
-    for (float x : {0.0f, 0.01f, 0.3f, 0.9f, 1.0f}) EXPECT_NEAR(linear_to_srgb(srgb_to_linear(x)), x, 1e-6);
+    for (float x : {0.0f, 0.01f, 0.3f, 0.9f, 1.0f})
+        EXPECT_NEAR(linear_to_srgb(srgb_to_linear(x)), x, 1e-6);
 }
 
 TEST(Image, RejectsBadSizes) {

@@ -1,7 +1,7 @@
 // Tokenizer: strings, brackets, comments, locations, escapes.
-#include <gtest/gtest.h>
-
 #include "pbrt/tokenizer.h"
+
+#include <gtest/gtest.h>
 
 using namespace cmam::pbrt;
 

@@ -1,14 +1,16 @@
 // pbrt-v3 transform conventions: Rotate is right-handed about its axis, LookAt yields
 // camera_from_world with the camera looking down +z, Transform lists columns.
+#include "pbrt/transform.h"
+
 #include <gtest/gtest.h>
 
 #include "pbrt/parser.h"
-#include "pbrt/transform.h"
 
 using namespace cmam::pbrt;
 
 namespace {
-void expect_near(const std::array<double, 3>& a, const std::array<double, 3>& b, double eps = 1e-12) {
+void expect_near(const std::array<double, 3>& a, const std::array<double, 3>& b,
+                 double eps = 1e-12) {
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], eps) << "component " << i;
 }
 }  // namespace
@@ -60,7 +62,8 @@ TEST(Transform, DirectivesComposeLikePbrt) {
 
 TEST(Transform, CameraCoordinateSystem) {
     SceneDesc d = parse_string(
-        "LookAt 0 0 -5  0 0 0  0 1 0 Camera \"perspective\" WorldBegin CoordSysTransform \"camera\" "
+        "LookAt 0 0 -5  0 0 0  0 1 0 Camera \"perspective\" WorldBegin CoordSysTransform "
+        "\"camera\" "
         "Shape \"sphere\" WorldEnd");
     expect_near(d.shapes[0].world_from_object.apply_point({0, 0, 0}), {0, 0, -5}, 1e-12);
 }

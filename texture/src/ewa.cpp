@@ -13,7 +13,8 @@ const float* ewa_weight_lut() {
         const double alpha = 2;
         for (int i = 0; i < kEwaLutSize; ++i) {
             double r2 = double(i) / (kEwaLutSize - 1);
-            t[static_cast<std::size_t>(i)] = static_cast<float>(std::exp(-alpha * r2) - std::exp(-alpha));
+            t[static_cast<std::size_t>(i)] =
+                static_cast<float>(std::exp(-alpha * r2) - std::exp(-alpha));
         }
         return t;
     }();
@@ -34,8 +35,8 @@ EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t) {
     return e;
 }
 
-Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s, double b_t,
-                int* texels_read) {
+Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s,
+                double b_t, int* texels_read) {
     const int W = img.width(), H = img.height(), nc = img.channels();
     double s0 = u * W - 0.5, t0 = v * H - 0.5;
     EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
@@ -52,7 +53,8 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
         if (disc <= 0) continue;
         double sq = std::sqrt(disc);
         double x_lo = (-bq - sq) / (2 * A), x_hi = (-bq + sq) / (2 * A);
-        int s_lo = static_cast<int>(std::ceil(s0 + x_lo)), s_hi = static_cast<int>(std::floor(s0 + x_hi));
+        int s_lo = static_cast<int>(std::ceil(s0 + x_lo)),
+            s_hi = static_cast<int>(std::floor(s0 + x_hi));
         int64_t jt = wrap_index(it, H, img.wrap_t());
         // Q is evaluated directly per texel (not incrementally): the weight-table index
         // floor(r2 * N) must not depend on accumulated rounding.
@@ -85,8 +87,8 @@ EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, d
     EwaResult r;
     const Image& base = pyr.level(0);
     const int L = pyr.levels();
-    if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(au) || !std::isfinite(av) || !std::isfinite(bu) ||
-        !std::isfinite(bv)) {
+    if (!std::isfinite(u) || !std::isfinite(v) || !std::isfinite(au) || !std::isfinite(av) ||
+        !std::isfinite(bu) || !std::isfinite(bv)) {
         r.value = base.mean();
         r.lambda = L - 1;
         return r;

@@ -17,11 +17,16 @@ std::optional<FilterKind> parse_filter(std::string_view n) {
 
 std::string_view to_string(FilterKind k) {
     switch (k) {
-        case FilterKind::Nearest: return "nearest";
-        case FilterKind::Bilinear: return "bilinear";
-        case FilterKind::Trilinear: return "trilinear";
-        case FilterKind::Sat: return "sat";
-        case FilterKind::Ewa: return "ewa";
+        case FilterKind::Nearest:
+            return "nearest";
+        case FilterKind::Bilinear:
+            return "bilinear";
+        case FilterKind::Trilinear:
+            return "trilinear";
+        case FilterKind::Sat:
+            return "sat";
+        case FilterKind::Ewa:
+            return "ewa";
     }
     return "?";
 }
@@ -59,8 +64,8 @@ namespace {
 bool finite(const Footprint& fp, double u, double v) {
     if (!std::isfinite(u) || !std::isfinite(v)) return false;
     if (fp.kind == Footprint::Kind::Axes)
-        return std::isfinite(fp.axis_a.u) && std::isfinite(fp.axis_a.v) && std::isfinite(fp.axis_b.u) &&
-               std::isfinite(fp.axis_b.v);
+        return std::isfinite(fp.axis_a.u) && std::isfinite(fp.axis_a.v) &&
+               std::isfinite(fp.axis_b.u) && std::isfinite(fp.axis_b.v);
     for (int i = 0; i < fp.point_count; ++i)
         if (!std::isfinite(fp.points[i].u) || !std::isfinite(fp.points[i].v)) return false;
     return true;
@@ -99,20 +104,25 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
     }
     // Reduce the footprint to two axis vectors (uv units).
     Vec2d a = fp.axis_a, b = fp.axis_b;
-    if (fp.kind == Footprint::Kind::Points) {  // vectors from the current sample (first) to the others
+    if (fp.kind ==
+        Footprint::Kind::Points) {  // vectors from the current sample (first) to the others
         a = b = Vec2d{};
-        if (fp.point_count > 1) a = {fp.points[1].u - fp.points[0].u, fp.points[1].v - fp.points[0].v};
-        if (fp.point_count > 2) b = {fp.points[2].u - fp.points[0].u, fp.points[2].v - fp.points[0].v};
+        if (fp.point_count > 1)
+            a = {fp.points[1].u - fp.points[0].u, fp.points[1].v - fp.points[0].v};
+        if (fp.point_count > 2)
+            b = {fp.points[2].u - fp.points[0].u, fp.points[2].v - fp.points[0].v};
     }
     switch (opts.kind) {
         case FilterKind::Trilinear: {
             double width2;
             if (fp.kind == Footprint::Kind::Axes) {
-                width2 = std::max(a.u * a.u * W * W + a.v * a.v * H * H, b.u * b.u * W * W + b.v * b.v * H * H);
+                width2 = std::max(a.u * a.u * W * W + a.v * a.v * H * H,
+                                  b.u * b.u * W * W + b.v * b.v * H * H);
             } else {  // diagonal of the points' bounding box
                 double rect[4];
                 points_box(fp, W, H, rect);
-                width2 = (rect[2] - rect[0]) * (rect[2] - rect[0]) + (rect[3] - rect[1]) * (rect[3] - rect[1]);
+                width2 = (rect[2] - rect[0]) * (rect[2] - rect[0]) +
+                         (rect[3] - rect[1]) * (rect[3] - rect[1]);
             }
             const MipPyramid& pyr = pyramid();
             double lambda = 0;
@@ -122,7 +132,8 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
                 in.lambda = lambda;
                 in.level_lo = static_cast<int>(std::floor(lambda));
                 in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-                in.texels_read = lambda >= pyr.levels() - 1 ? 1 : (in.level_lo == in.level_hi ? 4 : 8);
+                in.texels_read =
+                    lambda >= pyr.levels() - 1 ? 1 : (in.level_lo == in.level_hi ? 4 : 8);
             }
             return t;
         }
@@ -130,7 +141,8 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             double r[4];
             if (fp.kind == Footprint::Kind::Axes) {
                 // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box.
-                double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W, ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
+                double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W,
+                       ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
                 r[0] = u * W - hs;
                 r[1] = v * H - ht;
                 r[2] = u * W + hs;
@@ -139,7 +151,8 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
                 points_box(fp, W, H, r);
             }
             constexpr double kMax = 1073741824.0;  // 2^30 texels: beyond, sums lose all precision
-            if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) < kMax)) {
+            if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) <
+                  kMax)) {
                 in.fallback = true;
                 in.texels_read = 1;
                 return m_image.mean();
@@ -162,7 +175,8 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             }
             return r.value;
         }
-        default: break;
+        default:
+            break;
     }
     in.texels_read = 4;
     return bilinear(m_image, u, v);

@@ -15,10 +15,14 @@ std::optional<WrapMode> parse_wrap_mode(std::string_view name) {
 
 std::string_view to_string(WrapMode mode) {
     switch (mode) {
-        case WrapMode::Repeat: return "repeat";
-        case WrapMode::Clamp: return "clamp";
-        case WrapMode::Black: return "black";
-        case WrapMode::Mirror: return "mirror";
+        case WrapMode::Repeat:
+            return "repeat";
+        case WrapMode::Clamp:
+            return "clamp";
+        case WrapMode::Black:
+            return "black";
+        case WrapMode::Mirror:
+            return "mirror";
     }
     return "?";
 }
@@ -65,7 +69,9 @@ namespace {
 // Coordinates beyond this magnitude (or non-finite) cannot be floored to an integer safely.
 constexpr double kMaxCoord = 1073741824.0;  // 2^30
 
-bool usable(double x) { return std::isfinite(x) && std::abs(x) < kMaxCoord; }
+bool usable(double x) {
+    return std::isfinite(x) && std::abs(x) < kMaxCoord;
+}
 }  // namespace
 
 Texel nearest(const Image& image, double u, double v) {
@@ -78,7 +84,8 @@ Texel bilinear(const Image& image, double u, double v) {
     double s = u * image.width() - 0.5, t = v * image.height() - 0.5;
     if (!usable(s) || !usable(t)) return image.mean();
     int64_t i0 = floor_to_int(s), j0 = floor_to_int(t);
-    float fs = static_cast<float>(s - static_cast<double>(i0)), ft = static_cast<float>(t - static_cast<double>(j0));
+    float fs = static_cast<float>(s - static_cast<double>(i0)),
+          ft = static_cast<float>(t - static_cast<double>(j0));
     // Tiled textures: move the lattice cell into the base period so the fast path applies.
     if (image.wrap_s() == WrapMode::Repeat) i0 = wrap_index(i0, image.width(), WrapMode::Repeat);
     if (image.wrap_t() == WrapMode::Repeat) j0 = wrap_index(j0, image.height(), WrapMode::Repeat);
@@ -88,8 +95,11 @@ Texel bilinear(const Image& image, double u, double v) {
     if (i0 >= 0 && j0 >= 0 && i0 + 1 < image.width() && j0 + 1 < image.height()) {
         const float* a = image.texel(static_cast<int>(i0), static_cast<int>(j0));
         const float* c = a + static_cast<std::ptrdiff_t>(image.width()) * nc;
-        const float w00 = (1 - fs) * (1 - ft), w10 = fs * (1 - ft), w01 = (1 - fs) * ft, w11 = fs * ft;
-        auto blend = [&](int k) { return w00 * a[k] + w10 * a[nc + k] + w01 * c[k] + w11 * c[nc + k]; };
+        const float w00 = (1 - fs) * (1 - ft), w10 = fs * (1 - ft), w01 = (1 - fs) * ft,
+                    w11 = fs * ft;
+        auto blend = [&](int k) {
+            return w00 * a[k] + w10 * a[nc + k] + w01 * c[k] + w11 * c[nc + k];
+        };
         if (nc == 3) return {blend(0), blend(1), blend(2), 0.0f};
         if (nc == 1) return {blend(0), 0.0f, 0.0f, 0.0f};
         for (int k = 0; k < nc; ++k) out[k] = blend(k);

@@ -20,7 +20,8 @@ std::vector<Span> area_weights(int N, int n) {
         int i0 = static_cast<int>(std::floor(a)), i1 = std::min(N, static_cast<int>(std::ceil(b)));
         Span& s = spans[static_cast<std::size_t>(k)];
         s.first = i0;
-        for (int i = i0; i < i1; ++i) s.w.push_back((std::min<double>(b, i + 1) - std::max<double>(a, i)) / scale);
+        for (int i = i0; i < i1; ++i)
+            s.w.push_back((std::min<double>(b, i + 1) - std::max<double>(a, i)) / scale);
     }
     return spans;
 }
@@ -36,7 +37,8 @@ Image box_downsample(const Image& src, int w, int h) {
             const Span& s = xs[static_cast<std::size_t>(k)];
             for (std::size_t q = 0; q < s.w.size(); ++q) {
                 const float* t = src.texel(s.first + static_cast<int>(q), j);
-                for (int c = 0; c < C; ++c) tmp[(static_cast<std::size_t>(j) * w + k) * C + c] += s.w[q] * t[c];
+                for (int c = 0; c < C; ++c)
+                    tmp[(static_cast<std::size_t>(j) * w + k) * C + c] += s.w[q] * t[c];
             }
         }
     std::vector<float> out(static_cast<std::size_t>(w) * h * C);
@@ -70,7 +72,9 @@ std::size_t MipPyramid::memory_bytes() const {
     return n;
 }
 
-Texel MipPyramid::bilinear(int l, double u, double v) const { return texture::bilinear(level(l), u, v); }
+Texel MipPyramid::bilinear(int l, double u, double v) const {
+    return texture::bilinear(level(l), u, v);
+}
 
 Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_used) const {
     const int L = levels();

@@ -27,8 +27,10 @@ SummedAreaTable::SummedAreaTable(const Image& image, Storage storage)
                     s[(static_cast<std::size_t>(j) * (m_w + 1) + i + 1) * m_c + c] + row;
             }
         }
-    if (storage == Storage::Double) m_double = std::move(s);
-    else m_float.assign(s.begin(), s.end());
+    if (storage == Storage::Double)
+        m_double = std::move(s);
+    else
+        m_float.assign(s.begin(), s.end());
 }
 
 std::size_t SummedAreaTable::memory_bytes() const {
@@ -45,7 +47,8 @@ double SummedAreaTable::table(double x, double y, int c) const {
     int i = std::clamp(static_cast<int>(std::floor(x)), 0, m_w - 1);
     int j = std::clamp(static_cast<int>(std::floor(y)), 0, m_h - 1);
     double fx = x - i, fy = y - j;
-    double a = entry(i, j, c), b = entry(i + 1, j, c), d = entry(i, j + 1, c), e = entry(i + 1, j + 1, c);
+    double a = entry(i, j, c), b = entry(i + 1, j, c), d = entry(i, j + 1, c),
+           e = entry(i + 1, j + 1, c);
     return (1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * d + fx * e);
 }
 
@@ -76,7 +79,9 @@ double SummedAreaTable::extended(double x, double y, int c) const {
         }
         case WrapMode::Clamp:
             if (y < 0) return y * extended_x(x, 1, c);
-            if (y > H) return extended_x(x, H, c) + (y - H) * (extended_x(x, H, c) - extended_x(x, H - 1, c));
+            if (y > H)
+                return extended_x(x, H, c) +
+                       (y - H) * (extended_x(x, H, c) - extended_x(x, H - 1, c));
             return extended_x(x, y, c);
         case WrapMode::Black:
         case WrapMode::Mirror:
@@ -102,19 +107,22 @@ Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) cons
     Texel out{};
     double area = (x1 - x0) * (y1 - y0);
     for (int c = 0; c < m_c; ++c) {
-        double v = extended(x1, y1, c) - extended(x0, y1, c) - extended(x1, y0, c) + extended(x0, y0, c);
+        double v =
+            extended(x1, y1, c) - extended(x0, y1, c) - extended(x1, y0, c) + extended(x0, y0, c);
         if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
         out[c] = static_cast<float>(v);
     }
     // Black outside: the mean offset must not add texture outside the image.
-    if (m_storage == Storage::MeanOffsetFloat && (m_wrap_s != WrapMode::Repeat && m_wrap_s != WrapMode::Clamp ||
-                                                  m_wrap_t != WrapMode::Repeat && m_wrap_t != WrapMode::Clamp)) {
+    if (m_storage == Storage::MeanOffsetFloat &&
+        (m_wrap_s != WrapMode::Repeat && m_wrap_s != WrapMode::Clamp ||
+         m_wrap_t != WrapMode::Repeat && m_wrap_t != WrapMode::Clamp)) {
         double cx0 = m_wrap_s == WrapMode::Black ? std::clamp(x0, 0.0, double(m_w)) : x0;
         double cx1 = m_wrap_s == WrapMode::Black ? std::clamp(x1, 0.0, double(m_w)) : x1;
         double cy0 = m_wrap_t == WrapMode::Black ? std::clamp(y0, 0.0, double(m_h)) : y0;
         double cy1 = m_wrap_t == WrapMode::Black ? std::clamp(y1, 0.0, double(m_h)) : y1;
         double inside = (cx1 - cx0) * (cy1 - cy0);
-        for (int c = 0; c < m_c; ++c) out[c] = static_cast<float>(out[c] - m_mean[c] * (area - inside));
+        for (int c = 0; c < m_c; ++c)
+            out[c] = static_cast<float>(out[c] - m_mean[c] * (area - inside));
     }
     return out;
 }

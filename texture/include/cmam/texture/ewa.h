@@ -16,14 +16,14 @@ const float* ewa_weight_lut();
 
 struct EwaResult {
     Texel value{};
-    double lambda = 0;       // fractional MIP level used
-    int texels_read = 0;     // texels inside the ellipse(s) that were weighted
+    double lambda = 0;            // fractional MIP level used
+    int texels_read = 0;          // texels inside the ellipse(s) that were weighted
     double major = 0, minor = 0;  // semi-axes used, level-0 texels (after clamping)
 };
 
 /// EWA lookup at (u,v) with axes `a`, `b` in uv units.
-EwaResult ewa(const MipPyramid& pyramid, double u, double v, double au, double av, double bu, double bv,
-              double max_aniso = 8);
+EwaResult ewa(const MipPyramid& pyramid, double u, double v, double au, double av, double bu,
+              double bv, double max_aniso = 8);
 
 /// The ellipse of axes a, b (level texels) with the +1 reconstruction term: implicit
 /// coefficients before normalisation (A x^2 + B x y + C y^2 = F) and the bounding half-extents.
@@ -34,7 +34,7 @@ struct EwaEllipse {
 EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t);
 
 /// One EWA evaluation at level `l` with axes in level-0 texels (exposed for tests).
-Texel ewa_level(const Image& level, double u, double v, double a_s, double a_t, double b_s, double b_t,
-                int* texels_read);
+Texel ewa_level(const Image& level, double u, double v, double a_s, double a_t, double b_s,
+                double b_t, int* texels_read);
 
 }  // namespace cmam::texture

@@ -30,10 +30,10 @@ struct FilterOptions {
 
 /// What a lookup did (for `cmam lookup`, statistics and tests).
 struct LookupInfo {
-    double lambda = 0;         // fractional MIP level (0 for level-0 filters)
+    double lambda = 0;  // fractional MIP level (0 for level-0 filters)
     int level_lo = 0, level_hi = 0;
     int texels_read = 0;
-    bool fallback = false;     // non-finite input: the texture mean was returned
+    bool fallback = false;  // non-finite input: the texture mean was returned
     // The region filtered, in level-0 texels: a rectangle (SAT) or ellipse semi-axes (EWA),
     // or the footprint width (trilinear).
     double rect[4] = {0, 0, 0, 0};  // x0, y0, x1, y1
@@ -41,7 +41,7 @@ struct LookupInfo {
 };
 
 class FilteredTexture {
-public:
+  public:
     explicit FilteredTexture(Image level0);
 
     const Image& image() const { return m_image; }
@@ -56,7 +56,7 @@ public:
     Texel lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
                  LookupInfo* info = nullptr) const;
 
-private:
+  private:
     Image m_image;
     mutable std::mutex m_build;
     mutable std::atomic<MipPyramid*> m_pyr_ready{nullptr};  // set once the pyramid is complete

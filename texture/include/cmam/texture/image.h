@@ -17,7 +17,7 @@ namespace cmam::texture {
 
 /// The one exception type of the filtering library.
 class TextureError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
@@ -39,7 +39,7 @@ using Texel = std::array<float, 4>;
 /// Texel (i,j) covers the cell [i,i+1)x[j,j+1) of continuous texel space (s,t) = (u*W, v*H);
 /// row j = 0 is v = 0, i.e. the bottom of the picture.
 class Image {
-public:
+  public:
     Image() = default;
     /// `texels` holds width*height*channels floats, row-major from row j = 0 (v = 0).
     Image(int width, int height, int channels, std::vector<float> texels,
@@ -64,7 +64,7 @@ public:
     /// Mean of all texels per channel (the value returned for non-finite inputs).
     const Texel& mean() const { return m_mean; }
 
-private:
+  private:
     int m_width = 0, m_height = 0, m_channels = 0;
     WrapMode m_wrap_s = WrapMode::Repeat, m_wrap_t = WrapMode::Repeat;
     std::vector<float> m_texels;
@@ -81,9 +81,12 @@ inline int64_t floor_to_int(double x) {
 inline int64_t wrap_index(int64_t i, int64_t n, WrapMode mode) {
     if (i >= 0 && i < n) return i;
     switch (mode) {
-        case WrapMode::Repeat: return ((i % n) + n) % n;
-        case WrapMode::Clamp: return i < 0 ? 0 : n - 1;
-        case WrapMode::Black: return -1;
+        case WrapMode::Repeat:
+            return ((i % n) + n) % n;
+        case WrapMode::Clamp:
+            return i < 0 ? 0 : n - 1;
+        case WrapMode::Black:
+            return -1;
         case WrapMode::Mirror: {
             int64_t period = 2 * n;
             int64_t k = ((i % period) + period) % period;

@@ -11,7 +11,7 @@
 namespace cmam::texture {
 
 class MipPyramid {
-public:
+  public:
     MipPyramid() = default;
     /// Builds all levels, 1 + floor(log2(max(W,H))) of them, from `base` (copied).
     explicit MipPyramid(const Image& base);
@@ -26,7 +26,7 @@ public:
     /// `levels_used` (optional) receives the fractional level lambda, clamped to [0, L-1].
     Texel trilinear(double u, double v, double width, double* lambda_used = nullptr) const;
 
-private:
+  private:
     std::vector<Image> m_levels;
 };
 

@@ -13,7 +13,7 @@
 namespace cmam::texture {
 
 class SummedAreaTable {
-public:
+  public:
     enum class Storage : uint8_t {
         Double,           // 8 B per channel per entry; worst single-texel error ~1e-10
         MeanOffsetFloat,  // 4 B per channel per entry: the SAT of (T - mean); error < 1e-4
@@ -35,12 +35,12 @@ public:
     /// bilinear-free point value of the cell containing its centre.
     Texel average(double x0, double y0, double x1, double y1) const;
 
-private:
+  private:
     int m_w = 0, m_h = 0, m_c = 0;
     WrapMode m_wrap_s{}, m_wrap_t{};
     Storage m_storage = Storage::Double;
-    std::vector<double> m_double;   // (W+1)(H+1)C entries
-    std::vector<float> m_float;     // idem, of T - mean
+    std::vector<double> m_double;  // (W+1)(H+1)C entries
+    std::vector<float> m_float;    // idem, of T - mean
     Texel m_mean{};
 
     double entry(int i, int j, int c) const;        // S[j][i] (exclusive), 0 <= i <= W, 0 <= j <= H
