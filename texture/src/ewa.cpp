@@ -35,45 +35,75 @@ EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t) {
     return e;
 }
 
+namespace {
+
+int64_t ceil_to_int(double x) {
+    return -floor_to_int(-x);
+}
+
+// Weighted sum over the ellipse at one level; NC > 0 fixes the channel count at compile time.
+template <int NC>
+void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, double C, double hy,
+                    double* sum, double* wsum_out, int* count_out) {
+    const int W = img.width(), H = img.height(), nc = NC > 0 ? NC : img.channels();
+    const float* lut = ewa_weight_lut();
+    const int64_t t_lo = ceil_to_int(t0 - hy), t_hi = floor_to_int(t0 + hy);
+    float acc[4] = {0, 0, 0, 0};
+    double wsum = 0;
+    int count = 0;
+    for (int64_t it = t_lo; it <= t_hi; ++it) {
+        const double y = double(it) - t0;
+        // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0.
+        const double by = B * y, cyy = C * y * y;
+        const double disc = by * by - 4 * A * (cyy - 1);
+        if (disc <= 0) continue;
+        const double sq = std::sqrt(disc);
+        const int64_t s_lo = ceil_to_int(s0 + (-by - sq) / (2 * A));
+        const int64_t s_hi = floor_to_int(s0 + (-by + sq) / (2 * A));
+        const int64_t jt = wrap_index(it, H, img.wrap_t());
+        const bool inside = jt >= 0 && s_lo >= 0 && s_hi < W;
+        const float* row = jt >= 0 ? img.texel(0, static_cast<int>(jt)) : nullptr;
+        // Q is evaluated directly per texel (not incrementally): the weight-table index
+        // floor(r2 * N) must not depend on accumulated rounding.
+        for (int64_t is = s_lo; is <= s_hi; ++is) {
+            const double x = double(is) - s0;
+            const double r2 = A * x * x + by * x + cyy;
+            if (r2 >= 1) continue;
+            const float w = lut[std::min(static_cast<int>(r2 * kEwaLutSize), kEwaLutSize - 1)];
+            ++count;
+            wsum += w;
+            if (!row) continue;  // black row: the weight counts, the value is 0
+            const int64_t js = inside ? is : wrap_index(is, W, img.wrap_s());
+            if (js < 0) continue;
+            const float* t = row + js * nc;
+            for (int c = 0; c < nc; ++c) acc[c] += w * t[c];
+        }
+    }
+    for (int c = 0; c < nc; ++c) sum[c] = acc[c];
+    *wsum_out = wsum;
+    *count_out = count;
+}
+
+}  // namespace
+
 Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s,
                 double b_t, int* texels_read) {
     const int W = img.width(), H = img.height(), nc = img.channels();
-    double s0 = u * W - 0.5, t0 = v * H - 0.5;
+    const double s0 = u * W - 0.5, t0 = v * H - 0.5;
     EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
-    const double A = e.A / e.F, B = e.B / e.F, C = e.C / e.F, hy = e.hy;
-    const float* lut = ewa_weight_lut();
-    int t_lo = static_cast<int>(std::ceil(t0 - hy)), t_hi = static_cast<int>(std::floor(t0 + hy));
+    const double A = e.A / e.F, B = e.B / e.F, C = e.C / e.F;
     double sum[4] = {0, 0, 0, 0}, wsum = 0;
     int count = 0;
-    for (int it = t_lo; it <= t_hi; ++it) {
-        double y = it - t0;
-        // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0.
-        double bq = B * y, cq = C * y * y - 1;
-        double disc = bq * bq - 4 * A * cq;
-        if (disc <= 0) continue;
-        double sq = std::sqrt(disc);
-        double x_lo = (-bq - sq) / (2 * A), x_hi = (-bq + sq) / (2 * A);
-        int s_lo = static_cast<int>(std::ceil(s0 + x_lo)),
-            s_hi = static_cast<int>(std::floor(s0 + x_hi));
-        int64_t jt = wrap_index(it, H, img.wrap_t());
-        // Q is evaluated directly per texel (not incrementally): the weight-table index
-        // floor(r2 * N) must not depend on accumulated rounding.
-        const double by = B * y, cyy = C * y * y;
-        const bool inside = jt >= 0 && s_lo >= 0 && s_hi < W;
-        const float* row = jt >= 0 ? img.texel(0, static_cast<int>(jt)) : nullptr;
-        for (int is = s_lo; is <= s_hi; ++is) {
-            const double x = is - s0;
-            const double r2 = A * x * x + by * x + cyy;
-            if (r2 >= 1) continue;
-            float w = lut[std::min(static_cast<int>(r2 * kEwaLutSize), kEwaLutSize - 1)];
-            ++count;
-            wsum += w;
-            if (!row) continue;  // black row: weight counts, value 0
-            int64_t js = inside ? is : wrap_index(is, W, img.wrap_s());
-            if (js < 0) continue;
-            const float* t = row + js * nc;
-            for (int c = 0; c < nc; ++c) sum[c] += w * t[c];
-        }
+    switch (nc) {
+        case 1:
+            ewa_accumulate<1>(img, s0, t0, A, B, C, e.hy, sum, &wsum, &count);
+            break;
+        case 3:
+            ewa_accumulate<3>(img, s0, t0, A, B, C, e.hy, sum, &wsum, &count);
+            break;
+        default:
+            ewa_accumulate<0>(img, s0, t0, A, B, C, e.hy, sum, &wsum, &count);
+            break;
     }
     if (texels_read) *texels_read += count;
     Texel out{};
@@ -97,7 +127,7 @@ EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, d
     // Axes in level-0 texels, per axis scaled.
     double as = au * base.width(), at = av * base.height();
     double bs = bu * base.width(), bt = bv * base.height();
-    double la = std::hypot(as, at), lb = std::hypot(bs, bt);
+    double la = std::sqrt(as * as + at * at), lb = std::sqrt(bs * bs + bt * bt);
     if (la < lb) {
         std::swap(as, bs);
         std::swap(at, bt);
