@@ -14,10 +14,13 @@ struct Vec2d {
 };
 
 /// A ray's tag as the CMAM sees it (paper §3.1): the ray ID (scanline or pixel) and the
-/// recursion level (0 for primary rays, +1 per specular bounce).
+/// recursion level (0 for primary rays, +1 per specular bounce). `seq` numbers the camera
+/// samples of one ID in the order they are traced (algorithms.md §6.3.2), so the CMAM can
+/// accept only adjacent samples.
 struct RayTag {
     uint32_t id = 0;
     uint32_t level = 0;
+    uint32_t seq = 0;
 };
 
 /// A texture-space footprint around the lookup point.

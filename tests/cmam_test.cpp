@@ -1,0 +1,187 @@
+// The CMAM against algorithms.md §12 (T-CMAM-1..3) and the paper's rules: matching on tag and
+// level, the cache shift, the three cases per filter, the miss policies and the readings.
+#include <cmam/texture/cmam.h>
+#include <cmam/texture/filters.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace cmam::texture;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+Image tmip1() {
+    return Image(4, 4, 1, {3, 0, 1, 2, 5, 7, 4, 1, 0, 2, 6, 3, 1, 1, 0, 4});
+}
+CmamCache::Entry at(double s, double t) {
+    return {RayTag{}, s, t, true};
+}
+double area(const CmamRegion& r) {
+    return kPi * std::abs(r.a[0] * r.b[1] - r.a[1] * r.b[0]);
+}
+// Singular values of [a b] (the true semi-axes of the conjugate-diameter ellipse).
+std::pair<double, double> sigma(const double* a, const double* b) {
+    double A = a[1] * a[1] + b[1] * b[1], C = a[0] * a[0] + b[0] * b[0],
+           B = -2 * (a[0] * a[1] + b[0] * b[1]);
+    double root = std::sqrt((A - C) * (A - C) + B * B);
+    return {std::sqrt((A + C + root) / 2), std::sqrt((A + C - root) / 2)};
+}
+}  // namespace
+
+TEST(CmamRegion, TCmam1CaseTwoGeometry) {
+    CmamCache::Entry cached[2] = {at(12, 10.5), at(10.5, 11.5)};
+    CmamOptions o;
+    CmamRegion r = cmam_region(10, 10, cached, 2, o);
+    EXPECT_NEAR(r.width, 2.5, 1e-12);
+    EXPECT_NEAR(std::log2(r.width), 1.321928, 1e-6);
+    EXPECT_DOUBLE_EQ(r.a[0], 2);
+    EXPECT_DOUBLE_EQ(r.a[1], 0.5);
+    EXPECT_DOUBLE_EQ(r.b[0], 0.5);
+    EXPECT_DOUBLE_EQ(r.b[1], 1.5);
+    EXPECT_FALSE(r.orthogonal_fallback);
+    auto [s1, s2] = sigma(r.a, r.b);
+    EXPECT_NEAR(s1, 2.309017, 1e-6);
+    EXPECT_NEAR(s2, 1.190983, 1e-6);
+    EXPECT_NEAR(area(r), 8.639380, 1e-6);
+    EXPECT_NEAR(std::log2(std::hypot(r.b[0], r.b[1])), 0.661, 1e-3);
+    EXPECT_NEAR(std::log2(s2), 0.252, 1e-3);
+    EXPECT_DOUBLE_EQ(r.rect[0], 10);
+    EXPECT_DOUBLE_EQ(r.rect[2], 12);
+    EXPECT_DOUBLE_EQ(r.rect[1], 10);
+    EXPECT_DOUBLE_EQ(r.rect[3], 11.5);
+    o.ellipse = CmamEllipse::Orthogonal;
+    EXPECT_NEAR(area(cmam_region(10, 10, cached, 2, o)), 10.240339, 1e-6);
+    o.ellipse = CmamEllipse::Orthogonalised;
+    CmamRegion r3 = cmam_region(10, 10, cached, 2, o);
+    EXPECT_NEAR(area(r3), 8.639380, 1e-6);
+    EXPECT_NEAR(r3.a[0] * r3.b[0] + r3.a[1] * r3.b[1], 0, 1e-12);
+}
+
+TEST(CmamRegion, TCmam1CollinearFallsBackAndKeepsAMinimumExtent) {
+    CmamCache::Entry cached[2] = {at(11, 10), at(12, 10)};
+    CmamRegion r = cmam_region(10, 10, cached, 2, CmamOptions{});
+    EXPECT_NEAR(std::log2(r.width), 1, 1e-12);
+    EXPECT_TRUE(r.orthogonal_fallback);
+    EXPECT_NEAR(std::hypot(r.a[0], r.a[1]), 2, 1e-12);
+    EXPECT_NEAR(std::hypot(r.b[0], r.b[1]), 1, 1e-12);
+    EXPECT_NEAR(r.a[0] * r.b[0] + r.a[1] * r.b[1], 0, 1e-12);
+    EXPECT_NEAR(r.rect[3] - r.rect[1], 1, 1e-12);  // zero height -> 1 texel
+    EXPECT_NEAR(r.rect[2] - r.rect[0], 2, 1e-12);
+
+    CmamCache::Entry row[2] = {at(9, 10.05), at(8, 10.2)};  // a perspective row
+    CmamRegion p = cmam_region(10, 10, row, 2, CmamOptions{});
+    EXPECT_TRUE(p.orthogonal_fallback);
+    EXPECT_NEAR(sigma(p.a, p.b).second, std::hypot(1.0, 0.05), 1e-9);  // R2: minor = |b|
+}
+
+TEST(Cmam, TCmam2CaseOneOnTheMipTexture) {
+    FilteredTexture tex(tmip1());
+    EXPECT_NEAR(bilinear(tex.image(), 0.8, 0.6)[0], 3.70, 1e-5);
+    auto run = [&](CmamOptions o) {
+        CmamCache cache;
+        RayTag tag{7, 0, 0};
+        cmam_lookup(tex, cache, tag, 0.3, 0.6, o);  // cached sample
+        tag.seq = 1;
+        CmamRegion r;
+        float v = cmam_lookup(tex, cache, tag, 0.8, 0.6, o, nullptr, &r)[0];
+        EXPECT_EQ(r.matches, 1);
+        return std::pair{v, r};
+    };
+    CmamOptions o;
+    o.filter = FilterKind::Trilinear;
+    auto [tri, rt] = run(o);
+    EXPECT_NEAR(rt.width, 2, 1e-12);
+    EXPECT_NEAR(tri, 2.77, 1e-5);
+    o.filter = FilterKind::Sat;
+    auto [sat, rs] = run(o);
+    EXPECT_NEAR(rs.rect[0], 1.2, 1e-12);
+    EXPECT_NEAR(rs.rect[2], 3.2, 1e-12);
+    EXPECT_NEAR(rs.rect[1], 1.9, 1e-12);
+    EXPECT_NEAR(rs.rect[3], 2.9, 1e-12);
+    EXPECT_NEAR(sat, 4.18, 1e-5);
+    o.sat_box = CmamSatBox::Square;
+    EXPECT_NEAR(run(o).first, 3.15, 1e-5);
+    o.filter = FilterKind::Ewa;
+    EXPECT_NEAR(run(o).first, 2.465593, 1e-5);
+}
+
+TEST(Cmam, MissPolicies) {
+    FilteredTexture tex(tmip1());
+    CmamCache cache;
+    CmamOptions o;
+    EXPECT_FLOAT_EQ(cmam_lookup(tex, cache, {1, 0, 0}, 0.8, 0.6, o)[0], 2.5f);  // average: the mean
+    cache.reset();
+    o.miss = CmamMiss::Point;
+    EXPECT_NEAR(cmam_lookup(tex, cache, {1, 0, 0}, 0.8, 0.6, o)[0], 3.70, 1e-5);
+    cache.reset();
+    o.filter = FilterKind::Sat;
+    o.sat_miss = CmamSatMiss::PaperLiteral;  // average over [0, s] x [0, t] = [0,3.2] x [0,2.4]
+    float lit = cmam_lookup(tex, cache, {1, 0, 0}, 0.8, 0.6, o)[0];
+    EXPECT_NEAR(lit, tex.sat().average(0, 0, 3.2, 2.4)[0], 1e-6);
+}
+
+TEST(Cmam, MatchingShiftsTheCacheAndComparesTagAndLevel) {
+    FilteredTexture tex(tmip1());
+    CmamOptions o;
+    CmamCache c;
+    CmamRegion r;
+    cmam_lookup(tex, c, {3, 0, 0}, 0.1, 0.1, o, nullptr, &r);
+    EXPECT_EQ(r.matches, 0);
+    EXPECT_TRUE(c.last.valid);
+    EXPECT_FALSE(c.second_last.valid);
+    cmam_lookup(tex, c, {3, 0, 1}, 0.2, 0.1, o, nullptr, &r);
+    EXPECT_EQ(r.matches, 1);
+    EXPECT_DOUBLE_EQ(c.second_last.s, 0.4);
+    EXPECT_DOUBLE_EQ(c.last.s, 0.8);
+    cmam_lookup(tex, c, {3, 0, 2}, 0.3, 0.1, o, nullptr, &r);
+    EXPECT_EQ(r.matches, 2);
+    cmam_lookup(tex, c, {3, 1, 3}, 0.4, 0.1, o, nullptr, &r);  // reflected ray: another level
+    EXPECT_EQ(r.matches, 0);
+    cmam_lookup(tex, c, {4, 1, 4}, 0.5, 0.1, o, nullptr, &r);  // another ID (next scanline)
+    EXPECT_EQ(r.matches, 0);
+    cmam_lookup(tex, c, {4, 1, 5}, 0.6, 0.1, o, nullptr, &r);
+    EXPECT_EQ(r.matches, 1);
+}
+
+TEST(Cmam, TCmam3AdjacencyRejectsSamplesAcrossAnOccluder) {
+    // Object A at x = 10, object B at x = 11..20, object A again at x = 21 (one scanline).
+    FilteredTexture tex(tmip1());
+    CmamOptions o;
+    CmamCache a;
+    CmamRegion r;
+    cmam_lookup(tex, a, {5, 0, 10}, 0.10, 0.5, o);
+    cmam_lookup(tex, a, {5, 0, 21}, 0.21, 0.5, o, nullptr, &r);
+    EXPECT_EQ(r.matches, 0) << "a footprint spanning the occluder";
+    o.adjacent_only = false;  // the paper's literal matching would span it
+    CmamCache b;
+    cmam_lookup(tex, b, {5, 0, 10}, 0.10, 0.5, o);
+    cmam_lookup(tex, b, {5, 0, 21}, 0.21, 0.5, o, nullptr, &r);
+    EXPECT_EQ(r.matches, 1);
+}
+
+TEST(Cmam, ModuleObjectIsTheWholeApi) {
+    FilteredTexture tex(Image(8, 8, 3, std::vector<float>(8 * 8 * 3, 0.25f)));
+    for (FilterKind k : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa}) {
+        Cmam m(tex, CmamOptions{k});
+        for (uint32_t x = 0; x < 20; ++x)
+            EXPECT_NEAR(m.lookup({0, 0, x}, 0.05 * x, 0.3 + 0.01 * x)[1], 0.25f, 1e-6);
+    }
+}
+
+TEST(Cmam, NonFiniteCoordinatesGiveTheMean) {
+    FilteredTexture tex(tmip1());
+    CmamCache c;
+    LookupInfo info;
+    EXPECT_FLOAT_EQ(cmam_lookup(tex, c, {}, std::nan(""), 0.5, CmamOptions{}, &info)[0], 2.5f);
+    EXPECT_TRUE(info.fallback);
+    EXPECT_FALSE(c.last.valid);
+}
+
+TEST(Cmam, ParseAndPrint) {
+    for (auto m : {CmamMiss::Average, CmamMiss::Point}) EXPECT_EQ(parse_cmam_miss(to_string(m)), m);
+    for (auto e : {CmamEllipse::Conjugate, CmamEllipse::Orthogonal, CmamEllipse::Orthogonalised})
+        EXPECT_EQ(parse_cmam_ellipse(to_string(e)), e);
+    for (auto m : {CmamSatMiss::Average, CmamSatMiss::PaperLiteral})
+        EXPECT_EQ(parse_cmam_sat_miss(to_string(m)), m);
+    EXPECT_FALSE(parse_cmam_miss("blur"));
+}

@@ -1,0 +1,218 @@
+#include <cmam/texture/cmam.h>
+#include <cmam/texture/filters.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace cmam::texture {
+
+std::optional<CmamMiss> parse_cmam_miss(std::string_view n) {
+    if (n == "average") return CmamMiss::Average;
+    if (n == "point") return CmamMiss::Point;
+    return std::nullopt;
+}
+std::optional<CmamEllipse> parse_cmam_ellipse(std::string_view n) {
+    if (n == "conjugate") return CmamEllipse::Conjugate;
+    if (n == "orthogonal") return CmamEllipse::Orthogonal;
+    if (n == "orthogonalised") return CmamEllipse::Orthogonalised;
+    return std::nullopt;
+}
+std::optional<CmamSatMiss> parse_cmam_sat_miss(std::string_view n) {
+    if (n == "average") return CmamSatMiss::Average;
+    if (n == "paper-literal") return CmamSatMiss::PaperLiteral;
+    return std::nullopt;
+}
+std::string_view to_string(CmamMiss m) {
+    return m == CmamMiss::Average ? "average" : "point";
+}
+std::string_view to_string(CmamEllipse e) {
+    switch (e) {
+        case CmamEllipse::Conjugate:
+            return "conjugate";
+        case CmamEllipse::Orthogonal:
+            return "orthogonal";
+        case CmamEllipse::Orthogonalised:
+            return "orthogonalised";
+    }
+    return "?";
+}
+std::string_view to_string(CmamSatMiss m) {
+    return m == CmamSatMiss::Average ? "average" : "paper-literal";
+}
+
+namespace {
+
+// Minimum extent per axis (algorithms.md §6.4): max(extent, 1 texel, other extent / maxAniso),
+// centred on the original box.
+void min_extent(double* r, double max_aniso) {
+    double w = r[2] - r[0], h = r[3] - r[1];
+    double nw = std::max({w, 1.0, h / max_aniso}), nh = std::max({h, 1.0, w / max_aniso});
+    double cx = 0.5 * (r[0] + r[2]), cy = 0.5 * (r[1] + r[3]);
+    r[0] = cx - nw / 2;
+    r[2] = cx + nw / 2;
+    r[1] = cy - nh / 2;
+    r[3] = cy + nh / 2;
+}
+
+}  // namespace
+
+CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int matches,
+                       const CmamOptions& o) {
+    CmamRegion r;
+    r.matches = matches;
+    if (matches == 0) return r;
+    // Vectors from the current sample to the matching cached ones.
+    double v1[2] = {cached[0].s - s0, cached[0].t - t0};
+    double v2[2] = {0, 0};
+    if (matches == 2) {
+        v2[0] = cached[1].s - s0;
+        v2[1] = cached[1].t - t0;
+    }
+    // Bounding box of the samples.
+    double x0 = std::min(s0, cached[0].s), x1 = std::max(s0, cached[0].s);
+    double y0 = std::min(t0, cached[0].t), y1 = std::max(t0, cached[0].t);
+    if (matches == 2) {
+        x0 = std::min(x0, cached[1].s);
+        x1 = std::max(x1, cached[1].s);
+        y0 = std::min(y0, cached[1].t);
+        y1 = std::max(y1, cached[1].t);
+    }
+    const double len1 = std::sqrt(v1[0] * v1[0] + v1[1] * v1[1]);
+    // MIP: segment length, or the bounding box's diagonal.
+    r.width = matches == 1 ? len1 : std::sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0));
+    // SAT: the spanned rectangle (or the square alternative for one match).
+    if (matches == 1 && o.sat_box == CmamSatBox::Square) {
+        r.rect[0] = s0 - len1 / 2;
+        r.rect[2] = s0 + len1 / 2;
+        r.rect[1] = t0 - len1 / 2;
+        r.rect[3] = t0 + len1 / 2;
+    } else {
+        r.rect[0] = x0;
+        r.rect[1] = y0;
+        r.rect[2] = x1;
+        r.rect[3] = y1;
+    }
+    min_extent(r.rect, o.max_aniso);
+    // EWA: a circle of radius |v1| (one match), or an ellipse from the two vectors.
+    if (matches == 1) {
+        r.a[0] = len1;
+        r.b[1] = len1;
+        return r;
+    }
+    const double len2 = std::sqrt(v2[0] * v2[0] + v2[1] * v2[1]);
+    const double* major = len1 >= len2 ? v1 : v2;
+    const double* minor = len1 >= len2 ? v2 : v1;
+    const double lmaj = std::max(len1, len2), lmin = std::min(len1, len2);
+    r.a[0] = major[0];
+    r.a[1] = major[1];
+    r.b[0] = minor[0];
+    r.b[1] = minor[1];
+    if (lmaj == 0) return r;
+    const double ux = major[0] / lmaj, uy = major[1] / lmaj;
+    const double sin_theta =
+        lmin > 0 ? std::abs(major[0] * minor[1] - major[1] * minor[0]) / (lmaj * lmin) : 0;
+    CmamEllipse reading = o.ellipse;
+    if (sin_theta < 0.2) {  // nearly collinear: the conjugate ellipse would be a sliver
+        reading = CmamEllipse::Orthogonal;
+        r.orthogonal_fallback = o.ellipse != CmamEllipse::Orthogonal;
+    }
+    if (reading == CmamEllipse::Orthogonal) {  // R2: minor axis perpendicular, length |b|
+        r.b[0] = -uy * lmin;
+        r.b[1] = ux * lmin;
+    } else if (reading == CmamEllipse::Orthogonalised) {  // R3: b minus its component along a
+        double along = minor[0] * ux + minor[1] * uy;
+        r.b[0] = minor[0] - along * ux;
+        r.b[1] = minor[1] - along * uy;
+    }
+    return r;
+}
+
+Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
+                  const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
+    const Image& img = tex.image();
+    const double W = img.width(), H = img.height();
+    const double s0 = u * W, t0 = v * H;
+    // Matching (paper §3.1): the most recent sample, then both.
+    int matches = 0;
+    auto same = [&](const CmamCache::Entry& e, uint32_t steps_back) {
+        return e.valid && e.tag.id == tag.id && e.tag.level == tag.level &&
+               (!o.adjacent_only || e.tag.seq + steps_back == tag.seq);
+    };
+    if (same(cache.last, 1)) matches = same(cache.second_last, 2) ? 2 : 1;
+    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
+    // Shift the cache: the most recent becomes the second, the current the most recent.
+    cache.second_last = cache.last;
+    cache.last = {tag, s0, t0, std::isfinite(s0) && std::isfinite(t0)};
+
+    LookupInfo scratch;
+    LookupInfo& in = info ? *info : scratch;
+    if (info) *info = LookupInfo{};
+    if (!std::isfinite(s0) || !std::isfinite(t0)) {
+        in.fallback = true;
+        in.texels_read = 1;
+        return img.mean();
+    }
+    CmamRegion r = cmam_region(s0, t0, cached, matches, o);
+    if (region_out) *region_out = r;
+    if (matches == 0) {
+        if (o.filter == FilterKind::Sat && o.sat_miss == CmamSatMiss::PaperLiteral) {
+            // The region from the table's origin to the texture coordinate (in the base tile).
+            double s = s0 - std::floor(s0 / W) * W, t = t0 - std::floor(t0 / H) * H;
+            in.texels_read = 16;
+            in.rect[0] = in.rect[1] = 0;
+            in.rect[2] = s;
+            in.rect[3] = t;
+            return tex.sat().average(0, 0, std::max(s, 1e-6), std::max(t, 1e-6));
+        }
+        if (o.miss == CmamMiss::Average) {  // d = MAXLEVEL: the texture's average
+            in.texels_read = 1;
+            in.lambda = tex.pyramid().levels() - 1;
+            in.level_lo = in.level_hi = tex.pyramid().levels() - 1;
+            return img.mean();
+        }
+        in.texels_read = 4;  // d = 0: point sample
+        return bilinear(img, u, v);
+    }
+    switch (o.filter) {
+        case FilterKind::Sat:
+            if (info) {
+                std::copy(r.rect, r.rect + 4, in.rect);
+                in.texels_read = 16;
+            }
+            return tex.sat().average(r.rect[0], r.rect[1], r.rect[2], r.rect[3]);
+        case FilterKind::Ewa: {
+            EwaResult e = ewa(tex.pyramid(), u, v, r.a[0] / W, r.a[1] / H, r.b[0] / W, r.b[1] / H,
+                              o.max_aniso);
+            if (info) {
+                in.lambda = e.lambda;
+                in.level_lo = static_cast<int>(std::floor(e.lambda));
+                in.level_hi = e.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
+                in.texels_read = e.texels_read;
+                in.major = e.major;
+                in.minor = e.minor;
+            }
+            return e.value;
+        }
+        case FilterKind::Nearest:
+            in.texels_read = 1;
+            return nearest(img, u, v);
+        case FilterKind::Bilinear:
+            in.texels_read = 4;
+            return bilinear(img, u, v);
+        case FilterKind::Trilinear:
+        default: {
+            double lambda = 0;
+            Texel t = tex.pyramid().trilinear(u, v, r.width, &lambda);
+            if (info) {
+                in.width = r.width;
+                in.lambda = lambda;
+                in.level_lo = static_cast<int>(std::floor(lambda));
+                in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
+                in.texels_read = in.level_lo == in.level_hi ? 4 : 8;
+            }
+            return t;
+        }
+    }
+}
+
+}  // namespace cmam::texture
