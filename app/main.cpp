@@ -1,5 +1,6 @@
 // cmam — command-line front end: `cmam render`, `cmam check`, `cmam lookup`.
 // Libraries throw; this file is the only place that prints errors.
+#include <cmam/texture/cmam.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -25,6 +26,10 @@ struct RenderArgs {
     int threads = 0;
     bool quiet = false;
     bool stats = false;
+    std::string lod, filter, cmam_miss = "average", cmam_tags = "scanline",
+                             cmam_ellipse = "conjugate", cmam_sat_miss = "average",
+                             cmam_adjacency = "on";
+    bool cmam_hull = false;
 };
 
 void print_warning(const std::string& w) {
@@ -99,6 +104,37 @@ int run_render(const RenderArgs& a) {
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
     render::BuildOptions bo;
     bo.spp_override = a.spp;
+    if (!a.lod.empty()) {
+        bo.lod = render::parse_lod(a.lod);
+        if (!bo.lod)
+            throw std::invalid_argument("--lod: unknown \"" + a.lod + "\" (expected none or cmam)");
+    }
+    if (!a.filter.empty()) {
+        bo.filter = texture::parse_filter(a.filter);
+        if (!bo.filter)
+            throw std::invalid_argument("--filter: unknown \"" + a.filter +
+                                        "\" (expected bilinear, trilinear, sat or ewa)");
+    }
+    auto miss = texture::parse_cmam_miss(a.cmam_miss);
+    auto tags = render::parse_tag_policy(a.cmam_tags);
+    auto ell = texture::parse_cmam_ellipse(a.cmam_ellipse);
+    auto sat_miss = texture::parse_cmam_sat_miss(a.cmam_sat_miss);
+    if (!miss) throw std::invalid_argument("--cmam-miss: expected average or point");
+    if (!tags) throw std::invalid_argument("--cmam-tags: expected scanline or pixel");
+    if (!ell)
+        throw std::invalid_argument(
+            "--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
+    if (!sat_miss)
+        throw std::invalid_argument("--cmam-sat-miss: expected average or paper-literal");
+    if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
+        throw std::invalid_argument("--cmam-adjacency: expected on or off");
+    if (a.cmam_hull)
+        throw std::invalid_argument("--cmam-hull: convex hull weighting is not implemented yet");
+    bo.tags = *tags;
+    bo.cmam.miss = *miss;
+    bo.cmam.ellipse = *ell;
+    bo.cmam.sat_miss = *sat_miss;
+    bo.cmam.adjacent_only = a.cmam_adjacency == "on";
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
 
@@ -267,6 +303,31 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
     render_cmd->add_flag("--stats", ra.stats, "Print texture memory and lookup counts per filter");
+    render_cmd->add_option("--lod", ra.lod,
+                           "Footprint source for image textures: none (point sampling) or cmam");
+    render_cmd->add_option(
+        "--filter", ra.filter,
+        "Filter for image textures: bilinear, trilinear, sat or ewa (default: the scene's)");
+    render_cmd
+        ->add_option("--cmam-miss", ra.cmam_miss, "CMAM, no matching sample: average or point")
+        ->capture_default_str();
+    render_cmd->add_option("--cmam-tags", ra.cmam_tags, "CMAM ray IDs: scanline or pixel")
+        ->capture_default_str();
+    render_cmd
+        ->add_option("--cmam-ellipse", ra.cmam_ellipse,
+                     "CMAM EWA reading of two vectors: conjugate, orthogonal or orthogonalised")
+        ->capture_default_str();
+    render_cmd
+        ->add_option("--cmam-sat-miss", ra.cmam_sat_miss,
+                     "CMAM SAT on a miss: average or paper-literal")
+        ->capture_default_str();
+    render_cmd
+        ->add_option(
+            "--cmam-adjacency", ra.cmam_adjacency,
+            "CMAM accepts only adjacent samples: on, or off (the paper's literal matching)")
+        ->capture_default_str();
+    render_cmd->add_flag("--cmam-hull", ra.cmam_hull,
+                         "CMAM convex hull weighting (paper section 4; pixel tags)");
 
     std::string check_path;
     auto* check_cmd =

@@ -35,6 +35,8 @@ class Builder {
 
     std::unique_ptr<Scene> run() {
         m_scene = std::make_unique<Scene>();
+        m_scene->tags = m_opts.tags;
+        m_scene->cmam = m_opts.cmam;
         film();
         camera();
         sampler();
@@ -300,6 +302,27 @@ class Builder {
             n.filter.kind = e.params.get_bool("trilinear", false) ? texture::FilterKind::Trilinear
                                                                   : texture::FilterKind::Ewa;
             n.filter.max_aniso = e.params.get_float("maxanisotropy", 8);
+            // cmam's extensions (pbrt-v3 warns that it does not use them):
+            // "string filter" and "string lod".
+            if (const auto* fp = e.params.find("filter")) {
+                std::string f = e.params.get_string("filter", "");
+                auto k = texture::parse_filter(f);
+                if (!k)
+                    throw SceneError(fp->loc, "unknown filter " + q(f) +
+                                                  " (expected \"nearest\", \"bilinear\", "
+                                                  "\"trilinear\", \"sat\" or \"ewa\")");
+                n.filter.kind = *k;
+            }
+            if (const auto* lp = e.params.find("lod")) {
+                std::string l = e.params.get_string("lod", "");
+                auto k = parse_lod(l);
+                if (!k)
+                    throw SceneError(lp->loc,
+                                     "unknown lod " + q(l) + " (expected \"none\" or \"cmam\")");
+                n.lod = *k;
+            }
+            if (m_opts.filter) n.filter.kind = *m_opts.filter;
+            if (m_opts.lod) n.lod = *m_opts.lod;
             if (!(n.filter.max_aniso >= 1))
                 throw SceneError(e.params.find("maxanisotropy")->loc,
                                  "maxanisotropy must be at least 1");
@@ -517,6 +540,7 @@ class Builder {
                 e.loc, "unsupported shape " + q(e.type) +
                            " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
         }
+        prim->id = static_cast<uint32_t>(m_scene->primitives.size());
         m_scene->primitives.push_back(std::move(prim));
     }
 
@@ -582,6 +606,23 @@ class Builder {
 };
 
 }  // namespace
+
+std::optional<Lod> parse_lod(std::string_view n) {
+    if (n == "none") return Lod::None;
+    if (n == "cmam") return Lod::Cmam;
+    return std::nullopt;
+}
+std::string_view to_string(Lod lod) {
+    return lod == Lod::Cmam ? "cmam" : "none";
+}
+std::optional<TagPolicy> parse_tag_policy(std::string_view n) {
+    if (n == "scanline") return TagPolicy::Scanline;
+    if (n == "pixel") return TagPolicy::Pixel;
+    return std::nullopt;
+}
+std::string_view to_string(TagPolicy p) {
+    return p == TagPolicy::Pixel ? "pixel" : "scanline";
+}
 
 void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
     float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);

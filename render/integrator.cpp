@@ -56,6 +56,8 @@ struct Tracer {
     const Scene& scene;
     RayCounts* counts;
     Rng& rng;
+    texture::RayTag tag{};         // the camera ray's tag; the level follows the depth
+    CmamRowState* cmam = nullptr;  // the row's CMAM caches
 
     Rgb escaped() const {
         Rgb l{};
@@ -132,7 +134,9 @@ struct Tracer {
                 return escaped();
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-            TexContext ctx{h.u, h.v, {}, {}, counts ? &counts->lookups : nullptr};
+            texture::RayTag t = tag;
+            t.level = static_cast<uint32_t>(depth);
+            TexContext ctx{h.u, h.v, {}, t, counts ? &counts->lookups : nullptr, h.prim->id, cmam};
             Bsdf bsdf;
             Vec3 wo = -dir;
             if (!make_bsdf(scene, m, h, ctx, &bsdf)) {
@@ -189,9 +193,9 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
 }
 
 Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
-              RayCounts* counts) {
+              RayCounts* counts, texture::RayTag tag = {}, CmamRowState* cmam = nullptr) {
     Rng rng(seed);
-    Tracer t{scene, counts, rng};
+    Tracer t{scene, counts, rng, tag, cmam};
     if (counts) ++counts->camera;
     return t.li(org, dir, 0);
 }
@@ -225,6 +229,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         int py = film.y0 + row;
         float* out = &fb.rgb[static_cast<std::size_t>(row) * fb.width * 3];
         RayCounts counts;
+        CmamRowState cmam;  // caches live for one row: identical images for any thread count
         for (int col = 0; col < fb.width; ++col) {
             int px = film.x0 + col;
             uint64_t pixel_seed =
@@ -238,8 +243,17 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                     float fx = px + (sx + jx) / nx, fy = py + (sy + jy) / ny;
                     Vec3 org, dir;
                     scene.camera.generate_ray(fx, fy, &org, &dir);
-                    Rgb L = trace_one(scene, org, dir,
-                                      mix_seed(pixel_seed, uint64_t(sy * nx + sx) + 1), &counts);
+                    const int sample = sy * nx + sx;
+                    texture::RayTag tag;
+                    if (scene.tags == TagPolicy::Scanline) {
+                        tag.id = static_cast<uint32_t>(py);
+                        tag.seq = static_cast<uint32_t>(col * spp + sample);
+                    } else {
+                        tag.id = static_cast<uint32_t>(py * film.xres + px);
+                        tag.seq = static_cast<uint32_t>(sample);
+                    }
+                    Rgb L = trace_one(scene, org, dir, mix_seed(pixel_seed, uint64_t(sample) + 1),
+                                      &counts, tag, &cmam);
                     if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b))
                         L = Rgb();
                     sum[0] += L.r;

@@ -2,6 +2,7 @@
 // Built from a pbrt::SceneDesc by build_scene(); rendering reads it from many threads.
 #pragma once
 
+#include <cmam/texture/cmam.h>
 #include <cmam/texture/filter.h>
 #include <cmam/texture/footprint.h>
 #include <cmam/texture/image.h>
@@ -10,7 +11,9 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "pbrt/error.h"
@@ -29,6 +32,16 @@ struct Camera {
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
     void generate_ray(float px, float py, Vec3* org, Vec3* dir) const;
 };
+
+/// Where a texture lookup's footprint comes from ("level of detail" source).
+enum class Lod : uint8_t { None, Cmam };
+std::optional<Lod> parse_lod(std::string_view name);
+std::string_view to_string(Lod lod);
+
+/// Which rays share a CMAM tag ID (algorithms.md §6.2 item 2).
+enum class TagPolicy : uint8_t { Scanline, Pixel };
+std::optional<TagPolicy> parse_tag_policy(std::string_view name);
+std::string_view to_string(TagPolicy p);
 
 struct FilmSettings {
     int xres = 640, yres = 480;
@@ -58,6 +71,7 @@ struct TextureNode {
     float su = 1, sv = 1, du = 0, dv = 0;             // uv mapping
     const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
     texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
+    Lod lod = Lod::None;                              // Image: footprint source
     TexInput tex1, tex2, amount;                      // Checkerboard, Scale, Mix
 };
 
@@ -81,6 +95,7 @@ struct Light {
 struct Primitive {
     enum class Kind { Triangles, Sphere, Disk };
     Kind kind = Kind::Triangles;
+    uint32_t id = 0;    // index in Scene::primitives (the textured object for the CMAM)
     int material = -1;  // -1 is the default matte
     bool flip = false;  // reverse_orientation xor transform swaps handedness
     // Triangles (world space)
@@ -123,6 +138,8 @@ class Scene {
     std::map<std::string, std::unique_ptr<texture::FilteredTexture>>
         images;  // loaded once per settings
     Material default_material;
+    TagPolicy tags = TagPolicy::Scanline;  // CMAM ray tagging
+    texture::CmamOptions cmam;             // CMAM policies (the filter comes from each texture)
 
     /// Creates the Embree scene from `primitives`; call once after filling them.
     void commit();
@@ -140,6 +157,11 @@ class Scene {
 
 struct BuildOptions {
     int spp_override = 0;  // 0: the scene's sampler
+    // Overrides for every image texture (the scene file's choices otherwise).
+    std::optional<Lod> lod;
+    std::optional<texture::FilterKind> filter;
+    TagPolicy tags = TagPolicy::Scanline;
+    texture::CmamOptions cmam;
 };
 
 /// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.

@@ -29,7 +29,19 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 fp.axis_a = {fp.axis_a.u * n.su, fp.axis_a.v * n.sv};
                 fp.axis_b = {fp.axis_b.u * n.su, fp.axis_b.v * n.sv};
             }
-            texture::Texel x = lookup_image(*n.image, n.filter, s, t, fp, ctx.tag, ctx.counts);
+            texture::Texel x;
+            if (n.lod == Lod::Cmam && ctx.cmam) {
+                // The CMAM sits between the texture and the parameterization: tag and (s,t) in.
+                texture::CmamOptions o = scene.cmam;
+                o.filter = n.filter.kind;
+                o.max_aniso = n.filter.max_aniso;
+                if (ctx.counts) ++ctx.counts->by_filter[static_cast<int>(o.filter)];
+                x = texture::cmam_lookup(
+                    *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node)), ctx.tag,
+                    s, t, o);
+            } else {
+                x = lookup_image(*n.image, n.filter, s, t, fp, ctx.tag, ctx.counts);
+            }
             if (n.image->image().channels() == 1) return Rgb(x[0]);
             return Rgb(x[0], x[1], x[2]);
         }

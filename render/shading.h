@@ -13,12 +13,30 @@ struct LookupCounts {
     uint64_t point_sampled = 0;  // no footprint: bilinear at level 0 whatever the filter
 };
 
+/// The CMAM caches of one row of the image: one per (textured object, texture). Rows are
+/// rendered whole, left to right, so a row's samples reach its caches in scan order.
+class CmamRowState {
+  public:
+    texture::CmamCache& cache(uint32_t object, uint32_t texture_node) {
+        uint64_t key = (uint64_t(object) << 32) | texture_node;
+        for (auto& [k, c] : m_caches)
+            if (k == key) return c;
+        return m_caches.emplace_back(key, texture::CmamCache{}).second;
+    }
+    void clear() { m_caches.clear(); }
+
+  private:
+    std::vector<std::pair<uint64_t, texture::CmamCache>> m_caches;
+};
+
 /// What a texture lookup knows about the shading point.
 struct TexContext {
     float u = 0, v = 0;              // surface (u,v) of the hit
     texture::Footprint footprint{};  // texture-space footprint of the pixel (None: point sample)
     texture::RayTag tag{};           // the ray's tag (ID, recursion level)
     LookupCounts* counts = nullptr;  // optional statistics
+    uint32_t object = 0;             // the primitive hit (the CMAM's textured object)
+    CmamRowState* cmam = nullptr;    // the row's CMAM caches (null: no CMAM)
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the
