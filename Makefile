@@ -3,12 +3,13 @@
 #   make demo     install dependencies, build, render scenes/demo.pbrt
 #   make test     install dependencies, build, run every test through CTest
 #   make bench    build and run the benchmarks (Google Benchmark)
+#   make paper-figures  render the paper's scenes with the CMAM on and off, with an error table
 JOBS ?= $(shell nproc)
 BUILD := build/release
 CMAM := $(BUILD)/app/cmam
 DEMO_OUT ?= $(BUILD)/demo.png
 
-.PHONY: all build deps configure demo test bench clean
+.PHONY: all build deps configure demo test bench paper-figures clean
 
 all: build
 
@@ -34,6 +35,10 @@ bench: deps
 	@$(MAKE) --no-print-directory build
 	@$(BUILD)/bench/render_bench
 	@$(BUILD)/bench/filter_bench
+
+paper-figures: deps
+	@$(MAKE) --no-print-directory build
+	@bash scripts/paper-figures.sh $(CMAM) out/paper-figures
 
 clean:
 	rm -rf build

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <mutex>
 
+#include "eval/metrics.h"
 #include "pbrt/parser.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
@@ -267,6 +268,35 @@ int run_lookup(const LookupArgs& a) {
     return 0;
 }
 
+int run_compare(const std::string& ref_path, const std::string& img_path, bool json) {
+    render::RawImage ref = render::read_image(ref_path), img = render::read_image(img_path);
+    if (ref.width != img.width || ref.height != img.height)
+        throw std::invalid_argument("\"" + img_path + "\" is " + std::to_string(img.width) + "x" +
+                                    std::to_string(img.height) + ", the reference is " +
+                                    std::to_string(ref.width) + "x" + std::to_string(ref.height));
+    auto rgb = [](const render::RawImage& r) {
+        std::vector<float> v(static_cast<std::size_t>(r.width) * r.height * 3);
+        for (std::size_t p = 0; p < v.size() / 3; ++p)
+            for (int c = 0; c < 3; ++c) {
+                float x = r.pixels[p * r.channels + std::min(c, r.channels - 1)];
+                v[3 * p + c] = r.is_8bit ? texture::srgb_to_linear(x) : x;  // compare linear values
+            }
+        return v;
+    };
+    eval::ErrorStats s = eval::compare(rgb(ref), rgb(img));
+    if (json)
+        std::printf(
+            "{\"reference\": \"%s\", \"image\": \"%s\", \"rmse\": %.9g, \"relative_rmse\": %.9g, "
+            "\"psnr\": %.9g, \"pixels\": %zu}\n",
+            json_escape(ref_path).c_str(), json_escape(img_path).c_str(), s.rmse, s.relative_rmse,
+            s.psnr, s.pixels);
+    else
+        std::printf("%s vs %s: RMSE %.6f (%.2f%% of the reference mean %.6f), PSNR %.2f dB\n",
+                    img_path.c_str(), ref_path.c_str(), s.rmse, 100 * s.relative_rmse,
+                    s.reference_mean, s.psnr);
+    return 0;
+}
+
 int run_check(const std::string& path) {
     pbrt::SceneDesc desc = pbrt::parse_file(path, print_warning);
     auto scene = render::build_scene(desc, {}, print_warning);
@@ -355,6 +385,14 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1.0, 1e6));
     lookup_cmd->add_flag("--json", la.json, "One JSON object on stdout");
 
+    std::string cmp_ref, cmp_img;
+    bool cmp_json = false;
+    auto* compare_cmd =
+        app.add_subcommand("compare", "Error of an image against a reference (linear RGB)");
+    compare_cmd->add_option("reference", cmp_ref, "Reference image")->required();
+    compare_cmd->add_option("image", cmp_img, "Image to measure")->required();
+    compare_cmd->add_flag("--json", cmp_json, "One JSON object on stdout");
+
     CLI11_PARSE(app, argc, argv);
     if (*lookup_cmd && la.uv.empty() && la.points.empty()) {
         std::cerr << "cmam lookup: error: give --uv U,V (or --points)\n";
@@ -364,6 +402,7 @@ int main(int argc, char** argv) {
         if (*render_cmd) return run_render(ra);
         if (*check_cmd) return run_check(check_path);
         if (*lookup_cmd) return run_lookup(la);
+        if (*compare_cmd) return run_compare(cmp_ref, cmp_img, cmp_json);
     } catch (const pbrt::SceneError& e) {
         std::cerr << e.what() << "\n";
         return 1;
