@@ -7,6 +7,8 @@
 #include <atomic>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <string>
 
 #include "pbrt/parser.h"
 #include "render/integrator.h"
@@ -16,9 +18,25 @@ using namespace cmam;
 
 namespace {
 
-std::unique_ptr<render::Scene> demo_scene() {
+std::unique_ptr<render::Scene> demo_scene(render::BuildOptions bo = {}) {
     pbrt::SceneDesc d = pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/demo.pbrt");
-    return render::build_scene(d, {}, {});
+    return render::build_scene(d, bo, {});
+}
+
+// Whole render of the demo scene with one footprint source and filter (--lod / --filter).
+void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+    render::BuildOptions bo;
+    bo.lod = lod;
+    bo.filter = filter;
+    auto scene = demo_scene(bo);
+    for (auto& [k, tex] : scene->images) {  // build pyramids and tables outside the timing
+        tex->pyramid();
+        tex->sat();
+    }
+    for (auto _ : state) {
+        render::Framebuffer fb = render::render(*scene, {}, nullptr);
+        benchmark::DoNotOptimize(fb.rgb.data());
+    }
 }
 
 double g_render_rate = 0, g_bare_rate = 0;
@@ -105,6 +123,22 @@ void BM_BareEmbreeDemo(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RenderDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK_CAPTURE(BM_RenderLod, none, render::Lod::None, texture::FilterKind::Bilinear)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, cmam_trilinear, render::Lod::Cmam, texture::FilterKind::Trilinear)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, cmam_sat, render::Lod::Cmam, texture::FilterKind::Sat)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, cmam_ewa, render::Lod::Cmam, texture::FilterKind::Ewa)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
 BENCHMARK(BM_BareEmbreeDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Prints the ratio of the two rays/s figures after the runs.
@@ -113,6 +147,9 @@ class RatioReporter : public benchmark::ConsoleReporter {
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
+            if (r.benchmark_name().find("BM_RenderLod/") != std::string::npos)
+                m_lod[r.benchmark_name().substr(13, r.benchmark_name().find('/', 13) - 13)] =
+                    r.GetAdjustedRealTime();
             auto it = r.counters.find("rays/s");
             if (it == r.counters.end()) continue;
             if (r.benchmark_name().find("RenderDemo") != std::string::npos) m_render = it->second;
@@ -124,10 +161,17 @@ class RatioReporter : public benchmark::ConsoleReporter {
         if (m_render > 0 && m_bare > 0)
             std::printf("\nwhole render / bare Embree loop (rays/s): %.1f%%  (target >= 70%%)\n",
                         100.0 * m_render / m_bare);
+        if (m_lod.count("none"))
+            for (const char* k : {"cmam_trilinear", "cmam_sat", "cmam_ewa"})
+                if (m_lod.count(k))
+                    std::printf("--lod %s vs --lod none: %+.1f%% render time%s\n", k,
+                                100.0 * (m_lod[k] / m_lod["none"] - 1),
+                                std::string(k) == "cmam_trilinear" ? "  (target <= +10%)" : "");
     }
 
   private:
     double m_render = 0, m_bare = 0;
+    std::map<std::string, double> m_lod;
 };
 
 }  // namespace
