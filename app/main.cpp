@@ -129,13 +129,14 @@ int run_render(const RenderArgs& a) {
         throw std::invalid_argument("--cmam-sat-miss: expected average or paper-literal");
     if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
         throw std::invalid_argument("--cmam-adjacency: expected on or off");
-    if (a.cmam_hull)
-        throw std::invalid_argument("--cmam-hull: convex hull weighting is not implemented yet");
+    if (a.cmam_hull && *tags != render::TagPolicy::Pixel)
+        throw std::invalid_argument("--cmam-hull works per pixel: it needs --cmam-tags pixel");
     bo.tags = *tags;
     bo.cmam.miss = *miss;
     bo.cmam.ellipse = *ell;
     bo.cmam.sat_miss = *sat_miss;
     bo.cmam.adjacent_only = a.cmam_adjacency == "on";
+    bo.cmam.hull = a.cmam_hull;
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
 

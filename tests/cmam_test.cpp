@@ -185,3 +185,40 @@ TEST(Cmam, ParseAndPrint) {
         EXPECT_EQ(parse_cmam_sat_miss(to_string(m)), m);
     EXPECT_FALSE(parse_cmam_miss("blur"));
 }
+
+TEST(CmamHull, OnlyTheNewPartOfEachTriangleIsIntegrated) {
+    // The 2x2 texture of §12 (repeat); texel space = uv * 2.
+    FilteredTexture tex(Image(2, 2, 1, {1, 2, 3, 4}));
+    CmamOptions o;
+    o.hull = true;
+    o.adjacent_only = false;
+    CmamCache c;
+    RayTag tag{9, 0, 0};
+    CmamRegion r;
+    // Samples (texels): (0,0), (1,0), then (0,1): triangle (0,0),(1,0),(0,1), area 0.5, all new.
+    cmam_lookup(tex, c, tag, 0.0, 0.0, o);
+    cmam_lookup(tex, c, tag, 0.5, 0.0, o);
+    float v1 = cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r)[0];
+    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
+    EXPECT_NEAR(v1, 1.0, 1e-6);  // all inside texel (0,0)
+    // Next sample (1,1): triangle (1,1),(0,1),(1,0): new area 0.5, also in texel (0,0).
+    float v2 = cmam_lookup(tex, c, tag, 0.5, 0.5, o, nullptr, &r)[0];
+    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
+    EXPECT_NEAR(v2, 1.0, 1e-6);
+    // A triangle inside the hull [0,1]^2 adds nothing: the running mean comes back.
+    cmam_lookup(tex, c, tag, 0.1, 0.1, o);
+    float v3 = cmam_lookup(tex, c, tag, 0.2, 0.1, o, nullptr, &r)[0];
+    EXPECT_NEAR(r.hull_new_area, 0.0, 1e-12);
+    EXPECT_NEAR(v3, 1.0, 1e-6);
+    // A triangle reaching into texel (1,0): only the part outside the hull counts.
+    float v4 = cmam_lookup(tex, c, tag, 1.0, 0.25, o, nullptr,
+                           &r)[0];  // (2, 0.5) with (0.4,0.2),(0.2,0.2)
+    EXPECT_GT(r.hull_new_area, 0);
+    EXPECT_GT(v4, 1.0f);
+    // A new ID (the next pixel) starts a new hull.
+    tag.id = 10;
+    cmam_lookup(tex, c, tag, 0.0, 0.0, o);
+    cmam_lookup(tex, c, tag, 0.5, 0.0, o);
+    cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r);
+    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
+}

@@ -153,6 +153,61 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         return img.mean();
     }
     CmamRegion r = cmam_region(s0, t0, cached, matches, o);
+    if (o.hull && matches == 2) {
+        // Paper §4: integrate only the part of the new triangle outside the hull so far.
+        if (!cache.hull_valid || cache.hull_tag.id != tag.id || cache.hull_tag.level != tag.level) {
+            cache.hull.clear();
+            cache.hull_tag = tag;
+            cache.hull_valid = true;
+            std::fill(std::begin(cache.hull_integral), std::end(cache.hull_integral), 0.0);
+            cache.hull_area = 0;
+        }
+        Polygon tri = {{s0, t0}, {cached[0].s, cached[0].t}, {cached[1].s, cached[1].t}};
+        if (std::abs(signed_area(tri)) > 1e-9) {
+            // Integrate exactly at level 0 while the triangle's perimeter is short; longer
+            // ones go to the coarsest level where it stays under kMaxPerimeter texels (the
+            // box-filtered level makes that an approximation at the coarse cells' scale).
+            constexpr double kMaxPerimeter = 32;
+            double perimeter = 0;
+            for (int k = 0; k < 3; ++k)
+                perimeter +=
+                    std::hypot(tri[(k + 1) % 3].x - tri[k].x, tri[(k + 1) % 3].y - tri[k].y);
+            const int level =
+                perimeter > kMaxPerimeter
+                    ? std::min(tex.pyramid().levels() - 1,
+                               static_cast<int>(std::ceil(std::log2(perimeter / kMaxPerimeter))))
+                    : 0;
+            const Image& lev = level > 0 ? tex.pyramid().level(level) : img;
+            const double kx = lev.width() / W, ky = lev.height() / H;
+            double new_area = 0, integral[4] = {0, 0, 0, 0};
+            for (Polygon piece : difference(tri, cache.hull)) {
+                new_area += std::abs(signed_area(piece));
+                for (P2& p : piece) p = {p.x * kx, p.y * ky};
+                Texel t = polygon_integral(tex.level_sat(level), piece);
+                for (int c = 0; c < 4; ++c) integral[c] += t[c] / (kx * ky);
+            }
+            r.hull_new_area = new_area;
+            if (region_out) *region_out = r;
+            if (info) in.texels_read = 16;
+            Texel out{};
+            if (new_area > 1e-9) {
+                std::vector<P2> pts = cache.hull;
+                pts.insert(pts.end(), tri.begin(), tri.end());
+                cache.hull = convex_hull(std::move(pts));
+                for (int c = 0; c < 4; ++c) {
+                    cache.hull_integral[c] += integral[c];
+                    out[c] = static_cast<float>(integral[c] / new_area);
+                }
+                cache.hull_area += new_area;
+                return out;
+            }
+            if (cache.hull_area > 0) {  // nothing new: the DC value, read as the running mean
+                for (int c = 0; c < 4; ++c)
+                    out[c] = static_cast<float>(cache.hull_integral[c] / cache.hull_area);
+                return out;
+            }
+        }
+    }
     if (region_out) *region_out = r;
     if (matches == 0) {
         if (o.filter == FilterKind::Sat && o.sat_miss == CmamSatMiss::PaperLiteral) {

@@ -31,7 +31,26 @@ std::string_view to_string(FilterKind k) {
     return "?";
 }
 
-FilteredTexture::FilteredTexture(Image level0) : m_image(std::move(level0)) {}
+FilteredTexture::FilteredTexture(Image level0) : m_image(std::move(level0)) {
+    const int levels =
+        1 + static_cast<int>(std::floor(std::log2(std::max(m_image.width(), m_image.height()))));
+    m_level_sats.resize(static_cast<std::size_t>(levels));
+    m_level_ready =
+        std::make_unique<std::atomic<SummedAreaTable*>[]>(static_cast<std::size_t>(levels));
+}
+
+const SummedAreaTable& FilteredTexture::level_sat(int l) const {
+    if (l <= 0) return sat();
+    l = std::min<int>(l, static_cast<int>(m_level_sats.size()) - 1);
+    if (SummedAreaTable* p = m_level_ready[l].load(std::memory_order_acquire)) return *p;
+    const MipPyramid& pyr = pyramid();
+    std::lock_guard<std::mutex> lock(m_build);
+    if (!m_level_sats[l]) {
+        m_level_sats[l] = std::make_unique<SummedAreaTable>(pyr.level(l));
+        m_level_ready[l].store(m_level_sats[l].get(), std::memory_order_release);
+    }
+    return *m_level_sats[l];
+}
 
 const MipPyramid& FilteredTexture::pyramid() const {
     if (MipPyramid* p = m_pyr_ready.load(std::memory_order_acquire)) return *p;
@@ -57,6 +76,9 @@ std::size_t FilteredTexture::memory_bytes() const {
     std::size_t n = m_image.memory_bytes();
     if (pyramid_built()) n += m_pyramid->memory_bytes() - m_image.memory_bytes();
     if (sat_built()) n += m_sat->memory_bytes();
+    for (std::size_t l = 1; l < m_level_sats.size(); ++l)
+        if (SummedAreaTable* p = m_level_ready[l].load(std::memory_order_acquire))
+            n += p->memory_bytes();
     return n;
 }
 

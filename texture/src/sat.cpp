@@ -127,6 +127,23 @@ Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) cons
     return out;
 }
 
+double SummedAreaTable::row_integral(double x, int64_t j, int c) const {
+    // Rows outside a black border are empty; a clamped row repeats the edge row.
+    if (j < 0 || j >= m_h) {
+        if (m_wrap_t == WrapMode::Black || m_wrap_t == WrapMode::Mirror) return 0;
+        j = m_wrap_t == WrapMode::Repeat ? ((j % m_h) + m_h) % m_h : (j < 0 ? 0 : m_h - 1);
+    }
+    const double y = double(j);
+    double v = extended_x(x, y + 1, c) - extended_x(x, y, c);
+    if (m_storage == Storage::MeanOffsetFloat) {
+        double xm = x;  // the mean counts only where the row has texels
+        if (m_wrap_s == WrapMode::Black || m_wrap_s == WrapMode::Mirror)
+            xm = std::clamp(x, 0.0, double(m_w));
+        v += m_mean[c] * xm;
+    }
+    return v;
+}
+
 Texel SummedAreaTable::average(double x0, double y0, double x1, double y1) const {
     double area = std::abs((x1 - x0) * (y1 - y0));
     if (!(area >= 1e-12)) {

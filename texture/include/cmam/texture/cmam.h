@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cmam/texture/filter.h>
+#include <cmam/texture/polygon.h>
 
 #include <optional>
 #include <string_view>
@@ -41,6 +42,11 @@ struct CmamOptions {
     /// (algorithms.md §6.3.2). Off is the paper's literal matching on (ID, level), where a
     /// sample behind an occluder still matches and spans the whole gap.
     bool adjacent_only = true;
+    /// Convex hull weighting (paper §4; meant for pixel tags): each new triangle is differenced
+    /// with the hull of what this ID has filtered so far, and only the new pieces are
+    /// integrated, exactly (box-reconstructed texture, algorithms.md §5). A triangle wholly
+    /// inside the hull returns the running mean, i.e. it adds nothing.
+    bool hull = false;
 };
 
 /// The last two samples of one textured object (the paper's Figure 6 fields): tag and
@@ -52,7 +58,16 @@ struct CmamCache {
         bool valid = false;
     };
     Entry last, second_last;
-    void reset() { last = second_last = Entry{}; }
+    // Convex hull weighting state of the current ID (pixel).
+    Polygon hull;
+    RayTag hull_tag{};
+    bool hull_valid = false;
+    double hull_integral[4] = {0, 0, 0, 0}, hull_area = 0;
+    void reset() {
+        last = second_last = Entry{};
+        hull.clear();
+        hull_valid = false;
+    }
 };
 
 /// The region the paper's rules build for the current sample, in level-0 texels.
@@ -62,6 +77,7 @@ struct CmamRegion {
     double rect[4] = {0, 0, 0, 0};  // SAT: x0, y0, x1, y1 (after the minimum-extent rule)
     double a[2] = {0, 0}, b[2] = {0, 0};  // EWA: the two axis vectors (texels)
     bool orthogonal_fallback = false;     // EWA: sin(theta) < 0.2 switched to the R2 reading
+    double hull_new_area = -1;            // hull weighting: area of the new pieces (-1: not used)
 };
 
 /// Region for the current sample p0 and the `matches` cached samples that match it

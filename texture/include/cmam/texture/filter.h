@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace cmam::texture {
 
@@ -48,6 +49,8 @@ class FilteredTexture {
     /// Built on first use (thread-safe).
     const MipPyramid& pyramid() const;
     const SummedAreaTable& sat() const;
+    /// Summed-area table of MIP level `l` (level 0 is sat()); built on first use.
+    const SummedAreaTable& level_sat(int l) const;
     std::size_t memory_bytes() const;  // level 0 + whatever has been built
     bool pyramid_built() const { return m_pyr_ready.load(std::memory_order_acquire) != nullptr; }
     bool sat_built() const { return m_sat_ready.load(std::memory_order_acquire) != nullptr; }
@@ -63,6 +66,8 @@ class FilteredTexture {
     mutable std::atomic<SummedAreaTable*> m_sat_ready{nullptr};
     mutable std::unique_ptr<MipPyramid> m_pyramid;
     mutable std::unique_ptr<SummedAreaTable> m_sat;
+    mutable std::vector<std::unique_ptr<SummedAreaTable>> m_level_sats;  // guarded by m_build
+    mutable std::unique_ptr<std::atomic<SummedAreaTable*>[]> m_level_ready;
 };
 
 }  // namespace cmam::texture

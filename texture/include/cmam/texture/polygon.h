@@ -1,0 +1,34 @@
+// cmam::texture — convex polygons in texel space: clipping, difference with a convex hull, the
+// convex hull itself, and the exact integral of the box-reconstructed texture over a polygon
+// (algorithms.md §5). Used by the CMAM's convex hull weighting (paper §4).
+#pragma once
+
+#include <cmam/texture/sat.h>
+
+#include <vector>
+
+namespace cmam::texture {
+
+struct P2 {
+    double x = 0, y = 0;
+};
+using Polygon = std::vector<P2>;  // vertices in order; counter-clockwise unless stated
+
+/// Signed area (positive for counter-clockwise).
+double signed_area(const Polygon& p);
+/// The part of `p` on the left of the directed line a -> b (Sutherland-Hodgman).
+Polygon clip_left(const Polygon& p, P2 a, P2 b);
+/// Convex pieces, disjoint, whose union is t \ h (t convex, h convex and counter-clockwise).
+/// No pieces means t lies inside h.
+std::vector<Polygon> difference(const Polygon& t, const Polygon& h);
+/// Convex hull, counter-clockwise (Andrew's monotone chain); collinear points dropped.
+Polygon convex_hull(std::vector<P2> points);
+
+/// Exact integral of the box-reconstructed texture over `p` (texel space, any orientation gives
+/// the integral for its counter-clockwise version), via Green's theorem on the table's row
+/// prefixes: O(perimeter in texels). The wrap modes are the table's.
+Texel polygon_integral(const SummedAreaTable& sat, const Polygon& p);
+/// The same by clipping `p` to every texel cell it covers: O(cells x vertices); a test oracle.
+Texel polygon_integral_cells(const Image& image, const Polygon& p);
+
+}  // namespace cmam::texture
