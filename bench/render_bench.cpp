@@ -147,7 +147,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
-            if (r.benchmark_name().find("BM_RenderLod/") != std::string::npos)
+            const bool usable = r.aggregate_name.empty() || r.aggregate_name == "median";
+            if (usable && r.benchmark_name().find("BM_RenderLod/") != std::string::npos)
                 m_lod[r.benchmark_name().substr(13, r.benchmark_name().find('/', 13) - 13)] =
                     r.GetAdjustedRealTime();
             auto it = r.counters.find("rays/s");

@@ -106,6 +106,44 @@ Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) cons
     }
     Texel out{};
     double area = (x1 - x0) * (y1 - y0);
+    if (x0 >= 0 && y0 >= 0 && x1 <= m_w && y1 <= m_h) {
+        // Inside the table (the common case after the repeat shift): the four corners'
+        // bilinear weights are shared by all channels.
+        struct Corner {
+            std::size_t k;  // entry index of the cell's lower corner (channel 0)
+            double w[4];    // weights of (i,j), (i+1,j), (i,j+1), (i+1,j+1)
+            double sign;
+        };
+        auto corner = [&](double x, double y, double sign) {
+            int i = std::min(static_cast<int>(x), m_w - 1),
+                j = std::min(static_cast<int>(y), m_h - 1);
+            double fx = x - i, fy = y - j;
+            return Corner{(static_cast<std::size_t>(j) * (m_w + 1) + i) * m_c,
+                          {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy},
+                          sign};
+        };
+        const Corner cs[4] = {corner(x1, y1, 1), corner(x0, y1, -1), corner(x1, y0, -1),
+                              corner(x0, y0, 1)};
+        const std::size_t row = static_cast<std::size_t>(m_w + 1) * m_c;
+        for (int c = 0; c < m_c; ++c) {
+            double v = 0;
+            for (const Corner& k : cs) {
+                const std::size_t b = k.k + c;
+                double e00, e10, e01, e11;
+                if (m_storage == Storage::Double) {
+                    e00 = m_double[b], e10 = m_double[b + m_c], e01 = m_double[b + row],
+                    e11 = m_double[b + row + m_c];
+                } else {
+                    e00 = m_float[b], e10 = m_float[b + m_c], e01 = m_float[b + row],
+                    e11 = m_float[b + row + m_c];
+                }
+                v += k.sign * (k.w[0] * e00 + k.w[1] * e10 + k.w[2] * e01 + k.w[3] * e11);
+            }
+            if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
+            out[c] = static_cast<float>(v);
+        }
+        return out;
+    }
     for (int c = 0; c < m_c; ++c) {
         double v =
             extended(x1, y1, c) - extended(x0, y1, c) - extended(x1, y0, c) + extended(x0, y0, c);
