@@ -31,6 +31,7 @@ struct RenderArgs {
                              cmam_ellipse = "conjugate", cmam_sat_miss = "average",
                              cmam_adjacency = "on";
     bool cmam_hull = false;
+    std::string aov;
 };
 
 void print_warning(const std::string& w) {
@@ -98,6 +99,9 @@ void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
                      std::string(texture::to_string(texture::FilterKind(k))).c_str(),
                      (unsigned long long)stats.lookups_by_filter[k]);
     std::fprintf(stderr, "\n");
+    if (stats.dropped_differentials)
+        std::fprintf(stderr, "ray differentials dropped (grazing or non-finite): %llu\n",
+                     (unsigned long long)stats.dropped_differentials);
 }
 
 int run_render(const RenderArgs& a) {
@@ -108,7 +112,9 @@ int run_render(const RenderArgs& a) {
     if (!a.lod.empty()) {
         bo.lod = render::parse_lod(a.lod);
         if (!bo.lod)
-            throw std::invalid_argument("--lod: unknown \"" + a.lod + "\" (expected none or cmam)");
+            throw std::invalid_argument(
+                "--lod: unknown \"" + a.lod +
+                "\" (expected none, differentials, cones, cones-aniso or cmam)");
     }
     if (!a.filter.empty()) {
         bo.filter = texture::parse_filter(a.filter);
@@ -143,12 +149,19 @@ int run_render(const RenderArgs& a) {
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     render::RenderOptions ro;
     ro.threads = a.threads;
+    if (a.aov == "footprint")
+        ro.aov = render::AovKind::Footprint;
+    else if (a.aov == "texture")
+        ro.aov = render::AovKind::Texture;
+    else if (!a.aov.empty())
+        throw std::invalid_argument("--aov: unknown \"" + a.aov +
+                                    "\" (expected footprint or texture)");
     ro.progress = [&](int done, int total) { bar.update(done, total); };
     render::RenderStats stats;
     auto t1 = std::chrono::steady_clock::now();
     render::Framebuffer fb = render::render(*scene, ro, &stats);
     auto t2 = std::chrono::steady_clock::now();
-    render::write_image(out, fb.width, fb.height, fb.rgb);
+    render::write_image(out, fb.width, fb.height, fb.rgb, fb.channel_names);
     double render_s = std::chrono::duration<double>(t2 - t1).count();
     double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!a.quiet) {
@@ -334,8 +347,14 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
     render_cmd->add_flag("--stats", ra.stats, "Print texture memory and lookup counts per filter");
-    render_cmd->add_option("--lod", ra.lod,
-                           "Footprint source for image textures: none (point sampling) or cmam");
+    render_cmd->add_option(
+        "--lod", ra.lod,
+        "Footprint source for image textures: differentials (default, as pbrt-v3), cones, "
+        "cones-aniso, cmam, or none (point sampling)");
+    render_cmd->add_option(
+        "--aov", ra.aov,
+        "Write an AOV instead of radiance: footprint (major, minor axis in texels, MIP level; "
+        "EXR) or texture (unlit filtered texture of the first non-specular hit)");
     render_cmd->add_option(
         "--filter", ra.filter,
         "Filter for image textures: bilinear, trilinear, sat or ewa (default: the scene's)");

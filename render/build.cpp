@@ -317,8 +317,9 @@ class Builder {
                 std::string l = e.params.get_string("lod", "");
                 auto k = parse_lod(l);
                 if (!k)
-                    throw SceneError(lp->loc,
-                                     "unknown lod " + q(l) + " (expected \"none\" or \"cmam\")");
+                    throw SceneError(lp->loc, "unknown lod " + q(l) +
+                                                  " (expected \"none\", \"differentials\", "
+                                                  "\"cones\", \"cones-aniso\" or \"cmam\")");
                 n.lod = *k;
             }
             if (m_opts.filter) n.filter.kind = *m_opts.filter;
@@ -339,6 +340,8 @@ class Builder {
             n.tex1 = input("tex1", 1);
             n.tex2 = input("tex2", 0);
             std::string aa = e.params.get_string("aamode", "closedform");
+            n.closed_form = aa == "closedform";
+            if (m_opts.lod) n.lod = *m_opts.lod;
             if (aa != "closedform" && aa != "none")
                 throw SceneError(
                     e.params.find("aamode")->loc,
@@ -358,6 +361,11 @@ class Builder {
                                         "\"constant\", \"scale\", \"mix\")");
         }
         e.params.check_unused(what, m_warn);
+        if (n.kind == TextureNode::Kind::Image ||
+            (n.kind == TextureNode::Kind::Checkerboard && n.closed_form)) {
+            if (n.lod == Lod::Differentials) m_scene->needs_differentials = true;
+            if (n.lod == Lod::Cones || n.lod == Lod::ConesAniso) m_scene->needs_cones = true;
+        }
         m_scene->textures.push_back(n);
     }
 
@@ -609,11 +617,21 @@ class Builder {
 
 std::optional<Lod> parse_lod(std::string_view n) {
     if (n == "none") return Lod::None;
+    if (n == "differentials") return Lod::Differentials;
+    if (n == "cones") return Lod::Cones;
+    if (n == "cones-aniso") return Lod::ConesAniso;
     if (n == "cmam") return Lod::Cmam;
     return std::nullopt;
 }
 std::string_view to_string(Lod lod) {
-    return lod == Lod::Cmam ? "cmam" : "none";
+    switch (lod) {
+        case Lod::None: return "none";
+        case Lod::Differentials: return "differentials";
+        case Lod::Cones: return "cones";
+        case Lod::ConesAniso: return "cones-aniso";
+        case Lod::Cmam: return "cmam";
+    }
+    return "?";
 }
 std::optional<TagPolicy> parse_tag_policy(std::string_view n) {
     if (n == "scanline") return TagPolicy::Scanline;

@@ -242,6 +242,9 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
         uint32_t i0 = prim.indices[3 * rh.hit.primID], i1 = prim.indices[3 * rh.hit.primID + 1],
                  i2 = prim.indices[3 * rh.hit.primID + 2];
         float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
+        h.triangle = rh.hit.primID;
+        h.b1 = b1;
+        h.b2 = b2;
         const Vec3 &p0 = prim.positions[i0], &p1 = prim.positions[i1], &p2 = prim.positions[i2];
         h.p = b0 * p0 + b1 * p1 + b2 * p2;
         if (!prim.uvs.empty()) {
@@ -291,11 +294,121 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
     }
     if (prim.flip)
         for (double& x : n_obj) x = -x;
+    h.p_object = p;
     h.p = to_vec(xform_point(prim.world_from_object, p));
     Vec3 n = normalize(to_vec(xform_normal(prim.object_from_world, n_obj)));
     h.ng = n;
     h.ns = n;
     return true;
+}
+
+void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {
+    const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles) {
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+        if (!pr.uvs.empty()) {
+            uv0 = pr.uvs[i0];
+            uv1 = pr.uvs[i1];
+            uv2 = pr.uvs[i2];
+        }
+        Vec3 dp02 = pr.positions[i0] - pr.positions[i2], dp12 = pr.positions[i1] - pr.positions[i2];
+        float du02 = uv0[0] - uv2[0], dv02 = uv0[1] - uv2[1], du12 = uv1[0] - uv2[0],
+              dv12 = uv1[1] - uv2[1];
+        float det = du02 * dv12 - dv02 * du12;
+        if (std::abs(det) < 1e-12f) {  // degenerate uv: any frame of the plane
+            Frame f = Frame::from_z(normalize(cross(dp02, dp12)));
+            *dpdu = f.s;
+            *dpdv = f.t;
+            return;
+        }
+        float inv = 1 / det;
+        *dpdu = (dv12 * dp02 - dv02 * dp12) * inv;
+        *dpdv = (du02 * dp12 - du12 * dp02) * inv;
+        return;
+    }
+    const D3& p = p_object;
+    D3 du, dv;
+    if (pr.kind == Primitive::Kind::Sphere) {
+        double r = pr.radius;
+        double zr = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        double cos_phi = zr > 0 ? p[0] / zr : 1, sin_phi = zr > 0 ? p[1] / zr : 0;
+        double theta = std::acos(std::clamp(p[2] / r, -1.0, 1.0));
+        double dtheta = pr.theta_zmax - pr.theta_zmin;
+        du = {-pr.phi_max * p[1], pr.phi_max * p[0], 0};
+        dv = {dtheta * p[2] * cos_phi, dtheta * p[2] * sin_phi, -dtheta * r * std::sin(theta)};
+    } else {
+        double r_hit = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        du = {-pr.phi_max * p[1], pr.phi_max * p[0], 0};
+        double k = r_hit > 0 ? (pr.inner_radius - pr.radius) / r_hit : 0;
+        dv = {p[0] * k, p[1] * k, 0};
+    }
+    *dpdu = to_vec(xform_vector(pr.world_from_object, du));
+    *dpdv = to_vec(xform_vector(pr.world_from_object, dv));
+}
+
+void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
+    const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles) {
+        // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        Vec3 e1 = pr.positions[i1] - pr.positions[i0], e2 = pr.positions[i2] - pr.positions[i0];
+        Vec3 n = cross(e1, e2);
+        Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
+        float db1 = dot(l1, dp) / dot(l1, e1), db2 = dot(l2, dp) / dot(l2, e2);
+        std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+        if (!pr.uvs.empty()) {
+            uv0 = pr.uvs[i0];
+            uv1 = pr.uvs[i1];
+            uv2 = pr.uvs[i2];
+        }
+        *du = db1 * (uv1[0] - uv0[0]) + db2 * (uv2[0] - uv0[0]);
+        *dv = db1 * (uv1[1] - uv0[1]) + db2 * (uv2[1] - uv0[1]);
+        return;
+    }
+    // Least squares: [dpdu dpdv] (du dv)^T = dP.
+    Vec3 a, b;
+    partials(&a, &b);
+    double aa = dot(a, a), ab = dot(a, b), bb = dot(b, b), ad = dot(a, dp), bd = dot(b, dp);
+    double det = aa * bb - ab * ab;
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) {
+        *du = *dv = 0;
+        return;
+    }
+    *du = static_cast<float>((bb * ad - ab * bd) / det);
+    *dv = static_cast<float>((aa * bd - ab * ad) / det);
+}
+
+Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {
+    const Primitive& pr = *prim;
+    // d(n/|n|) = ((n.n) dn - (n.dn) n) / |n|^3 for an unnormalised normal n.
+    auto unit_derivative = [](const Vec3& n, const Vec3& dn) {
+        float nn = dot(n, n);
+        return (nn * dn - dot(n, dn) * n) / (nn * std::sqrt(nn));
+    };
+    if (pr.kind == Primitive::Kind::Triangles) {
+        if (pr.normals.empty()) return Vec3(0, 0, 0);  // flat: the normal is constant
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        Vec3 e1 = pr.positions[i1] - pr.positions[i0], e2 = pr.positions[i2] - pr.positions[i0];
+        Vec3 n = cross(e1, e2);
+        Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
+        float db1 = dot(l1, dp) / dot(l1, e1), db2 = dot(l2, dp) / dot(l2, e2);
+        float b0 = 1 - b1 - b2;
+        Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
+        Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];
+        Vec3 d = unit_derivative(ni, dn);
+        return pr.flip ? -d : d;
+    }
+    if (pr.kind == Primitive::Kind::Disk) return Vec3(0, 0, 0);
+    // Sphere: n_obj = p_obj, so dn_obj = dp_obj; normals map with (object_from_world)^T.
+    D3 dpo = xform_vector(pr.object_from_world, {dp.x, dp.y, dp.z});
+    Vec3 n = to_vec(xform_normal(pr.object_from_world, p_object));
+    Vec3 dn = to_vec(xform_normal(pr.object_from_world, dpo));
+    Vec3 d = unit_derivative(n, dn);
+    return pr.flip ? -d : d;
 }
 
 }  // namespace cmam::render

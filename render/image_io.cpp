@@ -86,7 +86,8 @@ void write_pfm(const std::string& path, int w, int h, const std::vector<float>& 
 
 }  // namespace
 
-void write_image(const std::string& path, int w, int h, const std::vector<float>& rgb) {
+void write_image(const std::string& path, int w, int h, const std::vector<float>& rgb,
+                 const std::vector<std::string>& channel_names) {
     std::string ext = lower_extension(path);
     fs::path target(path);
     fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
@@ -118,6 +119,7 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
                 }
             } else {
                 spec.attribute("oiio:ColorSpace", "Linear");
+                if (channel_names.size() == 3) spec.channelnames = channel_names;
             }
             if (!out->open(tmp.string(), spec))
                 throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());

@@ -38,6 +38,7 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
 /// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
 /// extension: .exr (32-bit float), .pfm (float), .png (8-bit sRGB, clamped), or anything else
 /// OpenImageIO writes (8-bit formats get sRGB encoding). Atomic: temp file, then rename.
-void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
+void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
+                 const std::vector<std::string>& channel_names = {"R", "G", "B"});
 
 }  // namespace cmam::render

@@ -6,6 +6,8 @@
 
 #include <memory>
 
+#include "render/cones.h"
+#include "render/differentials.h"
 #include "render/shading.h"
 
 namespace cmam::render {
@@ -40,6 +42,7 @@ Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
 struct RayCounts {
     uint64_t camera = 0, secondary = 0, shadow = 0;
     LookupCounts lookups;
+    uint64_t dropped_differentials = 0;
 
     void add_to(RenderStats* stats) const {
         if (!stats) return;
@@ -49,7 +52,15 @@ struct RayCounts {
         for (int k = 0; k < texture::kFilterKinds; ++k)
             stats->lookups_by_filter[k] += lookups.by_filter[k];
         stats->lookups_point_sampled += lookups.point_sampled;
+        stats->dropped_differentials += dropped_differentials;
     }
+};
+
+/// The AOV sample of one camera ray: three values, recorded at the first non-specular hit.
+struct Aov {
+    AovKind kind = AovKind::None;
+    bool recorded = false;
+    float v[3] = {0, 0, 0};
 };
 
 struct Tracer {
@@ -127,39 +138,76 @@ struct Tracer {
         return L;
     }
 
-    Rgb li(Vec3 org, Vec3 dir, int depth) {
+    /// A ray with the footprint state it carries.
+    struct Ray {
+        Vec3 org, dir;
+        RayDifferential diff;
+        RayCone cone;
+    };
+
+    Rgb li(Ray ray, int depth) {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             SurfaceHit h;
-            if (!scene.intersect(org, dir, 0, std::numeric_limits<float>::infinity(), &h))
+            if (!scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), &h))
                 return escaped();
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
             texture::RayTag t = tag;
             t.level = static_cast<uint32_t>(depth);
-            TexContext ctx{h.u, h.v, {}, t, counts ? &counts->lookups : nullptr, h.prim->id, cmam};
+            TexContext ctx;
+            ctx.u = h.u;
+            ctx.v = h.v;
+            ctx.tag = t;
+            ctx.counts = counts ? &counts->lookups : nullptr;
+            ctx.object = h.prim->id;
+            ctx.cmam = cmam;
+            HitDifferential hd;
+            if (scene.needs_differentials) {
+                hd = transfer(ray.diff, ray.dir, h);
+                if (hd.valid)
+                    ctx.footprint =
+                        texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
+                else if (counts && ray.diff.valid)
+                    ++counts->dropped_differentials;
+            }
+            if (scene.needs_cones) {
+                float w = cone_uv_width(ray.cone, ray.dir, h);
+                ctx.cone = texture::Footprint::axes({w, 0}, {0, w});
+                float ax[4];
+                cone_uv_axes(ray.cone, ray.dir, h, ax);
+                ctx.cone_aniso = texture::Footprint::axes({ax[0], ax[1]}, {ax[2], ax[3]});
+            }
             Bsdf bsdf;
-            Vec3 wo = -dir;
+            Vec3 wo = -ray.dir;
             if (!make_bsdf(scene, m, h, ctx, &bsdf)) {
-                org = offset_origin(h, dir);
+                // Continue through: the footprint state moves to the hit point.
+                ray.org = offset_origin(h, ray.dir);
+                ray.diff.dodx = hd.dpdx;
+                ray.diff.dody = hd.dpdy;
+                ray.diff.valid = hd.valid;
+                ray.cone.width = cone_width_at(ray.cone, h.t);
                 continue;
             }
+            if (aov) record_aov(ctx, h);
             Rgb L{};
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
-                L += specular_reflect(h, bsdf, wo, depth);
-                L += specular_transmit(h, bsdf, wo, depth);
+                L += specular_reflect(ray, h, hd, bsdf, wo, depth);
+                L += specular_transmit(ray, h, hd, bsdf, wo, depth);
             }
             return L;
         }
         return {};
     }
 
-    Rgb spawn(const SurfaceHit& h, const Vec3& wi, int depth) {
+    Rgb spawn(const SurfaceHit& h, Ray next, int depth) {
         if (counts) ++counts->secondary;
-        return li(offset_origin(h, wi), wi, depth + 1);
+        next.org = offset_origin(h, next.dir);
+        return li(next, depth + 1);
     }
 
-    Rgb specular_reflect(const SurfaceHit& h, const Bsdf& b, const Vec3& wo, int depth) {
+    Rgb specular_reflect(const Ray& ray, const SurfaceHit& h, const HitDifferential& hd,
+                         const Bsdf& b, const Vec3& wo, int depth) {
         if (b.kr.is_black()) return {};
         const Vec3& n = h.ns;
         float cos_o = dot(wo, n);
@@ -167,23 +215,89 @@ struct Tracer {
         if (dot(wi, n) == 0) return {};
         float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
         if (fr == 0) return {};
-        return b.kr * fr * spawn(h, wi, depth);
+        Ray next{{}, wi, {}, {}};
+        if (scene.needs_differentials) next.diff = render::reflect(ray.diff, hd, ray.dir, h);
+        if (scene.needs_cones) next.cone = reflect_cone(ray.cone, ray.dir, h);
+        return b.kr * fr * spawn(h, next, depth);
     }
 
-    Rgb specular_transmit(const SurfaceHit& h, const Bsdf& b, const Vec3& wo, int depth) {
+    Rgb specular_transmit(const Ray& ray, const SurfaceHit& h, const HitDifferential& hd,
+                          const Bsdf& b, const Vec3& wo, int depth) {
         if (b.kt.is_black()) return {};
         const Vec3& n = h.ns;
         float cos_o = dot(wo, n);
         bool entering = cos_o > 0;
         float eta_i = entering ? 1.0f : b.eta, eta_t = entering ? b.eta : 1.0f;
         Vec3 wt;
-        if (!refract(wo, faceforward(n, wo), eta_i / eta_t, &wt)) return {};
+        if (!render::refract(wo, faceforward(n, wo), eta_i / eta_t, &wt)) return {};
         float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};
-        return b.kt * ft * spawn(h, wt, depth);
+        Ray next{{}, wt, {}, {}};
+        if (scene.needs_differentials)
+            next.diff = render::refract(ray.diff, hd, ray.dir, h, eta_i / eta_t);
+        if (scene.needs_cones) next.cone = refract_cone(ray.cone, ray.dir, h, eta_i / eta_t);
+        return b.kt * ft * spawn(h, next, depth);
     }
+
+    // --- AOVs: the first non-specular hit along the specular chain ---
+    Aov* aov = nullptr;
+    void record_aov(const TexContext& ctx, const SurfaceHit& h);
 };
+
+// The first image texture feeding a material's diffuse (or reflective) input.
+const TextureNode* first_image(const Scene& scene, const TexInput& in, int budget = 8) {
+    if (in.node < 0 || budget == 0) return nullptr;
+    const TextureNode& n = scene.textures[static_cast<std::size_t>(in.node)];
+    if (n.kind == TextureNode::Kind::Image) return &n;
+    for (const TexInput* c : {&n.tex1, &n.tex2})
+        if (const TextureNode* f = first_image(scene, *c, budget - 1)) return f;
+    return nullptr;
+}
+
+void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h) {
+    if (aov->recorded) return;
+    const Material& m =
+        h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
+    const bool specular = m.type == Material::Type::Mirror || m.type == Material::Type::Glass;
+    if (specular) return;  // follow the specular chain
+    aov->recorded = true;
+    if (aov->kind == AovKind::Texture) {
+        Rgb k = eval_texture(scene, m.kd, ctx);
+        aov->v[0] = k.r;
+        aov->v[1] = k.g;
+        aov->v[2] = k.b;
+        return;
+    }
+    // Footprint: semi-axis lengths in level-0 texels of the first image texture, and its level.
+    const TextureNode* n = first_image(scene, m.kd);
+    if (!n) return;
+    texture::Footprint fp;
+    switch (n->lod) {
+        case Lod::Differentials:
+            fp = ctx.footprint;
+            break;
+        case Lod::Cones:
+            fp = ctx.cone;
+            break;
+        case Lod::ConesAniso:
+            fp = ctx.cone_aniso;
+            break;
+        default:
+            break;
+    }
+    if (fp.kind != texture::Footprint::Kind::Axes) return;
+    const double W = n->image->image().width() * n->su, H = n->image->image().height() * n->sv;
+    double la = std::hypot(fp.axis_a.u * W, fp.axis_a.v * H),
+           lb = std::hypot(fp.axis_b.u * W, fp.axis_b.v * H);
+    double major = std::max(la, lb), minor = std::min(la, lb);
+    double lambda = n->filter.kind == texture::FilterKind::Ewa
+                        ? std::log2(std::max({minor, major / n->filter.max_aniso, 1e-8}))
+                        : std::log2(std::max(major, 1e-8));
+    aov->v[0] = float(major);
+    aov->v[1] = float(minor);
+    aov->v[2] = float(std::max(0.0, lambda));
+}
 
 uint64_t mix_seed(uint64_t a, uint64_t b) {
     uint64_t z = a * 0x9E3779B97F4A7C15ull + b + 0x632BE59BD9B4E019ull;
@@ -192,12 +306,19 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
-Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
-              RayCounts* counts, texture::RayTag tag = {}, CmamRowState* cmam = nullptr) {
+struct CameraSample {
+    Vec3 org, dir;
+    RayDifferential diff;
+    RayCone cone;
+};
+
+Rgb trace_one(const Scene& scene, const CameraSample& cs, uint64_t seed, RayCounts* counts,
+              texture::RayTag tag = {}, CmamRowState* cmam = nullptr, Aov* aov = nullptr) {
     Rng rng(seed);
     Tracer t{scene, counts, rng, tag, cmam};
+    t.aov = aov;
     if (counts) ++counts->camera;
-    return t.li(org, dir, 0);
+    return t.li({cs.org, cs.dir, cs.diff, cs.cone}, 0);
 }
 
 }  // namespace
@@ -205,7 +326,8 @@ Rgb trace_one(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t see
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
                    RenderStats* stats) {
     RayCounts c;
-    Rgb L = trace_one(scene, org, dir, seed, &c);
+    CameraSample cs{org, dir, {}, {}};
+    Rgb L = trace_one(scene, cs, seed, &c);
     c.add_to(stats);
     return L;
 }
@@ -218,6 +340,9 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     fb.rgb.assign(static_cast<std::size_t>(fb.width) * fb.height * 3, 0.0f);
     const SamplerSettings& smp = scene.sampler;
     const int nx = smp.xsamples, ny = smp.ysamples, spp = nx * ny;
+    const float footprint_scale = 1 / std::sqrt(float(spp));  // pbrt-v3: differentials / sqrt(spp)
+    const RayCone camera_spread = camera_cone(scene.camera, footprint_scale);
+    if (options.aov == AovKind::Footprint) fb.channel_names = {"major", "minor", "lambda"};
 
     std::unique_ptr<tbb::global_control> limit;
     if (options.threads > 0)
@@ -241,8 +366,11 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                     float jx = smp.jitter ? jitter.next_float() : 0.5f;
                     float jy = smp.jitter ? jitter.next_float() : 0.5f;
                     float fx = px + (sx + jx) / nx, fy = py + (sy + jy) / ny;
-                    Vec3 org, dir;
-                    scene.camera.generate_ray(fx, fy, &org, &dir);
+                    CameraSample cs;
+                    scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
+                    if (scene.needs_differentials)
+                        cs.diff = camera_differential(scene.camera, fx, fy, footprint_scale);
+                    cs.cone = camera_spread;
                     const int sample = sy * nx + sx;
                     texture::RayTag tag;
                     if (scene.tags == TagPolicy::Scanline) {
@@ -252,8 +380,11 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                         tag.id = static_cast<uint32_t>(py * film.xres + px);
                         tag.seq = static_cast<uint32_t>(sample);
                     }
-                    Rgb L = trace_one(scene, org, dir, mix_seed(pixel_seed, uint64_t(sample) + 1),
-                                      &counts, tag, &cmam);
+                    Aov aov{options.aov};
+                    Rgb L =
+                        trace_one(scene, cs, mix_seed(pixel_seed, uint64_t(sample) + 1), &counts,
+                                  tag, &cmam, options.aov == AovKind::None ? nullptr : &aov);
+                    if (options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
                     if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b))
                         L = Rgb();
                     sum[0] += L.r;

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "render/scene.h"
@@ -16,11 +17,16 @@ struct RenderStats {
     std::atomic<uint64_t> camera_rays{0}, secondary_rays{0}, shadow_rays{0};
     std::atomic<uint64_t> lookups_by_filter[texture::kFilterKinds] = {};  // with a footprint
     std::atomic<uint64_t> lookups_point_sampled{0};                       // without one
+    std::atomic<uint64_t> dropped_differentials{0};  // grazing or non-finite: point sampled
     uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
 };
 
+/// Arbitrary output variables: what `cmam render --aov` writes instead of radiance.
+enum class AovKind : uint8_t { None, Footprint, Texture };
+
 struct RenderOptions {
     int threads = 0;  // 0: all cores
+    AovKind aov = AovKind::None;
     /// Called after each finished row with (rows done, rows total); may be empty.
     std::function<void(int, int)> progress;
 };
@@ -28,7 +34,8 @@ struct RenderOptions {
 /// Rendered image: linear RGB, top row first, film.width() x film.height().
 struct Framebuffer {
     int width = 0, height = 0;
-    std::vector<float> rgb;
+    std::vector<float> rgb;  // 3 floats per pixel (radiance, or the AOV's three channels)
+    std::vector<std::string> channel_names = {"R", "G", "B"};
 };
 
 Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats);

@@ -34,7 +34,7 @@ struct Camera {
 };
 
 /// Where a texture lookup's footprint comes from ("level of detail" source).
-enum class Lod : uint8_t { None, Cmam };
+enum class Lod : uint8_t { None, Differentials, Cones, ConesAniso, Cmam };
 std::optional<Lod> parse_lod(std::string_view name);
 std::string_view to_string(Lod lod);
 
@@ -71,7 +71,8 @@ struct TextureNode {
     float su = 1, sv = 1, du = 0, dv = 0;             // uv mapping
     const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
     texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
-    Lod lod = Lod::None;                              // Image: footprint source
+    Lod lod = Lod::Differentials;                     // Image, Checkerboard: footprint source
+    bool closed_form = true;                          // Checkerboard: aamode "closedform"
     TexInput tex1, tex2, amount;                      // Checkerboard, Scale, Mix
 };
 
@@ -116,6 +117,17 @@ struct SurfaceHit {
     float u = 0, v = 0;
     float t = 0;
     const Primitive* prim = nullptr;
+    uint32_t triangle = 0;             // triangles: the triangle index
+    float b1 = 0, b2 = 0;              // triangles: barycentrics of vertices 1 and 2
+    std::array<double, 3> p_object{};  // quadrics: the hit in object space
+
+    /// Surface partial derivatives dP/du and dP/dv in world space.
+    void partials(Vec3* dpdu, Vec3* dpdv) const;
+    /// (du, dv) for a world-space offset dP in the tangent plane (barycentric differentials on
+    /// triangles, least squares on dP/du, dP/dv elsewhere).
+    void uv_offset(const Vec3& dp, float* du, float* dv) const;
+    /// Change of the (unit) shading normal for a world-space offset dP along the surface.
+    Vec3 normal_offset(const Vec3& dp) const;
 };
 
 struct RenderStats;
@@ -138,8 +150,9 @@ class Scene {
     std::map<std::string, std::unique_ptr<texture::FilteredTexture>>
         images;  // loaded once per settings
     Material default_material;
-    TagPolicy tags = TagPolicy::Scanline;  // CMAM ray tagging
-    texture::CmamOptions cmam;             // CMAM policies (the filter comes from each texture)
+    TagPolicy tags = TagPolicy::Scanline;                   // CMAM ray tagging
+    bool needs_differentials = false, needs_cones = false;  // some texture asks for them
+    texture::CmamOptions cmam;  // CMAM policies (the filter comes from each texture)
 
     /// Creates the Embree scene from `primitives`; call once after filling them.
     void commit();

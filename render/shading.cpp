@@ -16,6 +16,31 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
     return image.lookup(s, t, footprint, filter);
 }
 
+namespace {
+// The footprint this node asks for, scaled by its uv mapping like the lookup point.
+texture::Footprint mapped_footprint(const TextureNode& n, const TexContext& ctx) {
+    texture::Footprint fp;
+    switch (n.lod) {
+        case Lod::Differentials:
+            fp = ctx.footprint;
+            break;
+        case Lod::Cones:
+            fp = ctx.cone;
+            break;
+        case Lod::ConesAniso:
+            fp = ctx.cone_aniso;
+            break;
+        default:
+            return {};
+    }
+    if (fp.kind == texture::Footprint::Kind::Axes) {
+        fp.axis_a = {fp.axis_a.u * n.su, fp.axis_a.v * n.sv};
+        fp.axis_b = {fp.axis_b.u * n.su, fp.axis_b.v * n.sv};
+    }
+    return fp;
+}
+}  // namespace
+
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
     if (in.node < 0) return in.value;
     const TextureNode& n = scene.textures[static_cast<std::size_t>(in.node)];
@@ -24,11 +49,6 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
             return n.constant;
         case TextureNode::Kind::Image: {
             double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
-            texture::Footprint fp = ctx.footprint;
-            if (fp.kind == texture::Footprint::Kind::Axes) {  // the uv mapping scales the axes too
-                fp.axis_a = {fp.axis_a.u * n.su, fp.axis_a.v * n.sv};
-                fp.axis_b = {fp.axis_b.u * n.su, fp.axis_b.v * n.sv};
-            }
             texture::Texel x;
             if (n.lod == Lod::Cmam && ctx.cmam) {
                 // The CMAM sits between the texture and the parameterization: tag and (s,t) in.
@@ -40,13 +60,33 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                     *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node)), ctx.tag,
                     s, t, o);
             } else {
-                x = lookup_image(*n.image, n.filter, s, t, fp, ctx.tag, ctx.counts);
+                x = lookup_image(*n.image, n.filter, s, t, mapped_footprint(n, ctx), ctx.tag,
+                                 ctx.counts);
             }
             if (n.image->image().channels() == 1) return Rgb(x[0]);
             return Rgb(x[0], x[1], x[2]);
         }
         case TextureNode::Kind::Checkerboard: {
             double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
+            texture::Footprint fp = n.closed_form ? mapped_footprint(n, ctx) : texture::Footprint{};
+            if (fp.kind == texture::Footprint::Kind::Axes) {
+                // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.
+                double ds = std::max(std::abs(fp.axis_a.u), std::abs(fp.axis_b.u));
+                double dt = std::max(std::abs(fp.axis_a.v), std::abs(fp.axis_b.v));
+                double s0 = s - ds, s1 = s + ds, t0 = t - dt, t1 = t + dt;
+                if (std::floor(s0) != std::floor(s1) || std::floor(t0) != std::floor(t1)) {
+                    auto bump = [](double x) {
+                        return std::floor(x / 2) +
+                               2 * std::max(x / 2 - std::floor(x / 2) - 0.5, 0.0);
+                    };
+                    double sint = (bump(s1) - bump(s0)) / (2 * ds),
+                           tint = (bump(t1) - bump(t0)) / (2 * dt);
+                    double area2 = sint + tint - 2 * sint * tint;
+                    if (ds > 1 || dt > 1) area2 = 0.5;
+                    return float(1 - area2) * eval_texture(scene, n.tex1, ctx) +
+                           float(area2) * eval_texture(scene, n.tex2, ctx);
+                }
+            }
             auto parity =
                 static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
             return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);

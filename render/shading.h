@@ -31,12 +31,14 @@ class CmamRowState {
 
 /// What a texture lookup knows about the shading point.
 struct TexContext {
-    float u = 0, v = 0;              // surface (u,v) of the hit
-    texture::Footprint footprint{};  // texture-space footprint of the pixel (None: point sample)
-    texture::RayTag tag{};           // the ray's tag (ID, recursion level)
-    LookupCounts* counts = nullptr;  // optional statistics
-    uint32_t object = 0;             // the primitive hit (the CMAM's textured object)
-    CmamRowState* cmam = nullptr;    // the row's CMAM caches (null: no CMAM)
+    float u = 0, v = 0;               // surface (u,v) of the hit
+    texture::Footprint footprint{};   // ray differentials' footprint (None: point sample)
+    texture::Footprint cone{};        // isotropic ray cone footprint
+    texture::Footprint cone_aniso{};  // anisotropic ray cone footprint
+    texture::RayTag tag{};            // the ray's tag (ID, recursion level)
+    LookupCounts* counts = nullptr;   // optional statistics
+    uint32_t object = 0;              // the primitive hit (the CMAM's textured object)
+    CmamRowState* cmam = nullptr;     // the row's CMAM caches (null: no CMAM)
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the

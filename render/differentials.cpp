@@ -1,0 +1,95 @@
+#include "render/differentials.h"
+
+#include <cmath>
+
+namespace cmam::render {
+
+namespace {
+bool finite(const Vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+Vec3 world_vector(const Camera& c, const Vec3& v) {
+    const auto& m = c.world_from_camera;
+    return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+            m[8] * v.x + m[9] * v.y + m[10] * v.z};
+}
+}  // namespace
+
+RayDifferential camera_differential(const Camera& c, float px, float py, float scale) {
+    // Unnormalised direction d(x,y) = V + x R + y U in world space; R, U are one-pixel steps.
+    const float sx = c.screen[0] + (px / c.xres) * (c.screen[1] - c.screen[0]);
+    const float sy = c.screen[3] - (py / c.yres) * (c.screen[3] - c.screen[2]);
+    Vec3 d = world_vector(c, Vec3(sx * c.tan_half_fov, sy * c.tan_half_fov, 1));
+    Vec3 r = world_vector(c, Vec3((c.screen[1] - c.screen[0]) / c.xres * c.tan_half_fov, 0, 0));
+    Vec3 u = world_vector(c, Vec3(0, -(c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov, 0));
+    const float dd = dot(d, d), k = 1 / (dd * std::sqrt(dd));
+    RayDifferential rd;
+    rd.valid = true;
+    rd.dddx = (dd * r - dot(d, r) * d) * (k * scale);
+    rd.dddy = (dd * u - dot(d, u) * d) * (k * scale);
+    return rd;
+}
+
+HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit) {
+    HitDifferential h;
+    if (!ray.valid) return h;
+    const Vec3& n = hit.ng;
+    const float dn = dot(d, n);
+    if (std::abs(dn) < 1e-6f) return h;  // grazing: the plane of the hit gives no footprint
+    const float t = hit.t;
+    Vec3 ox = ray.dodx + t * ray.dddx, oy = ray.dody + t * ray.dddy;
+    h.dpdx = ox + (-dot(ox, n) / dn) * d;
+    h.dpdy = oy + (-dot(oy, n) / dn) * d;
+    hit.uv_offset(h.dpdx, &h.dudx, &h.dvdx);
+    hit.uv_offset(h.dpdy, &h.dudy, &h.dvdy);
+    h.valid = finite(h.dpdx) && finite(h.dpdy) && std::isfinite(h.dudx) && std::isfinite(h.dvdx) &&
+              std::isfinite(h.dudy) && std::isfinite(h.dvdy);
+    return h;
+}
+
+RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
+                        const SurfaceHit& hit) {
+    RayDifferential out;
+    if (!ray.valid || !hd.valid) return out;
+    const Vec3& n = hit.ns;
+    const float dn = dot(d, n);
+    auto one = [&](const Vec3& dp, const Vec3& dd) {
+        Vec3 dnrm = hit.normal_offset(dp);
+        float ddn = dot(dd, n) + dot(d, dnrm);
+        return dd - 2 * (dn * dnrm + ddn * n);
+    };
+    out.dodx = hd.dpdx;
+    out.dody = hd.dpdy;
+    out.dddx = one(hd.dpdx, ray.dddx);
+    out.dddy = one(hd.dpdy, ray.dddy);
+    out.valid = finite(out.dddx) && finite(out.dddy);
+    return out;
+}
+
+RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
+                        const SurfaceHit& hit, float eta) {
+    RayDifferential out;
+    if (!ray.valid || !hd.valid) return out;
+    // N oriented against D (D.N < 0), as is its derivative.
+    const float side = dot(d, hit.ns) < 0 ? 1.0f : -1.0f;
+    const Vec3 n = side * hit.ns;
+    const float dn = dot(d, n);
+    const float k = 1 - eta * eta * (1 - dn * dn);
+    if (k < 0) return reflect(ray, hd, d, hit);  // total internal reflection
+    const float tn = -std::sqrt(k);              // T.N
+    const float mu = eta * dn - tn;
+    auto one = [&](const Vec3& dp, const Vec3& dd) {
+        Vec3 dnrm = side * hit.normal_offset(dp);
+        float ddn = dot(dd, n) + dot(d, dnrm);
+        float dmu = (eta - eta * eta * dn / tn) * ddn;
+        return eta * dd - (mu * dnrm + dmu * n);
+    };
+    out.dodx = hd.dpdx;
+    out.dody = hd.dpdy;
+    out.dddx = one(hd.dpdx, ray.dddx);
+    out.dddy = one(hd.dpdy, ray.dddy);
+    out.valid = finite(out.dddx) && finite(out.dddy);
+    return out;
+}
+
+}  // namespace cmam::render

@@ -1,0 +1,204 @@
+// Ray differentials and ray cones against central finite differences of the actual ray tracer
+// (camera, intersection, reflection, refraction), plus the numbers of algorithms.md §12
+// (T-RD-1, T-RC-1) and the agreement of cones with differentials.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/cones.h"
+#include "render/differentials.h"
+#include "render/shading.h"
+#include "scene_util.h"
+
+using namespace cmam;
+using namespace cmam::render;
+
+namespace {
+// Pinhole at the origin looking down +z, 512x512, 90 degrees: one pixel = 1/256 on the plane z=1.
+std::string camera512(const std::string& world) {
+    return "LookAt 0 0 0  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 90 "
+           "Film \"image\" \"integer xresolution\" 512 \"integer yresolution\" 512 WorldBegin " +
+           world + " WorldEnd";
+}
+void expect_vec(const Vec3& a, const Vec3& b, double tol, const char* what) {
+    EXPECT_NEAR(a.x, b.x, tol) << what;
+    EXPECT_NEAR(a.y, b.y, tol) << what;
+    EXPECT_NEAR(a.z, b.z, tol) << what;
+}
+SurfaceHit hit_at(const Scene& s, float px, float py, Vec3* d) {
+    Vec3 o;
+    s.camera.generate_ray(px, py, &o, d);
+    SurfaceHit h;
+    EXPECT_TRUE(s.intersect(o, *d, 0, 1e30f, &h));
+    return h;
+}
+}  // namespace
+
+TEST(Differentials, TRd1CameraDerivativeAndFrontoParallelTransfer) {
+    auto s = test::scene_from(camera512(
+        "Shape \"trianglemesh\" \"point3 P\" [-100 -100 10  100 -100 10  100 100 10  -100 100 10] "
+        "\"integer indices\" [0 1 2 0 2 3]"));
+    RayDifferential rd = camera_differential(s->camera, 384, 256, 1);
+    expect_vec(rd.dddx, Vec3(0.00279508f, 0, -0.00139754f), 1e-7, "dD/dx");
+    Vec3 d;
+    for (auto [px, py] : {std::pair{384.0f, 256.0f}, std::pair{10.5f, 400.25f}}) {
+        SurfaceHit h = hit_at(*s, px, py, &d);
+        HitDifferential hd = transfer(camera_differential(s->camera, px, py, 1), d, h);
+        ASSERT_TRUE(hd.valid);
+        expect_vec(hd.dpdx, Vec3(0.0390625f, 0, 0), 1e-6, "dP/dx");
+        expect_vec(hd.dpdy, Vec3(0, -0.0390625f, 0), 1e-6, "dP/dy (raster y points down)");
+    }
+}
+
+TEST(Differentials, UvDerivativesMatchFiniteDifferencesOnATiltedPlaneAndASphere) {
+    for (const char* shape :
+         {"Translate 0 0 10 Rotate 60 1 0 0 Shape \"trianglemesh\" \"point3 P\" [-8 -8 0  8 -8 0  "
+          "8 8 0  -8 8 0] "
+          "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 4 0 4 4 0 4]",
+          "Translate 0.3 -0.2 4 Rotate 30 1 1 0 Shape \"sphere\" \"float radius\" 1.5"}) {
+        auto s = test::scene_from(camera512(shape));
+        for (auto [px, py] : {std::pair{300.0f, 200.0f}, std::pair{250.0f, 280.0f}}) {
+            Vec3 d;
+            SurfaceHit h = hit_at(*s, px, py, &d);
+            HitDifferential hd = transfer(camera_differential(s->camera, px, py, 1), d, h);
+            ASSERT_TRUE(hd.valid);
+            const float e = 0.05f;
+            Vec3 dd;
+            SurfaceHit xp = hit_at(*s, px + e, py, &dd), xm = hit_at(*s, px - e, py, &dd);
+            SurfaceHit yp = hit_at(*s, px, py + e, &dd), ym = hit_at(*s, px, py - e, &dd);
+            double tol = 2e-3 * (std::abs(hd.dudx) + std::abs(hd.dvdx) + std::abs(hd.dudy) +
+                                 std::abs(hd.dvdy)) +
+                         1e-6;
+            EXPECT_NEAR(hd.dudx, (xp.u - xm.u) / (2 * e), tol) << shape;
+            EXPECT_NEAR(hd.dvdx, (xp.v - xm.v) / (2 * e), tol) << shape;
+            EXPECT_NEAR(hd.dudy, (yp.u - ym.u) / (2 * e), tol) << shape;
+            EXPECT_NEAR(hd.dvdy, (yp.v - ym.v) / (2 * e), tol) << shape;
+            expect_vec(hd.dpdx, (xp.p - xm.p) / (2 * e), 2e-3 * length(hd.dpdx) + 1e-6, "dP/dx");
+        }
+    }
+}
+
+namespace {
+// Direction of the reflected or refracted ray through raster (px, py), as the integrator makes it.
+Vec3 secondary(const Scene& s, float px, float py, bool refracted, float eta,
+               SurfaceHit* out = nullptr) {
+    Vec3 d;
+    SurfaceHit h = hit_at(s, px, py, &d);
+    if (out) *out = h;
+    Vec3 wo = -d, n = h.ns;
+    if (!refracted) return -wo + 2 * dot(wo, n) * n;
+    Vec3 wt;
+    EXPECT_TRUE(render::refract(wo, faceforward(n, wo), eta, &wt));
+    return wt;
+}
+}  // namespace
+
+TEST(Differentials, ReflectionAndRefractionMatchFiniteDifferencesOnASphere) {
+    auto s = test::scene_from(camera512("Translate 0 0 5 Shape \"sphere\""));
+    for (bool refracted : {false, true}) {
+        const float px = 281.6f, py = 268.8f, eta = 1 / 1.5f;
+        SurfaceHit h;
+        Vec3 d;
+        h = hit_at(*s, px, py, &d);
+        RayDifferential cam = camera_differential(s->camera, px, py, 1);
+        HitDifferential hd = transfer(cam, d, h);
+        RayDifferential out =
+            refracted ? render::refract(cam, hd, d, h, eta) : render::reflect(cam, hd, d, h);
+        ASSERT_TRUE(out.valid);
+        const float e = 0.02f;
+        Vec3 fx = (secondary(*s, px + e, py, refracted, eta) -
+                   secondary(*s, px - e, py, refracted, eta)) /
+                  (2 * e);
+        Vec3 fy = (secondary(*s, px, py + e, refracted, eta) -
+                   secondary(*s, px, py - e, refracted, eta)) /
+                  (2 * e);
+        expect_vec(out.dddx, fx, 2e-3 * length(fx) + 2e-6, refracted ? "dT/dx" : "dR/dx");
+        expect_vec(out.dddy, fy, 2e-3 * length(fy) + 2e-6, refracted ? "dT/dy" : "dR/dy");
+    }
+    // T-RD-3: the reflection at d ~ (0.1, 0.05, 1) (raster y grows downwards here, so the
+    // doc's y = 268.8 is 243.2 in raster), unit sphere at (0,0,5).
+    Vec3 d;
+    SurfaceHit h = hit_at(*s, 281.6f, 243.2f, &d);
+    expect_vec(h.p, Vec3(0.411194f, 0.205597f, 4.111941f), 2e-5, "P");
+    RayDifferential cam = camera_differential(s->camera, 281.6f, 243.2f, 1);
+    HitDifferential hd = transfer(cam, d, h);
+    expect_vec(hd.dpdx, Vec3(0.0168517f, 0.00039471f, 0.0078941f), 2e-6, "T-RD-3 dP/dx");
+    expect_vec(render::reflect(cam, hd, d, h).dddx, Vec3(0.0224455f, -0.0040737f, 0.0330926f), 2e-6,
+               "T-RD-3 dR/dx");
+    expect_vec(render::refract(cam, hd, d, h, 1 / 1.5f).dddx,
+               Vec3(-0.00501599f, -0.00079384f, -0.00047737f), 2e-6, "T-RD-4 dT/dx");
+}
+
+TEST(Cones, TRc1AndAgreementWithDifferentialsOnAFrontoParallelPlane) {
+    // Plane z = 10 mapping 4 world units to 1 uv; a 1024^2 texture: 10 texels per pixel.
+    auto s = test::scene_from(camera512(
+        "Shape \"trianglemesh\" \"point3 P\" [-100 -100 10  100 -100 10  100 100 10  -100 100 10] "
+        "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 50 0 50 50 0 50]"));
+    RayCone c = camera_cone(s->camera, 1);
+    EXPECT_NEAR(c.spread, std::atan(1.0 / 256) * 1.0, 1e-7);  // 2 atan(1/512) ~ atan(1/256)
+    Vec3 d;
+    SurfaceHit h = hit_at(*s, 256, 256, &d);
+    EXPECT_NEAR(cone_width_at(c, h.t), 0.0390624, 1e-6);
+    float w = cone_uv_width(c, d, h);
+    EXPECT_NEAR(std::log2(w * 1024), std::log2(10.0), 1e-4);
+    HitDifferential hd = transfer(camera_differential(s->camera, 256, 256, 1), d, h);
+    EXPECT_NEAR(w, std::hypot(hd.dudx, hd.dvdx), 1e-4 * w);
+    float ax[4];
+    cone_uv_axes(c, d, h, ax);
+    EXPECT_NEAR(std::hypot(ax[0], ax[1]), w, 1e-3 * w);
+    EXPECT_NEAR(std::hypot(ax[2], ax[3]), w, 1e-3 * w);
+}
+
+TEST(Cones, AnisotropicAxesFollowDifferentialsOnATiltedPlane) {
+    // T-RD-2 / T-RC-1: plane through (0,0,10), normal (0, -sin60, -cos60), uv = 1/4 per unit.
+    auto s = test::scene_from(
+        camera512("Translate 0 0 10 Rotate -60 1 0 0 Shape \"trianglemesh\" \"point3 P\" [-40 -40 "
+                  "0  40 -40 0  40 40 0  -40 40 0] "
+                  "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 20 0 20 20 0 20]"));
+    Vec3 d;
+    SurfaceHit h = hit_at(*s, 300, 312, &d);
+    HitDifferential hd = transfer(camera_differential(s->camera, 300, 312, 1), d, h);
+    float ax[4];
+    cone_uv_axes(camera_cone(s->camera, 1), d, h, ax);
+    double cone_major = std::max(std::hypot(ax[0], ax[1]), std::hypot(ax[2], ax[3])) * 1024;
+    double cone_minor = std::min(std::hypot(ax[0], ax[1]), std::hypot(ax[2], ax[3])) * 1024;
+    double diff_x = std::hypot(hd.dudx, hd.dvdx) * 1024,
+           diff_y = std::hypot(hd.dudy, hd.dvdy) * 1024;
+    double diff_major = std::max(diff_x, diff_y), diff_minor = std::min(diff_x, diff_y);
+    EXPECT_NEAR(cone_major / diff_major, 1.0, 0.1) << cone_major << " vs " << diff_major;
+    EXPECT_NEAR(cone_minor / diff_minor, 1.0, 0.1) << cone_minor << " vs " << diff_minor;
+    float iso = cone_uv_width(camera_cone(s->camera, 1), d, h) * 1024;
+    EXPECT_NEAR(std::log2(iso), std::log2(diff_major), 0.3);  // T-RC-1: within about 0.3 levels
+}
+
+TEST(Cones, ReflectionOffAConvexMirrorSpreadsTheCone) {
+    auto s = test::scene_from(camera512("Translate 0 0 5 Shape \"sphere\""));
+    Vec3 d;
+    SurfaceHit h = hit_at(*s, 270, 250, &d);
+    EXPECT_NEAR(surface_curvature(h), 1.0, 1e-4);
+    RayCone c = camera_cone(s->camera, 1);
+    RayCone r = reflect_cone(c, d, h);
+    EXPECT_GT(r.spread, c.spread);
+    EXPECT_NEAR(r.width, cone_width_at(c, h.t), 1e-7);
+    RayCone t = refract_cone(c, d, h, 1 / 1.5f);
+    EXPECT_TRUE(std::isfinite(t.spread) && std::isfinite(t.width));
+    EXPECT_GT(std::abs(t.width), 0);
+}
+
+TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {
+    auto s = test::scene_from(
+        "Camera \"perspective\" WorldBegin Texture \"c\" \"spectrum\" \"checkerboard\" "
+        "\"rgb tex1\" [1 1 1] \"rgb tex2\" [0 0 0] \"float uscale\" 8 \"float vscale\" 8 Material "
+        "\"matte\" "
+        "\"texture Kd\" \"c\" Shape \"sphere\" WorldEnd");
+    TexInput in{0, {}};
+    TexContext ctx;
+    ctx.u = 0.3f;
+    ctx.v = 0.3f;
+    EXPECT_EQ(eval_texture(*s, in, ctx).r,
+              1.0f);  // no footprint: point sample of check (2,2): tex1
+    ctx.footprint = texture::Footprint::axes({0.5, 0}, {0, 0.5});  // 4 checks wide
+    EXPECT_NEAR(eval_texture(*s, in, ctx).r, 0.5, 1e-6);
+    ctx.footprint = texture::Footprint::axes({0.001, 0}, {0, 0.001});  // inside one check
+    EXPECT_EQ(eval_texture(*s, in, ctx).r, 1.0f);
+}
