@@ -324,6 +324,8 @@ class Builder {
             }
             if (m_opts.filter) n.filter.kind = *m_opts.filter;
             if (m_opts.lod) n.lod = *m_opts.lod;
+            // With ray differentials, trilinear measures the footprint as pbrt-v3 does.
+            n.filter.pbrt_trilinear_width = n.lod == Lod::Differentials;
             if (!(n.filter.max_aniso >= 1))
                 throw SceneError(e.params.find("maxanisotropy")->loc,
                                  "maxanisotropy must be at least 1");

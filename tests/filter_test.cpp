@@ -318,3 +318,13 @@ TEST(Colour, TCol1MinifiedSrgbCheckerIsLinearHalf) {
     EXPECT_NEAR(lin, 0.5, 1e-6);
     EXPECT_NEAR(linear_to_srgb(lin), 0.735357, 1e-5);
 }
+
+TEST(Filter, PbrtTrilinearWidthUsesTheLargestComponent) {
+    FilteredTexture t(tmip1());
+    LookupInfo gl, pbrt;
+    Footprint fp = Footprint::axes({1.0 / 4, 1.0 / 4}, {0, 0.5 / 4});  // (1,1) and (0,0.5) texels
+    t.lookup(0.3, 0.6, fp, {FilterKind::Trilinear, 8, false}, &gl);
+    t.lookup(0.3, 0.6, fp, {FilterKind::Trilinear, 8, true}, &pbrt);
+    EXPECT_NEAR(gl.width, std::sqrt(2.0), 1e-12);
+    EXPECT_NEAR(pbrt.width, 1.0, 1e-12);
+}

@@ -27,6 +27,10 @@ std::string_view to_string(FilterKind kind);
 struct FilterOptions {
     FilterKind kind = FilterKind::Ewa;
     double max_aniso = 8;
+    /// Trilinear footprint width: the longer axis's Euclidean length in texels (GL style,
+    /// algorithms.md §2.2), or pbrt-v3's largest absolute component of the two axes, measured in
+    /// texels of the larger image dimension (what pbrt-v3 does after its PR #275).
+    bool pbrt_trilinear_width = false;
 };
 
 /// What a lookup did (for `cmam lookup`, statistics and tests).
