@@ -139,6 +139,24 @@ BENCHMARK_CAPTURE(BM_RenderLod, cmam_ewa, render::Lod::Cmam, texture::FilterKind
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, differentials_ewa, render::Lod::Differentials,
+                  texture::FilterKind::Ewa)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, differentials_trilinear, render::Lod::Differentials,
+                  texture::FilterKind::Trilinear)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, cones_trilinear, render::Lod::Cones, texture::FilterKind::Trilinear)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
+BENCHMARK_CAPTURE(BM_RenderLod, cones_aniso_ewa, render::Lod::ConesAniso, texture::FilterKind::Ewa)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(1.0);
 BENCHMARK(BM_BareEmbreeDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Prints the ratio of the two rays/s figures after the runs.
@@ -163,7 +181,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
             std::printf("\nwhole render / bare Embree loop (rays/s): %.1f%%  (target >= 70%%)\n",
                         100.0 * m_render / m_bare);
         if (m_lod.count("none"))
-            for (const char* k : {"cmam_trilinear", "cmam_sat", "cmam_ewa"})
+            for (const char* k : {"cmam_trilinear", "cmam_sat", "cmam_ewa", "differentials_ewa",
+                                  "differentials_trilinear", "cones_trilinear", "cones_aniso_ewa"})
                 if (m_lod.count(k))
                     std::printf("--lod %s vs --lod none: %+.1f%% render time%s\n", k,
                                 100.0 * (m_lod[k] / m_lod["none"] - 1),

@@ -367,6 +367,7 @@ class Builder {
             (n.kind == TextureNode::Kind::Checkerboard && n.closed_form)) {
             if (n.lod == Lod::Differentials) m_scene->needs_differentials = true;
             if (n.lod == Lod::Cones || n.lod == Lod::ConesAniso) m_scene->needs_cones = true;
+            if (n.lod == Lod::ConesAniso) m_scene->needs_cones_aniso = true;
         }
         m_scene->textures.push_back(n);
     }

@@ -173,6 +173,8 @@ struct Tracer {
             if (scene.needs_cones) {
                 float w = cone_uv_width(ray.cone, ray.dir, h);
                 ctx.cone = texture::Footprint::axes({w, 0}, {0, w});
+            }
+            if (scene.needs_cones_aniso) {
                 float ax[4];
                 cone_uv_axes(ray.cone, ray.dir, h, ax);
                 ctx.cone_aniso = texture::Footprint::axes({ax[0], ax[1]}, {ax[2], ax[3]});

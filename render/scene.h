@@ -151,7 +151,8 @@ class Scene {
         images;  // loaded once per settings
     Material default_material;
     TagPolicy tags = TagPolicy::Scanline;                   // CMAM ray tagging
-    bool needs_differentials = false, needs_cones = false;  // some texture asks for them
+    // Which footprint producers some texture asks for (the tracer computes only those).
+    bool needs_differentials = false, needs_cones = false, needs_cones_aniso = false;
     texture::CmamOptions cmam;  // CMAM policies (the filter comes from each texture)
 
     /// Creates the Embree scene from `primitives`; call once after filling them.
