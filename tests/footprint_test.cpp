@@ -7,6 +7,7 @@
 
 #include "render/cones.h"
 #include "render/differentials.h"
+#include "render/integrator.h"
 #include "render/shading.h"
 #include "scene_util.h"
 
@@ -201,4 +202,36 @@ TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {
     EXPECT_NEAR(eval_texture(*s, in, ctx).r, 0.5, 1e-6);
     ctx.footprint = texture::Footprint::axes({0.001, 0}, {0, 0.001});  // inside one check
     EXPECT_EQ(eval_texture(*s, in, ctx).r, 1.0f);
+}
+
+TEST(Aov, FootprintAndTextureOfAFrontoParallelPlane) {
+    // 512x512 pixels, plane z = 10: one pixel covers 0.0390625 world units = 5 texels of a
+    // 512^2 texture that spans 4 units.
+    std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
+    auto s = test::scene_from(
+        camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
+                  "\" Material \"matte\" \"texture Kd\" \"b\" LightSource \"distant\" "
+                  "Shape \"trianglemesh\" \"point3 P\" [-100 -100 10  100 -100 10  100 100 10  "
+                  "-100 100 10] "
+                  "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 50 0 50 50 0 50]"),
+        "t.pbrt", 1);
+    s->film.x0 = 250;
+    s->film.x1 = 262;
+    s->film.y0 = 250;
+    s->film.y1 = 252;
+    RenderOptions o;
+    o.aov = AovKind::Footprint;
+    Framebuffer fp = render::render(*s, o, nullptr);
+    ASSERT_EQ(fp.channel_names, (std::vector<std::string>{"major", "minor", "lambda"}));
+    for (std::size_t p = 0; p < fp.rgb.size() / 3; ++p) {
+        EXPECT_NEAR(fp.rgb[3 * p], 5.0, 0.01);
+        EXPECT_NEAR(fp.rgb[3 * p + 1], 5.0, 0.01);
+        EXPECT_NEAR(fp.rgb[3 * p + 2], std::log2(5.0), 0.01);  // EWA: level of the minor axis
+    }
+    o.aov = AovKind::Texture;
+    Framebuffer tx = render::render(*s, o, nullptr);
+    Framebuffer lit = render::render(*s, {}, nullptr);
+    // Unlit: the lit value is Kd/pi * L * cos = Kd/pi here (distant light along +z, L = 1).
+    for (std::size_t i = 0; i < tx.rgb.size(); ++i)
+        EXPECT_NEAR(lit.rgb[i], tx.rgb[i] / 3.14159265f, 1e-5);
 }
