@@ -1,4 +1,5 @@
-// cmam — command-line front end: `cmam render`, `cmam check`, `cmam lookup`.
+// cmam — command-line front end: `cmam render`, `cmam check`, `cmam lookup`, `cmam compare`,
+// `cmam eval`.
 // Libraries throw; this file is the only place that prints errors.
 #include <cmam/texture/cmam.h>
 #include <unistd.h>
@@ -9,7 +10,9 @@
 #include <cstdlib>
 #include <iostream>
 #include <mutex>
+#include <sstream>
 
+#include "eval/evaluation.h"
 #include "eval/metrics.h"
 #include "pbrt/parser.h"
 #include "render/image_io.h"
@@ -311,6 +314,63 @@ int run_compare(const std::string& ref_path, const std::string& img_path, bool j
     return 0;
 }
 
+struct EvalArgs {
+    std::vector<std::string> scenes;
+    std::string methods, spp = "1,4,16", out = "eval-out";
+    int reference_spp = 1024;
+    bool quiet = false;
+};
+
+std::vector<std::string> split_list(const std::string& s) {
+    std::vector<std::string> out;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ','))
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+int run_eval(const EvalArgs& a) {
+    eval::EvalOptions o;
+    o.scenes = a.scenes;
+    o.reference_spp = a.reference_spp;
+    o.out_dir = a.out;
+    for (const std::string& name :
+         a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
+        auto m = eval::parse_method(name);
+        if (!m)
+            throw std::invalid_argument(
+                "--methods: unknown method \"" + name +
+                "\" (e.g. none, differentials+ewa, cones+trilinear, cones-aniso+ewa, "
+                "cmam+sat, cmam-literal+trilinear, cmam-point+ewa, cmam-pixel-hull+trilinear)");
+        o.methods.push_back(*m);
+    }
+    o.spp.clear();
+    for (const std::string& v : split_list(a.spp)) {
+        char* end = nullptr;
+        long n = std::strtol(v.c_str(), &end, 10);
+        if (*end || n < 1)
+            throw std::invalid_argument("--spp: \"" + v + "\" is not a positive integer");
+        o.spp.push_back(static_cast<int>(n));
+    }
+    if (o.spp.empty()) throw std::invalid_argument("--spp: give at least one sample count");
+    ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
+    o.progress = [&](int done, int total, const std::string&) { bar.update(done, total); };
+    auto t0 = std::chrono::steady_clock::now();
+    eval::EvalResult r = eval::run_eval(o);
+    if (!a.quiet) {
+        int cached = 0;
+        for (const auto& s : r.scenes) cached += s.reference_cached;
+        std::fprintf(stderr,
+                     "%s: %zu scenes (%d ground truths from the cache), %zu results, %.1fs; see "
+                     "%s/index.html\n",
+                     a.out.c_str(), r.scenes.size(), cached, r.rows.size(),
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                     a.out.c_str());
+    }
+    return 0;
+}
+
 int run_check(const std::string& path) {
     pbrt::SceneDesc desc = pbrt::parse_file(path, print_warning);
     auto scene = render::build_scene(desc, {}, print_warning);
@@ -413,6 +473,20 @@ int main(int argc, char** argv) {
     compare_cmd->add_option("image", cmp_img, "Image to measure")->required();
     compare_cmd->add_flag("--json", cmp_json, "One JSON object on stdout");
 
+    EvalArgs ea;
+    auto* eval_cmd = app.add_subcommand(
+        "eval", "Compare footprint methods against a ground truth; write a report");
+    eval_cmd->add_option("scenes", ea.scenes, "Scene files (.pbrt)")->required();
+    eval_cmd->add_option("--methods", ea.methods,
+                         "Comma-separated methods (default: every method)");
+    eval_cmd->add_option("--spp", ea.spp, "Comma-separated samples per pixel")
+        ->capture_default_str();
+    eval_cmd->add_option("--reference-spp", ea.reference_spp, "Ground-truth samples per pixel")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1 << 20));
+    eval_cmd->add_option("-o,--output", ea.out, "Output directory")->capture_default_str();
+    eval_cmd->add_flag("--quiet", ea.quiet, "No progress bar and no summary line");
+
     CLI11_PARSE(app, argc, argv);
     if (*lookup_cmd && la.uv.empty() && la.points.empty()) {
         std::cerr << "cmam lookup: error: give --uv U,V (or --points)\n";
@@ -423,6 +497,7 @@ int main(int argc, char** argv) {
         if (*check_cmd) return run_check(check_path);
         if (*lookup_cmd) return run_lookup(la);
         if (*compare_cmd) return run_compare(cmp_ref, cmp_img, cmp_json);
+        if (*eval_cmd) return run_eval(ea);
     } catch (const pbrt::SceneError& e) {
         std::cerr << e.what() << "\n";
         return 1;

@@ -87,6 +87,7 @@ class Parser {
     void push_file(Tokenizer t) {
         std::error_code ec;
         auto canon = std::filesystem::weakly_canonical(t.filename(), ec).string();
+        m_desc.sources.push_back(t.filename());
         m_files.push_back(std::make_unique<Source>(Source{std::move(t), canon}));
     }
 

@@ -60,6 +60,7 @@ struct SceneDesc {
     std::vector<MaterialDesc> materials;
     std::vector<ShapeDesc> shapes;
     std::vector<LightDesc> lights;
+    std::vector<std::string> sources;  // every scene file read (the main file, then Includes)
     std::string base_dir;  // directory of the main file (relative paths resolve against the
                            // directory of the file that names them; see Param locations)
 };

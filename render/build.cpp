@@ -102,10 +102,11 @@ class Builder {
     void camera() {
         const Entity& e = m_desc.camera;
         if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
-        if (e.type != "perspective")
-            throw SceneError(e.loc,
-                             "unsupported Camera " + q(e.type) + " (supported: \"perspective\")");
+        if (e.type != "perspective" && e.type != "orthographic")
+            throw SceneError(e.loc, "unsupported Camera " + q(e.type) +
+                                        " (supported: \"perspective\", \"orthographic\")");
         Camera& c = m_scene->camera;
+        c.orthographic = e.type == "orthographic";
         c.xres = m_scene->film.xres;
         c.yres = m_scene->film.yres;
         double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
@@ -125,13 +126,13 @@ class Builder {
                 throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
             for (int i = 0; i < 4; ++i) c.screen[i] = float((*sw)[i]);
         }
-        double fov = e.params.get_float("fov", 90);
-        double halffov = e.params.get_float("halffov", -1);
+        double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
+        double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
         if (halffov > 0) fov = 2 * halffov;
         if (!(fov > 0 && fov < 180))
             throw SceneError(e.params.find("fov") ? e.params.find("fov")->loc : e.loc,
                              "fov must be in (0, 180) degrees");
-        c.tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
+        c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
         if (e.params.get_float("lensradius", 0) != 0)
             warn(e.params.find("lensradius")->loc,
                  "lensradius ignored: cmam renders a pinhole camera");
@@ -298,6 +299,11 @@ class Builder {
             n.kind = TextureNode::Kind::Image;
             uv_mapping(e, &n);
             n.image = load_image(e, t.is_float);
+            if (m_opts.untextured) {
+                const texture::Texel& mean = n.image->image().mean();
+                n.kind = TextureNode::Kind::Constant;
+                n.constant = n.image->image().channels() == 1 ? Rgb(mean[0]) : Rgb(mean[0], mean[1], mean[2]);
+            }
             // pbrt-v3: EWA unless "trilinear" is true; "maxanisotropy" bounds EWA's eccentricity.
             n.filter.kind = e.params.get_bool("trilinear", false) ? texture::FilterKind::Trilinear
                                                                   : texture::FilterKind::Ewa;
@@ -343,6 +349,15 @@ class Builder {
             n.tex2 = input("tex2", 0);
             std::string aa = e.params.get_string("aamode", "closedform");
             n.closed_form = aa == "closedform";
+            if (m_opts.untextured) {  // the mean of the two inputs (constants only)
+                if (n.tex1.node < 0 && n.tex2.node < 0) {
+                    n.kind = TextureNode::Kind::Constant;
+                    n.constant = (n.tex1.value + n.tex2.value) * 0.5f;
+                } else {
+                    n.kind = TextureNode::Kind::Mix;
+                    n.amount = {-1, Rgb(0.5f)};
+                }
+            }
             if (m_opts.lod) n.lod = *m_opts.lod;
             if (aa != "closedform" && aa != "none")
                 throw SceneError(
@@ -648,6 +663,12 @@ std::string_view to_string(TagPolicy p) {
 void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
     float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
+    if (orthographic) {
+        const auto& m = world_from_camera;
+        *org = Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7], m[8] * sx + m[9] * sy + m[11]);
+        *dir = normalize(Vec3(m[2], m[6], m[10]));
+        return;
+    }
     Vec3 d(sx * tan_half_fov, sy * tan_half_fov, 1);
     const auto& m = world_from_camera;
     *org = Vec3(m[3], m[7], m[11]);

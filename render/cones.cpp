@@ -8,6 +8,7 @@ RayCone camera_cone(const Camera& c, float scale) {
     // One pixel of the shorter axis on the image plane at distance 1.
     float px = (c.screen[1] - c.screen[0]) / c.xres * c.tan_half_fov;
     float py = (c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov;
+    if (c.orthographic) return {std::min(px, py) * scale, 0};  // a cylinder one pixel wide
     return {0, 2 * std::atan(0.5f * std::min(px, py)) * scale};
 }
 

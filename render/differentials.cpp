@@ -22,9 +22,14 @@ RayDifferential camera_differential(const Camera& c, float px, float py, float s
     Vec3 d = world_vector(c, Vec3(sx * c.tan_half_fov, sy * c.tan_half_fov, 1));
     Vec3 r = world_vector(c, Vec3((c.screen[1] - c.screen[0]) / c.xres * c.tan_half_fov, 0, 0));
     Vec3 u = world_vector(c, Vec3(0, -(c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov, 0));
-    const float dd = dot(d, d), k = 1 / (dd * std::sqrt(dd));
     RayDifferential rd;
     rd.valid = true;
+    if (c.orthographic) {  // parallel rays: the origin moves one pixel, the direction not at all
+        rd.dodx = r * scale;
+        rd.dody = u * scale;
+        return rd;
+    }
+    const float dd = dot(d, d), k = 1 / (dd * std::sqrt(dd));
     rd.dddx = (dd * r - dot(d, r) * d) * (k * scale);
     rd.dddy = (dd * u - dot(d, u) * d) * (k * scale);
     return rd;

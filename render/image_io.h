@@ -41,4 +41,7 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
 void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
                  const std::vector<std::string>& channel_names = {"R", "G", "B"});
 
+/// Writes 8-bit RGB bytes (already display-encoded) as PNG, atomically.
+void write_png8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+
 }  // namespace cmam::render

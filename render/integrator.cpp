@@ -190,7 +190,7 @@ struct Tracer {
                 ray.cone.width = cone_width_at(ray.cone, h.t);
                 continue;
             }
-            if (aov) record_aov(ctx, h);
+            if (aov) record_aov(ctx, h, bsdf);
             Rgb L{};
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
@@ -244,7 +244,7 @@ struct Tracer {
 
     // --- AOVs: the first non-specular hit along the specular chain ---
     Aov* aov = nullptr;
-    void record_aov(const TexContext& ctx, const SurfaceHit& h);
+    void record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& bsdf);
 };
 
 // The first image texture feeding a material's diffuse (or reflective) input.
@@ -257,7 +257,7 @@ const TextureNode* first_image(const Scene& scene, const TexInput& in, int budge
     return nullptr;
 }
 
-void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h) {
+void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& bsdf) {
     if (aov->recorded) return;
     const Material& m =
         h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
@@ -265,7 +265,9 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h) {
     if (specular) return;  // follow the specular chain
     aov->recorded = true;
     if (aov->kind == AovKind::Texture) {
-        Rgb k = eval_texture(scene, m.kd, ctx);
+        // The Kd the BSDF was built with: the same lookup (a second one would disturb the
+        // CMAM's cache).
+        const Rgb& k = bsdf.kd;
         aov->v[0] = k.r;
         aov->v[1] = k.g;
         aov->v[2] = k.b;

@@ -22,10 +22,12 @@
 
 namespace cmam::render {
 
-/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space).
+/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), or
+/// its orthographic camera (the screen window is the view in camera units, rays along +z).
 struct Camera {
     std::array<float, 12> world_from_camera{};  // 3x4
-    float tan_half_fov = 1;
+    bool orthographic = false;
+    float tan_half_fov = 1;                      // perspective; 1 for orthographic
     float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
     int xres = 640, yres = 480;
 
@@ -171,6 +173,9 @@ class Scene {
 
 struct BuildOptions {
     int spp_override = 0;  // 0: the scene's sampler
+    /// Replace every image texture by its mean and every checkerboard by the mean of its two
+    /// inputs: the "untextured" render that separates geometric edges from texture detail.
+    bool untextured = false;
     // Overrides for every image texture (the scene file's choices otherwise).
     std::optional<Lod> lod;
     std::optional<texture::FilterKind> filter;
