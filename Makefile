@@ -27,7 +27,8 @@ demo: deps
 	@$(CMAM) render scenes/demo.pbrt -o $(DEMO_OUT)
 	@echo "demo image: $(abspath $(DEMO_OUT))"
 
-test: deps
+test:
+	@bash scripts/setup-deps.sh --test
 	@$(MAKE) --no-print-directory build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 

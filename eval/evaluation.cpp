@@ -199,7 +199,7 @@ EvalResult run_eval(const EvalOptions& o) {
         render::write_png8((fs::path(o.out_dir) / sr.reference_image).string(), sr.width, sr.height,
                            to_srgb8(ref));
         double ref_mean = compare(ref, ref).reference_mean;
-        const double heat_scale = std::max(1e-3, 0.5 * ref_mean);
+        const double heat_scale = std::max(1e-3, ref_mean);
         for (int spp : o.spp) {
             render::BuildOptions un = gt_opts;
             un.untextured = true;

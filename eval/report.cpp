@@ -82,14 +82,22 @@ std::string svg_plot(const std::vector<const ResultRow*>& rows,
       << "\" role=\"img\" aria-label=\"error versus render time\">\n";
     s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << (W - L - R) << "\" height=\""
       << (H - T - B) << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
-    for (double lt = std::ceil(lt0); lt <= lt1; lt += 1)
-        s << "<text x=\"" << X(std::pow(10, lt)) << "\" y=\"" << (H - B + 16)
-          << "\" font-size=\"11\" text-anchor=\"middle\">" << fmt("%g", std::pow(10, lt))
-          << " s</text>\n";
-    for (double le = std::ceil(le0); le <= le1; le += 1)
-        s << "<text x=\"" << (L - 6) << "\" y=\"" << Y(std::pow(10, le)) + 4
-          << "\" font-size=\"11\" text-anchor=\"end\">" << fmt("%g", std::pow(10, le))
-          << "</text>\n";
+    // Ticks at 1, 2 and 5 times the powers of ten inside the ranges.
+    for (double d = std::floor(lt0); d <= lt1; d += 1)
+        for (double k : {1.0, 2.0, 5.0}) {
+            double v = k * std::pow(10, d);
+            if (std::log10(v) < lt0 || std::log10(v) > lt1) continue;
+            s << "<text x=\"" << X(v) << "\" y=\"" << (H - B + 16)
+              << "\" font-size=\"11\" text-anchor=\"middle\">" << fmt("%g", v) << "</text>\n";
+        }
+    for (double d = std::floor(le0); d <= le1; d += 1)
+        for (double k : {1.0, 2.0, 5.0}) {
+            double v = k * std::pow(10, d);
+            if (std::log10(v) < le0 || std::log10(v) > le1) continue;
+            s << "<line x1=\"" << L << "\" x2=\"" << (W - R) << "\" y1=\"" << Y(v) << "\" y2=\""
+              << Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 6) << "\" y=\"" << Y(v) + 4
+              << "\" font-size=\"11\" text-anchor=\"end\">" << fmt("%g", v) << "</text>\n";
+        }
     s << "<text x=\"" << (L + (W - L - R) / 2) << "\" y=\"" << (H - 12)
       << "\" font-size=\"12\" text-anchor=\"middle\">render time (s, log)</text>\n";
     s << "<text x=\"14\" y=\"" << (T + (H - T - B) / 2)
@@ -182,7 +190,7 @@ th{background:#f3f3f3} td:first-child,td:nth-child(2){text-align:left}
 <h1>cmam evaluation</h1>
 <p class="note">Ground truth: )"
       << o.reference_spp
-      << R"( stratified jittered samples per pixel with point-sampled textures. Each row shows one sample count: the ground truth, then every method, with its error heat map (|luminance difference|, black = 0, white = half the ground truth's mean) below. Move the mouse over any image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
+      << R"( stratified jittered samples per pixel with point-sampled textures. Each row shows one sample count: the ground truth, then every method, with its error heat map (|luminance difference|, black = 0, white = the ground truth's mean) below. Move the mouse over any image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
 )";
     for (const SceneReport& sc : r.scenes) {
         std::vector<const ResultRow*> rows;

@@ -8,8 +8,9 @@ packages=(
   libembree-dev libopenimageio-dev openimageio-tools libtbb-dev libcli11-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
 )
+# With --test, also what the tests need beyond the build: Chromium opens the HTML report.
 if [[ "${1:-}" == "--test" ]]; then
-  shift
+  packages+=(chromium)
 fi
 
 missing=()

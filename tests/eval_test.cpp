@@ -1,0 +1,142 @@
+// The evaluation: metrics against hand-computed values, the edge mask, the ground-truth cache,
+// and the ground truth itself against an exact integral (algorithms.md §9, T-GT-1).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "eval/evaluation.h"
+#include "eval/metrics.h"
+#include "pbrt/parser.h"
+#include "render/image_io.h"
+#include "render/integrator.h"
+
+using namespace cmam;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path temp_dir(const std::string& name) {
+    fs::path p =
+        fs::temp_directory_path() / ("cmam_eval_" + std::to_string(::getpid()) + "_" + name);
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+}  // namespace
+
+TEST(Metrics, RmsePsnrByHand) {
+    std::vector<float> ref = {0, 0, 0, 1, 1, 1}, img = {0.1f, 0.1f, 0.1f, 0.9f, 0.9f, 0.9f};
+    eval::ErrorStats s = eval::compare(ref, img);
+    EXPECT_NEAR(s.rmse, 0.1, 1e-7);
+    EXPECT_NEAR(s.psnr, 20.0, 1e-5);
+    EXPECT_NEAR(s.relative_rmse, 0.2, 1e-6);
+    std::vector<bool> mask = {false, true};
+    EXPECT_NEAR(eval::compare(ref, img, &mask).rmse, 0.1, 1e-7);
+    EXPECT_TRUE(std::isinf(eval::compare(ref, ref).psnr));
+    EXPECT_THROW(eval::compare(ref, {0, 0, 0}), std::invalid_argument);
+}
+
+TEST(Metrics, SsimByHand) {
+    // Identical images: 1. Constant images a and b: (2ab + C1) / (a^2 + b^2 + C1), variances 0.
+    std::vector<float> a(4 * 3 * 3, 0.2f), b(4 * 3 * 3, 0.4f);
+    EXPECT_NEAR(eval::ssim(a, a, 4, 3), 1.0, 1e-12);
+    EXPECT_NEAR(eval::ssim(a, b, 4, 3), (2 * 0.2 * 0.4 + 1e-4) / (0.04 + 0.16 + 1e-4), 1e-6);
+    // A checkerboard against its mean: the structure term vanishes, SSIM ~ C2 / (var + C2).
+    std::vector<float> chk(8 * 8 * 3), mean(8 * 8 * 3, 0.5f);
+    for (int p = 0; p < 64; ++p)
+        for (int c = 0; c < 3; ++c) chk[3 * p + c] = ((p % 8 + p / 8) % 2) ? 1.0f : 0.0f;
+    EXPECT_LT(eval::ssim(chk, mean, 8, 8), 0.01);
+}
+
+TEST(Metrics, EdgeMaskMarksDisagreeingPixels) {
+    std::vector<float> ref = {0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0, 0, 0};
+    std::vector<float> img = {0.505f, 0.5f, 0.5f, 0.9f, 0.5f, 0.5f, 0.0005f, 0, 0};
+    std::vector<bool> m = eval::edge_mask(ref, img);
+    EXPECT_EQ(m, (std::vector<bool>{true, false, true}));  // 1% off: kept; 80% off: an edge
+}
+
+TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
+    fs::path dir = temp_dir("cache");
+    fs::path scene = dir / "tiny.pbrt";
+    std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/gravel.png";
+    auto write_scene = [&](const std::string& extra) {
+        std::ofstream(scene)
+            << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50\n"
+            << "Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 16\n"
+            << "Integrator \"whitted\"\nWorldBegin\nLightSource \"distant\" \"point from\" [0 1 "
+               "-1]\n"
+            << "Texture \"g\" \"spectrum\" \"imagemap\" \"string filename\" \"" << tex << "\"\n"
+            << "Material \"matte\" \"texture Kd\" \"g\"\n"
+            << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+            << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5] \"point2 uv\" [0 0 8 0 8 8 0 8]\n"
+            << extra << "WorldEnd\n";
+    };
+    write_scene("");
+    eval::EvalOptions o;
+    o.scenes = {scene.string()};
+    o.methods = {*eval::parse_method("none"), *eval::parse_method("differentials+ewa")};
+    o.spp = {1};
+    o.reference_spp = 4;
+    o.out_dir = (dir / "out").string();
+    int renders = 0;
+    o.progress = [&](int, int, const std::string&) { ++renders; };
+    eval::EvalResult first = eval::run_eval(o);
+    ASSERT_EQ(first.scenes.size(), 1u);
+    EXPECT_FALSE(first.scenes[0].reference_cached);
+    EXPECT_EQ(first.rows.size(), 2u);
+    EXPECT_LT(first.rows[1].rmse, first.rows[0].rmse);  // filtering beats point sampling here
+    for (const char* f : {"results.csv", "results.md", "index.html"})
+        EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / f));
+    const std::string key = eval::reference_key(scene.string(), 4);
+    EXPECT_EQ(eval::run_eval(o).scenes[0].reference_cached, true);
+    EXPECT_EQ(eval::reference_key(scene.string(), 4), key);
+    EXPECT_NE(eval::reference_key(scene.string(), 8), key);
+    write_scene("# a changed scene\n");
+    EXPECT_NE(eval::reference_key(scene.string(), 4), key);
+    EXPECT_FALSE(eval::run_eval(o).scenes[0].reference_cached);
+    fs::remove_all(dir);
+}
+
+TEST(Eval, MethodNames) {
+    for (const std::string& m : eval::default_methods()) EXPECT_TRUE(eval::parse_method(m)) << m;
+    EXPECT_FALSE(eval::parse_method("cmam+nearest"));
+    EXPECT_FALSE(eval::parse_method("magic+ewa"));
+    auto hull = eval::parse_method("cmam-pixel-hull+trilinear");
+    ASSERT_TRUE(hull);
+    EXPECT_TRUE(hull->build.cmam.hull);
+    EXPECT_EQ(hull->build.tags, render::TagPolicy::Pixel);
+}
+
+// T-GT-1: one pixel of an orthographic camera sees the parallelogram (0.5,0.25), (1.75,0.75),
+// (1.25,1.75), (0,1.25) of the 2x2 texture [1 2; 3 4] (texel space). The stratified ground
+// truth (64 x 64 samples, nearest reconstruction) must match the exact average 2.4.
+TEST(GroundTruth, TGt1MatchesTheExactIntegral) {
+    fs::path dir = temp_dir("gt1");
+    // File rows go top to bottom; v = 0 (texel row 0: values 1, 2) is the bottom row.
+    render::write_image((dir / "t.exr").string(), 2, 2, {3, 3, 3, 4, 4, 4, 1, 1, 1, 2, 2, 2});
+    // Raster (x, y) in [0,1]^2 maps to texel A + x (B - A) + (1 - y) (D - A) with A = (0.5, 0.25),
+    // B - A = (1.25, 0.5), D - A = (-0.5, 1): a quad whose corners carry those uv (texel / 2).
+    // Screen window [-1,1]^2 with the camera looking down +z: world x = screen x, world y = screen
+    // y.
+    std::ofstream(dir / "gt.pbrt")
+        << "Camera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\n"
+        << "Film \"image\" \"integer xresolution\" 1 \"integer yresolution\" 1\n"
+        << "WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"t.exr\"\n"
+        << "Material \"matte\" \"texture Kd\" \"t\"\n"
+        << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-1 -1 5  1 -1 5 "
+           " 1 1 5  -1 1 5]\n"
+        << "  \"point2 uv\" [0.25 0.125  0.875 0.375  0.625 0.875  0 0.625]\nWorldEnd\n";
+    pbrt::SceneDesc d = pbrt::parse_file((dir / "gt.pbrt").string());
+    render::BuildOptions bo;
+    bo.spp_override = 64 * 64;
+    bo.lod = render::Lod::None;
+    bo.filter = texture::FilterKind::Nearest;
+    auto s = render::build_scene(d, bo, {});
+    render::RenderOptions ro;
+    ro.aov = render::AovKind::Texture;
+    render::Framebuffer fb = render::render(*s, ro, nullptr);
+    EXPECT_NEAR(fb.rgb[0], 2.4, 0.006) << fb.rgb[0];  // RMS error about 0.002 at N = 64 (§9)
+    fs::remove_all(dir);
+}
