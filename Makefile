@@ -4,12 +4,13 @@
 #   make test     install dependencies, build, run every test through CTest
 #   make bench    build and run the benchmarks (Google Benchmark)
 #   make paper-figures  render the paper's scenes with the CMAM on and off, with an error table
+#   make results  evaluate every method on the bundled scenes; rewrites docs/results.md
 JOBS ?= $(shell nproc)
 BUILD := build/release
 CMAM := $(BUILD)/app/cmam
 DEMO_OUT ?= $(BUILD)/demo.png
 
-.PHONY: all build deps configure demo test bench paper-figures clean
+.PHONY: all build deps configure demo test bench paper-figures results clean
 
 all: build
 
@@ -40,6 +41,10 @@ bench: deps
 paper-figures: deps
 	@$(MAKE) --no-print-directory build
 	@bash scripts/paper-figures.sh $(CMAM) out/paper-figures
+
+results: deps
+	@$(MAKE) --no-print-directory build
+	@bash scripts/results.sh $(CMAM)
 
 clean:
 	rm -rf build
