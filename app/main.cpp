@@ -33,7 +33,7 @@ struct RenderArgs {
     std::string lod, filter, cmam_miss = "average", cmam_tags = "scanline",
                              cmam_ellipse = "conjugate", cmam_sat_miss = "average",
                              cmam_adjacency = "on";
-    bool cmam_hull = false;
+    bool cmam_hull = false, cmam_2d = false;
     std::string aov;
 };
 
@@ -146,6 +146,10 @@ int run_render(const RenderArgs& a) {
     bo.cmam.sat_miss = *sat_miss;
     bo.cmam.adjacent_only = a.cmam_adjacency == "on";
     bo.cmam.hull = a.cmam_hull;
+    if (a.cmam_2d && *tags != render::TagPolicy::Scanline)
+        throw std::invalid_argument(
+            "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
+    bo.cmam.two_d = a.cmam_2d;
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
 
@@ -436,6 +440,10 @@ int main(int argc, char** argv) {
             "--cmam-adjacency", ra.cmam_adjacency,
             "CMAM accepts only adjacent samples: on, or off (the paper's literal matching)")
         ->capture_default_str();
+    render_cmd->add_flag(
+        "--cmam-2d", ra.cmam_2d,
+        "2-D CMAM: also use the sample of the pixel above (scanline tags), an improvement "
+        "beyond the paper");
     render_cmd->add_flag("--cmam-hull", ra.cmam_hull,
                          "CMAM convex hull weighting (paper section 4; pixel tags)");
 

@@ -45,6 +45,8 @@ std::optional<Method> parse_method(const std::string& name) {
             m.build.cmam.adjacent_only = false;
         else if (source == "cmam-point")
             m.build.cmam.miss = texture::CmamMiss::Point;
+        else if (source == "cmam2d")
+            m.build.cmam.two_d = true;
         else if (source == "cmam-pixel-hull") {
             m.build.tags = render::TagPolicy::Pixel;
             m.build.cmam.hull = true;
@@ -67,7 +69,10 @@ std::vector<std::string> default_methods() {
             "cmam+ewa",
             "cmam-literal+trilinear",
             "cmam-point+trilinear",
-            "cmam-pixel-hull+trilinear"};
+            "cmam-pixel-hull+trilinear",
+            "cmam2d+trilinear",
+            "cmam2d+sat",
+            "cmam2d+ewa"};
 }
 
 namespace {

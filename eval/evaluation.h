@@ -21,7 +21,8 @@ struct Method {
 /// Parses a method name; nullopt for an unknown one. Known forms: none; differentials+F;
 /// cones+F; cones-aniso+F; cmam+F (paper mode: scanline tags, average miss, conjugate
 /// ellipse); cmam-literal+F (no adjacency check); cmam-point+F (point sample on a miss);
-/// cmam-pixel-hull+F (pixel tags with convex hull weighting); F in bilinear, trilinear, sat, ewa.
+/// cmam-pixel-hull+F (pixel tags with convex hull weighting); cmam2d+F (the 2-D CMAM);
+/// F in bilinear, trilinear, sat, ewa.
 std::optional<Method> parse_method(const std::string& name);
 /// The default list of the evaluation.
 std::vector<std::string> default_methods();

@@ -354,11 +354,10 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                                                       options.threads);
     std::atomic<int> rows_done{0};
 
-    auto render_row = [&](int row) {
+    auto render_row = [&](int row, CmamRowState& cmam) {
         int py = film.y0 + row;
         float* out = &fb.rgb[static_cast<std::size_t>(row) * fb.width * 3];
         RayCounts counts;
-        CmamRowState cmam;  // caches live for one row: identical images for any thread count
         for (int col = 0; col < fb.width; ++col) {
             int px = film.x0 + col;
             uint64_t pixel_seed =
@@ -402,10 +401,18 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         if (options.progress) options.progress(done, fb.height);
     };
 
-    tbb::parallel_for(tbb::blocked_range<int>(0, fb.height, 1),
-                      [&](const tbb::blocked_range<int>& r) {
-                          for (int row = r.begin(); row < r.end(); ++row) render_row(row);
-                      });
+    // Rows go in fixed blocks, each block top to bottom and each row left to right, with CMAM
+    // caches that live for one block: the image is the same for any thread count, and the
+    // 2-D CMAM finds the row above inside the block.
+    constexpr int kBlockRows = 8;
+    const int blocks = (fb.height + kBlockRows - 1) / kBlockRows;
+    tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int b = r.begin(); b < r.end(); ++b) {
+            CmamRowState cmam;
+            for (int row = b * kBlockRows; row < std::min(fb.height, (b + 1) * kBlockRows); ++row)
+                render_row(row, cmam);
+        }
+    });
     return fb;
 }
 

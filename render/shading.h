@@ -13,8 +13,9 @@ struct LookupCounts {
     uint64_t point_sampled = 0;  // no footprint: bilinear at level 0 whatever the filter
 };
 
-/// The CMAM caches of one row of the image: one per (textured object, texture). Rows are
-/// rendered whole, left to right, so a row's samples reach its caches in scan order.
+/// The CMAM caches of one block of rows: one per (textured object, texture). Rows are rendered
+/// whole, left to right and top to bottom within a block, so samples reach the caches in scan
+/// order.
 class CmamRowState {
   public:
     texture::CmamCache& cache(uint32_t object, uint32_t texture_node) {

@@ -33,7 +33,8 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
   echo "* Methods: \`none\` point-samples; \`differentials\` / \`cones\` / \`cones-aniso\` are ray differentials and ray cones;"
   echo "  \`cmam\` is the paper's module (scanline tags, average on a miss, conjugate ellipse, adjacency check);"
   echo "  \`cmam-literal\` drops the adjacency check (the paper's literal matching); \`cmam-point\` point-samples on"
-  echo "  a miss; \`cmam-pixel-hull\` uses pixel tags with the paper's Section 4 convex hull weighting."
+  echo "  a miss; \`cmam-pixel-hull\` uses pixel tags with the paper's Section 4 convex hull weighting;"
+  echo "  \`cmam2d\` is the 2-D CMAM (the left neighbour and the pixel above, beyond the paper)."
   echo
   sed -n '/^| scene |/,$p' "$OUT/results.md"
 } > docs/results.md.tmp

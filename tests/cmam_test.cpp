@@ -222,3 +222,42 @@ TEST(CmamHull, OnlyTheNewPartOfEachTriangleIsIntegrated) {
     cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r);
     EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
 }
+
+TEST(Cmam2d, RegionUsesTheLeftAndUpperNeighboursAsJacobianColumns) {
+    CmamCache::Entry left = at(9, 10), above = at(10.5, 8);
+    CmamRegion r = cmam_region_2d(10, 10, &left, above, CmamOptions{});
+    EXPECT_TRUE(r.used_above);
+    EXPECT_DOUBLE_EQ(r.a[0], -1);
+    EXPECT_DOUBLE_EQ(r.a[1], 0);
+    EXPECT_DOUBLE_EQ(r.b[0], 0.5);
+    EXPECT_DOUBLE_EQ(r.b[1], -2);
+    EXPECT_NEAR(r.width, std::hypot(0.5, 2.0), 1e-12);
+    // The box around the parallelogram p0 +- (a +- b)/2: half extents 0.75 and 1.
+    EXPECT_NEAR(r.rect[0], 9.25, 1e-12);
+    EXPECT_NEAR(r.rect[2], 10.75, 1e-12);
+    EXPECT_NEAR(r.rect[1], 9, 1e-12);
+    EXPECT_NEAR(r.rect[3], 11, 1e-12);
+    CmamRegion c = cmam_region_2d(10, 10, nullptr, above, CmamOptions{});  // no left: a circle
+    EXPECT_NEAR(std::hypot(c.a[0], c.a[1]), std::hypot(c.b[0], c.b[1]), 1e-12);
+    EXPECT_NEAR(c.a[0] * c.b[0] + c.a[1] * c.b[1], 0, 1e-12);
+}
+
+TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
+    FilteredTexture tex(tmip1());
+    CmamOptions o;
+    o.two_d = true;
+    CmamCache c;
+    CmamRegion r;
+    for (uint32_t x = 0; x < 4; ++x) cmam_lookup(tex, c, {0, 0, x}, 0.1 * x, 0.5, o);  // row 0
+    cmam_lookup(tex, c, {1, 0, 0}, 0.0, 0.55, o, nullptr, &r);  // row 1, x = 0
+    EXPECT_TRUE(r.used_above);
+    EXPECT_EQ(r.matches, 0);  // no left neighbour, but the sample above gives a region
+    EXPECT_NEAR(std::hypot(r.b[0], r.b[1]), 0.05 * 4, 1e-9);
+    cmam_lookup(tex, c, {1, 0, 1}, 0.1, 0.55, o, nullptr, &r);
+    EXPECT_TRUE(r.used_above);
+    EXPECT_EQ(r.matches, 1);
+    cmam_lookup(tex, c, {1, 1, 2}, 0.2, 0.55, o, nullptr, &r);  // a reflected ray: level 1
+    EXPECT_FALSE(r.used_above);
+    cmam_lookup(tex, c, {3, 0, 2}, 0.2, 0.6, o, nullptr, &r);  // ID 3 after 1: no row above
+    EXPECT_FALSE(r.used_above);
+}

@@ -201,3 +201,30 @@ TEST(Cmam, ReducesTheErrorOfARecedingTexturedPlane) {
     EXPECT_LT(tri, 0.75 * off) << tri << " vs " << off;
     EXPECT_LT(ewa, 0.75 * off) << ewa << " vs " << off;
 }
+
+TEST(Cmam, TwoDimensionalCmamFixesTheCollinearSatBoxes) {
+    // At 1 spp with scanline tags the paper's cached samples lie along the row, so the SAT box
+    // is one texel tall; the 2-D CMAM adds the pixel above and filters vertically too.
+    std::string scenes = CMAM_SCENES_DIR;
+    pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
+    auto render_with = [&](int spp, Lod lod, bool two_d) {
+        BuildOptions bo;
+        bo.spp_override = spp;
+        bo.lod = lod;
+        bo.filter = texture::FilterKind::Sat;
+        bo.cmam.two_d = two_d;
+        auto s = build_scene(d, bo, {});
+        s->film.y0 = 100;
+        s->film.y1 = 180;
+        return render::render(*s, {}, nullptr).rgb;
+    };
+    auto rmse = [](const std::vector<float>& a, const std::vector<float>& b) {
+        double se = 0;
+        for (std::size_t i = 0; i < a.size(); ++i) se += (a[i] - b[i]) * double(a[i] - b[i]);
+        return std::sqrt(se / a.size());
+    };
+    auto ref = render_with(64, Lod::None, false);
+    double one_d = rmse(ref, render_with(1, Lod::Cmam, false));
+    double two_d = rmse(ref, render_with(1, Lod::Cmam, true));
+    EXPECT_LT(two_d, 0.8 * one_d) << two_d << " vs " << one_d;
+}

@@ -127,6 +127,39 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
     return r;
 }
 
+CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
+                          const CmamCache::Entry& above, const CmamOptions& o) {
+    CmamRegion r;
+    r.used_above = true;
+    double b[2] = {above.s - s0, above.t - t0};
+    double a[2] = {0, 0};
+    if (left) {
+        a[0] = left->s - s0;
+        a[1] = left->t - t0;
+        r.matches = 1;
+    } else {  // no left neighbour: a circle whose radius is the step to the sample above
+        a[0] = b[1];
+        a[1] = -b[0];
+    }
+    const double la = std::sqrt(a[0] * a[0] + a[1] * a[1]),
+                 lb = std::sqrt(b[0] * b[0] + b[1] * b[1]);
+    r.width = std::max(la, lb);  // GL-style: the longer Jacobian column
+    // SAT: the box around the pixel's parallelogram p0 +- (a +- b) / 2.
+    double hs = 0.5 * (std::abs(a[0]) + std::abs(b[0])),
+           ht = 0.5 * (std::abs(a[1]) + std::abs(b[1]));
+    r.rect[0] = s0 - hs;
+    r.rect[2] = s0 + hs;
+    r.rect[1] = t0 - ht;
+    r.rect[3] = t0 + ht;
+    min_extent(r.rect, o.max_aniso);
+    // EWA: the Jacobian columns are conjugate semi-diameters (algorithms.md §4.1).
+    r.a[0] = a[0];
+    r.a[1] = a[1];
+    r.b[0] = b[0];
+    r.b[1] = b[1];
+    return r;
+}
+
 Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
     const Image& img = tex.image();
@@ -143,6 +176,25 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     // Shift the cache: the most recent becomes the second, the current the most recent.
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, std::isfinite(s0) && std::isfinite(t0)};
+    // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
+    CmamCache::Entry above;
+    if (o.two_d) {
+        if (!cache.row_valid || tag.id != cache.row_id) {
+            if (cache.row_valid && tag.id == cache.row_id + 1)
+                std::swap(cache.row_previous, cache.row_current);
+            else
+                cache.row_previous.clear();
+            cache.row_current.clear();
+            cache.row_id = tag.id;
+            cache.row_valid = true;
+        }
+        if (tag.seq < cache.row_previous.size()) {
+            const CmamCache::Entry& e = cache.row_previous[tag.seq];
+            if (e.valid && e.tag.level == tag.level) above = e;
+        }
+        if (tag.seq >= cache.row_current.size()) cache.row_current.resize(tag.seq + 1);
+        cache.row_current[tag.seq] = cache.last;
+    }
 
     LookupInfo scratch;
     LookupInfo& in = info ? *info : scratch;
@@ -152,8 +204,11 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         in.texels_read = 1;
         return img.mean();
     }
-    CmamRegion r = cmam_region(s0, t0, cached, matches, o);
-    if (o.hull && matches == 2) {
+    CmamRegion r = above.valid
+                       ? cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, above, o)
+                       : cmam_region(s0, t0, cached, matches, o);
+    if (above.valid) matches = std::max(matches, 1);  // a region exists: no miss
+    if (o.hull && matches == 2 && !above.valid) {
         // Paper §4: integrate only the part of the new triangle outside the hull so far.
         if (!cache.hull_valid || cache.hull_tag.id != tag.id || cache.hull_tag.level != tag.level) {
             cache.hull.clear();

@@ -11,6 +11,7 @@
 
 #include <optional>
 #include <string_view>
+#include <vector>
 
 namespace cmam::texture {
 
@@ -47,6 +48,11 @@ struct CmamOptions {
     /// integrated, exactly (box-reconstructed texture, algorithms.md §5). A triangle wholly
     /// inside the hull returns the running mean, i.e. it adds nothing.
     bool hull = false;
+    /// 2-D CMAM (algorithms.md §6.3.1, beyond the paper): besides the left neighbour, use the
+    /// sample of the previous ID (scanline) with the same sequence number, i.e. the pixel above,
+    /// so the two vectors approximate the screen-space Jacobian columns d(s,t)/dx and d(s,t)/dy
+    /// instead of two nearly collinear steps along the row. Meant for scanline tags.
+    bool two_d = false;
 };
 
 /// The last two samples of one textured object (the paper's Figure 6 fields): tag and
@@ -58,6 +64,10 @@ struct CmamCache {
         bool valid = false;
     };
     Entry last, second_last;
+    // 2-D CMAM: this ID's and the previous ID's samples by sequence number (a row buffer).
+    std::vector<Entry> row_current, row_previous;
+    uint32_t row_id = 0;
+    bool row_valid = false;
     // Convex hull weighting state of the current ID (pixel).
     Polygon hull;
     RayTag hull_tag{};
@@ -65,6 +75,9 @@ struct CmamCache {
     double hull_integral[4] = {0, 0, 0, 0}, hull_area = 0;
     void reset() {
         last = second_last = Entry{};
+        row_current.clear();
+        row_previous.clear();
+        row_valid = false;
         hull.clear();
         hull_valid = false;
     }
@@ -78,7 +91,13 @@ struct CmamRegion {
     double a[2] = {0, 0}, b[2] = {0, 0};  // EWA: the two axis vectors (texels)
     bool orthogonal_fallback = false;     // EWA: sin(theta) < 0.2 switched to the R2 reading
     double hull_new_area = -1;            // hull weighting: area of the new pieces (-1: not used)
+    bool used_above = false;              // 2-D CMAM: the sample above took part
 };
+
+/// The 2-D CMAM's region from the current sample p0, its left neighbour (may be null) and the
+/// sample above (level-0 texels): the two vectors as Jacobian columns.
+CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
+                          const CmamCache::Entry& above, const CmamOptions& options);
 
 /// Region for the current sample p0 and the `matches` cached samples that match it
 /// (cached[0] is the most recent). Pure geometry, no texture access.
