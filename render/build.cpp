@@ -302,7 +302,8 @@ class Builder {
             if (m_opts.untextured) {
                 const texture::Texel& mean = n.image->image().mean();
                 n.kind = TextureNode::Kind::Constant;
-                n.constant = n.image->image().channels() == 1 ? Rgb(mean[0]) : Rgb(mean[0], mean[1], mean[2]);
+                n.constant = n.image->image().channels() == 1 ? Rgb(mean[0])
+                                                              : Rgb(mean[0], mean[1], mean[2]);
             }
             // pbrt-v3: EWA unless "trilinear" is true; "maxanisotropy" bounds EWA's eccentricity.
             n.filter.kind = e.params.get_bool("trilinear", false) ? texture::FilterKind::Trilinear
@@ -643,11 +644,16 @@ std::optional<Lod> parse_lod(std::string_view n) {
 }
 std::string_view to_string(Lod lod) {
     switch (lod) {
-        case Lod::None: return "none";
-        case Lod::Differentials: return "differentials";
-        case Lod::Cones: return "cones";
-        case Lod::ConesAniso: return "cones-aniso";
-        case Lod::Cmam: return "cmam";
+        case Lod::None:
+            return "none";
+        case Lod::Differentials:
+            return "differentials";
+        case Lod::Cones:
+            return "cones";
+        case Lod::ConesAniso:
+            return "cones-aniso";
+        case Lod::Cmam:
+            return "cmam";
     }
     return "?";
 }
@@ -665,7 +671,8 @@ void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
     float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
     if (orthographic) {
         const auto& m = world_from_camera;
-        *org = Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7], m[8] * sx + m[9] * sy + m[11]);
+        *org = Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7],
+                    m[8] * sx + m[9] * sy + m[11]);
         *dir = normalize(Vec3(m[2], m[6], m[10]));
         return;
     }

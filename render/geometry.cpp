@@ -348,16 +348,28 @@ void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {
     *dpdv = to_vec(xform_vector(pr.world_from_object, dv));
 }
 
+namespace {
+// Barycentric differentials of triangle `tri`: (db1, db2) for a world offset dp in its plane.
+void barycentric_offsets(const Primitive& pr, uint32_t tri, const Vec3& dp, float* db1,
+                         float* db2) {
+    const Vec3& p0 = pr.positions[pr.indices[3 * tri]];
+    Vec3 e1 = pr.positions[pr.indices[3 * tri + 1]] - p0,
+         e2 = pr.positions[pr.indices[3 * tri + 2]] - p0;
+    Vec3 n = cross(e1, e2);
+    Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
+    *db1 = dot(l1, dp) / dot(l1, e1);
+    *db2 = dot(l2, dp) / dot(l2, e2);
+}
+}  // namespace
+
 void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {
         // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
-        Vec3 e1 = pr.positions[i1] - pr.positions[i0], e2 = pr.positions[i2] - pr.positions[i0];
-        Vec3 n = cross(e1, e2);
-        Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
-        float db1 = dot(l1, dp) / dot(l1, e1), db2 = dot(l2, dp) / dot(l2, e2);
+        float db1, db2;
+        barycentric_offsets(pr, triangle, dp, &db1, &db2);
         std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
         if (!pr.uvs.empty()) {
             uv0 = pr.uvs[i0];
@@ -392,10 +404,8 @@ Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {
         if (pr.normals.empty()) return Vec3(0, 0, 0);  // flat: the normal is constant
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
-        Vec3 e1 = pr.positions[i1] - pr.positions[i0], e2 = pr.positions[i2] - pr.positions[i0];
-        Vec3 n = cross(e1, e2);
-        Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
-        float db1 = dot(l1, dp) / dot(l1, e1), db2 = dot(l2, dp) / dot(l2, e2);
+        float db1, db2;
+        barycentric_offsets(pr, triangle, dp, &db1, &db2);
         float b0 = 1 - b1 - b2;
         Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
         Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];

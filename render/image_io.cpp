@@ -138,12 +138,14 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
 
 void write_png8(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb) {
     fs::path target(path);
-    fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + ".png");
+    fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" +
+                                           std::to_string(::getpid()) + ".png");
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw ImageIoError("cannot write \"" + path + "\": no PNG writer");
     OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close()) {
+    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) ||
+        !out->close()) {
         std::error_code ec;
         fs::remove(tmp, ec);
         throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());

@@ -42,6 +42,7 @@ void write_image(const std::string& path, int width, int height, const std::vect
                  const std::vector<std::string>& channel_names = {"R", "G", "B"});
 
 /// Writes 8-bit RGB bytes (already display-encoded) as PNG, atomically.
-void write_png8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+void write_png8(const std::string& path, int width, int height,
+                const std::vector<unsigned char>& rgb);
 
 }  // namespace cmam::render

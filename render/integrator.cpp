@@ -276,22 +276,9 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     // Footprint: semi-axis lengths in level-0 texels of the first image texture, and its level.
     const TextureNode* n = first_image(scene, m.kd);
     if (!n) return;
-    texture::Footprint fp;
-    switch (n->lod) {
-        case Lod::Differentials:
-            fp = ctx.footprint;
-            break;
-        case Lod::Cones:
-            fp = ctx.cone;
-            break;
-        case Lod::ConesAniso:
-            fp = ctx.cone_aniso;
-            break;
-        default:
-            break;
-    }
+    const texture::Footprint fp = node_footprint(*n, ctx);  // in the node's (s,t) units
     if (fp.kind != texture::Footprint::Kind::Axes) return;
-    const double W = n->image->image().width() * n->su, H = n->image->image().height() * n->sv;
+    const double W = n->image->image().width(), H = n->image->image().height();
     double la = std::hypot(fp.axis_a.u * W, fp.axis_a.v * H),
            lb = std::hypot(fp.axis_b.u * W, fp.axis_b.v * H);
     double major = std::max(la, lb), minor = std::min(la, lb);

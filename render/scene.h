@@ -27,7 +27,7 @@ namespace cmam::render {
 struct Camera {
     std::array<float, 12> world_from_camera{};  // 3x4
     bool orthographic = false;
-    float tan_half_fov = 1;                      // perspective; 1 for orthographic
+    float tan_half_fov = 1;            // perspective; 1 for orthographic
     float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
     int xres = 640, yres = 480;
 
@@ -152,7 +152,7 @@ class Scene {
     std::map<std::string, std::unique_ptr<texture::FilteredTexture>>
         images;  // loaded once per settings
     Material default_material;
-    TagPolicy tags = TagPolicy::Scanline;                   // CMAM ray tagging
+    TagPolicy tags = TagPolicy::Scanline;  // CMAM ray tagging
     // Which footprint producers some texture asks for (the tracer computes only those).
     bool needs_differentials = false, needs_cones = false, needs_cones_aniso = false;
     texture::CmamOptions cmam;  // CMAM policies (the filter comes from each texture)

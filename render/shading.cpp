@@ -16,9 +16,7 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
     return image.lookup(s, t, footprint, filter);
 }
 
-namespace {
-// The footprint this node asks for, scaled by its uv mapping like the lookup point.
-texture::Footprint mapped_footprint(const TextureNode& n, const TexContext& ctx) {
+texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
     texture::Footprint fp;
     switch (n.lod) {
         case Lod::Differentials:
@@ -39,7 +37,6 @@ texture::Footprint mapped_footprint(const TextureNode& n, const TexContext& ctx)
     }
     return fp;
 }
-}  // namespace
 
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
     if (in.node < 0) return in.value;
@@ -60,7 +57,7 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                     *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node)), ctx.tag,
                     s, t, o);
             } else {
-                x = lookup_image(*n.image, n.filter, s, t, mapped_footprint(n, ctx), ctx.tag,
+                x = lookup_image(*n.image, n.filter, s, t, node_footprint(n, ctx), ctx.tag,
                                  ctx.counts);
             }
             if (n.image->image().channels() == 1) return Rgb(x[0]);
@@ -68,7 +65,7 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
         }
         case TextureNode::Kind::Checkerboard: {
             double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
-            texture::Footprint fp = n.closed_form ? mapped_footprint(n, ctx) : texture::Footprint{};
+            texture::Footprint fp = n.closed_form ? node_footprint(n, ctx) : texture::Footprint{};
             if (fp.kind == texture::Footprint::Kind::Axes) {
                 // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.
                 double ds = std::max(std::abs(fp.axis_a.u), std::abs(fp.axis_b.u));

@@ -49,6 +49,10 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
                             const texture::Footprint& footprint, texture::RayTag tag,
                             LookupCounts* counts);
 
+/// The footprint `n` asks for (its lod: differentials, cones or anisotropic cones), scaled by
+/// the node's uv mapping like the lookup point; None for point sampling and the CMAM.
+texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx);
+
 /// Evaluates a texture input (constant or node) at a shading point; float textures return
 /// their value in all three channels.
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx);
