@@ -149,6 +149,22 @@ TEST(Scenes, EveryBundledSceneBuilds) {
     EXPECT_GE(n, 3);
 }
 
+namespace {
+// Rows 100..180 of the paper's scene 1 (the floor from just below the horizon).
+std::vector<float> render_floor(const pbrt::SceneDesc& d, BuildOptions bo, int spp) {
+    bo.spp_override = spp;
+    auto s = build_scene(d, bo, {});
+    s->film.y0 = 100;
+    s->film.y1 = 180;
+    return render::render(*s, {}, nullptr).rgb;
+}
+double rmse(const std::vector<float>& a, const std::vector<float>& b) {
+    double se = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) se += (a[i] - b[i]) * double(a[i] - b[i]);
+    return std::sqrt(se / a.size());
+}
+}  // namespace
+
 TEST(Cmam, IdenticalImagesForOneAndTwoThreadsWithEitherTagPolicy) {
     std::string scenes = CMAM_SCENES_DIR;
     pbrt::SceneDesc d = pbrt::parse_file(scenes + "/demo.pbrt");
@@ -181,18 +197,9 @@ TEST(Cmam, ReducesTheErrorOfARecedingTexturedPlane) {
     pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
     auto render_with = [&](int spp, Lod lod, texture::FilterKind f) {
         BuildOptions bo;
-        bo.spp_override = spp;
         bo.lod = lod;
         bo.filter = f;
-        auto s = build_scene(d, bo, {});
-        s->film.y0 = 100;  // the floor from just below the horizon
-        s->film.y1 = 180;
-        return render::render(*s, {}, nullptr).rgb;
-    };
-    auto rmse = [](const std::vector<float>& a, const std::vector<float>& b) {
-        double se = 0;
-        for (std::size_t i = 0; i < a.size(); ++i) se += (a[i] - b[i]) * double(a[i] - b[i]);
-        return std::sqrt(se / a.size());
+        return render_floor(d, bo, spp);
     };
     auto ref = render_with(64, Lod::None, texture::FilterKind::Bilinear);
     double off = rmse(ref, render_with(1, Lod::None, texture::FilterKind::Bilinear));
@@ -209,19 +216,10 @@ TEST(Cmam, TwoDimensionalCmamFixesTheCollinearSatBoxes) {
     pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
     auto render_with = [&](int spp, Lod lod, bool two_d) {
         BuildOptions bo;
-        bo.spp_override = spp;
         bo.lod = lod;
         bo.filter = texture::FilterKind::Sat;
         bo.cmam.two_d = two_d;
-        auto s = build_scene(d, bo, {});
-        s->film.y0 = 100;
-        s->film.y1 = 180;
-        return render::render(*s, {}, nullptr).rgb;
-    };
-    auto rmse = [](const std::vector<float>& a, const std::vector<float>& b) {
-        double se = 0;
-        for (std::size_t i = 0; i < a.size(); ++i) se += (a[i] - b[i]) * double(a[i] - b[i]);
-        return std::sqrt(se / a.size());
+        return render_floor(d, bo, spp);
     };
     auto ref = render_with(64, Lod::None, false);
     double one_d = rmse(ref, render_with(1, Lod::Cmam, false));

@@ -138,7 +138,8 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
         case FilterKind::Trilinear: {
             double width2;
             if (fp.kind == Footprint::Kind::Axes && opts.pbrt_trilinear_width) {
-                double m = std::max({std::abs(a.u), std::abs(a.v), std::abs(b.u), std::abs(b.v)}) * std::max(W, H);
+                double m = std::max({std::abs(a.u), std::abs(a.v), std::abs(b.u), std::abs(b.v)}) *
+                           std::max(W, H);
                 width2 = m * m;
             } else if (fp.kind == Footprint::Kind::Axes) {
                 width2 = std::max(a.u * a.u * W * W + a.v * a.v * H * H,
