@@ -41,41 +41,55 @@ int64_t ceil_to_int(double x) {
     return -floor_to_int(-x);
 }
 
-// Weighted sum over the ellipse at one level; NC > 0 fixes the channel count at compile time.
-template <int NC>
+// Column wrap handled at compile time where it is cheap: Repeat steps the wrapped column along
+// with the unwrapped one, Clamp clamps it; anything else wraps each texel.
+enum class ColumnWrap { Repeat, Clamp, Other };
+
+// The ellipse's weighted sum at one level. Coefficients are normalised (Q < 1 inside);
+// NC > 0 fixes the channel count at compile time.
+template <int NC, ColumnWrap CW>
 void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, double C, double hy,
-                    double* sum, double* wsum_out, int* count_out) {
-    const int W = img.width(), H = img.height(), nc = NC > 0 ? NC : img.channels();
+                    float* sum, double* wsum_out, int* count_out) {
+    const int64_t W = img.width(), H = img.height();
+    const int nc = NC > 0 ? NC : img.channels();
     const float* lut = ewa_weight_lut();
+    const double delta = 4 * A * C - B * B, inv2a = 0.5 / A;
     const int64_t t_lo = ceil_to_int(t0 - hy), t_hi = floor_to_int(t0 + hy);
     float acc[4] = {0, 0, 0, 0};
-    double wsum = 0;
+    float wsum = 0;
     int count = 0;
     for (int64_t it = t_lo; it <= t_hi; ++it) {
         const double y = double(it) - t0;
-        // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0.
-        const double by = B * y, cyy = C * y * y;
-        const double disc = by * by - 4 * A * (cyy - 1);
-        if (disc <= 0) continue;
-        const double sq = std::sqrt(disc);
-        const int64_t s_lo = ceil_to_int(s0 + (-by - sq) / (2 * A));
-        const int64_t s_hi = floor_to_int(s0 + (-by + sq) / (2 * A));
+        // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0, i.e. |x - xc| < sqrt(disc)/2A.
+        const double disc = 4 * A - delta * y * y;
+        if (!(disc > 0)) continue;
+        const double half = std::sqrt(disc) * inv2a, xc = s0 - B * y * inv2a;
+        const int64_t s_lo = ceil_to_int(xc - half), s_hi = floor_to_int(xc + half);
         const int64_t jt = wrap_index(it, H, img.wrap_t());
-        const bool inside = jt >= 0 && s_lo >= 0 && s_hi < W;
-        const float* row = jt >= 0 ? img.texel(0, static_cast<int>(jt)) : nullptr;
+        const float* row = jt >= 0 ? img.row(static_cast<int>(jt)) : nullptr;
+        const double by = B * y, cyy = C * y * y;
+        int64_t js = CW == ColumnWrap::Repeat ? wrap_index(s_lo, W, WrapMode::Repeat) : 0;
         // Q is evaluated directly per texel (not incrementally): the weight-table index
-        // floor(r2 * N) must not depend on accumulated rounding.
-        for (int64_t is = s_lo; is <= s_hi; ++is) {
-            const double x = double(is) - s0;
+        // floor(Q * N) must not depend on accumulated rounding.
+        double xi = double(s_lo);
+        for (int64_t is = s_lo; is <= s_hi; ++is, xi += 1) {
+            const double x = xi - s0;
             const double r2 = A * x * x + by * x + cyy;
-            if (r2 >= 1) continue;
-            const float w = lut[std::min(static_cast<int>(r2 * kEwaLutSize), kEwaLutSize - 1)];
+            int64_t col;
+            if constexpr (CW == ColumnWrap::Repeat) {
+                col = js;
+                js = js + 1 == W ? 0 : js + 1;
+            } else if constexpr (CW == ColumnWrap::Clamp) {
+                col = is < 0 ? 0 : (is >= W ? W - 1 : is);
+            } else {
+                col = wrap_index(is, W, img.wrap_s());
+            }
+            if (!(r2 < 1)) continue;
+            const float w = lut[static_cast<int>(r2 * kEwaLutSize)];
             ++count;
             wsum += w;
-            if (!row) continue;  // black row: the weight counts, the value is 0
-            const int64_t js = inside ? is : wrap_index(is, W, img.wrap_s());
-            if (js < 0) continue;
-            const float* t = row + js * nc;
+            if (!row || col < 0) continue;  // outside a black edge: the weight counts, 0 adds
+            const float* t = row + Image::column_offset(col) * nc;
             for (int c = 0; c < nc; ++c) acc[c] += w * t[c];
         }
     }
@@ -84,31 +98,57 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
     *count_out = count;
 }
 
+template <int NC>
+void ewa_accumulate_nc(const Image& img, double s0, double t0, double A, double B, double C,
+                       double hy, float* sum, double* wsum, int* count) {
+    switch (img.wrap_s()) {
+        case WrapMode::Repeat:
+            return ewa_accumulate<NC, ColumnWrap::Repeat>(img, s0, t0, A, B, C, hy, sum, wsum,
+                                                          count);
+        case WrapMode::Clamp:
+            return ewa_accumulate<NC, ColumnWrap::Clamp>(img, s0, t0, A, B, C, hy, sum, wsum,
+                                                         count);
+        default:
+            return ewa_accumulate<NC, ColumnWrap::Other>(img, s0, t0, A, B, C, hy, sum, wsum,
+                                                         count);
+    }
+}
+
 }  // namespace
 
 Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s,
                 double b_t, int* texels_read) {
     const int W = img.width(), H = img.height(), nc = img.channels();
+    const bool black = img.wrap_s() == WrapMode::Black || img.wrap_t() == WrapMode::Black;
+    if (W == 1 && H == 1 && !black) {  // every texel of the ellipse is this one
+        if (texels_read) *texels_read += 1;
+        return img.fetch(0, 0);
+    }
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
-    EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
-    const double A = e.A / e.F, B = e.B / e.F, C = e.C / e.F;
-    double sum[4] = {0, 0, 0, 0}, wsum = 0;
+    const double A = a_t * a_t + b_t * b_t + 1, B = -2 * (a_s * a_t + b_s * b_t),
+                 C = a_s * a_s + b_s * b_s + 1;
+    const double inv_f = 1 / (A * C - B * B / 4);
+    const double An = A * inv_f, Bn = B * inv_f, Cn = C * inv_f;
+    const double hy = 2 * std::sqrt(An / (4 * An * Cn - Bn * Bn));
+    float sum[4] = {0, 0, 0, 0};
+    double wsum = 0;
     int count = 0;
     switch (nc) {
         case 1:
-            ewa_accumulate<1>(img, s0, t0, A, B, C, e.hy, sum, &wsum, &count);
+            ewa_accumulate_nc<1>(img, s0, t0, An, Bn, Cn, hy, sum, &wsum, &count);
             break;
         case 3:
-            ewa_accumulate<3>(img, s0, t0, A, B, C, e.hy, sum, &wsum, &count);
+            ewa_accumulate_nc<3>(img, s0, t0, An, Bn, Cn, hy, sum, &wsum, &count);
             break;
         default:
-            ewa_accumulate<0>(img, s0, t0, A, B, C, e.hy, sum, &wsum, &count);
+            ewa_accumulate_nc<0>(img, s0, t0, An, Bn, Cn, hy, sum, &wsum, &count);
             break;
     }
     if (texels_read) *texels_read += count;
     Texel out{};
     if (wsum <= 0) return texture::bilinear(img, u, v);
-    for (int c = 0; c < nc; ++c) out[c] = static_cast<float>(sum[c] / wsum);
+    const float inv = static_cast<float>(1 / wsum);
+    for (int c = 0; c < nc; ++c) out[c] = sum[c] * inv;
     return out;
 }
 

@@ -2,6 +2,16 @@
 #include <cmam/texture/image.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <utility>
+
+#include "kernels.h"
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace cmam::texture {
 
@@ -37,22 +47,68 @@ float linear_to_srgb(float c) {
     return 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-Image::Image(int width, int height, int channels, std::vector<float> texels, WrapMode wrap_s,
+TexelBuffer::TexelBuffer(std::size_t count) : m_size(count) {
+    if (count == 0) return;
+    constexpr std::size_t kHuge = std::size_t{2} << 20;
+    const std::size_t bytes = count * sizeof(float);
+    const std::size_t align = bytes >= kHuge ? kHuge : 64;
+    const std::size_t rounded = (bytes + align - 1) / align * align;
+    m_data = static_cast<float*>(std::aligned_alloc(align, rounded));
+    if (!m_data) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (align == kHuge) madvise(m_data, rounded, MADV_HUGEPAGE);  // advice only: may be ignored
+#endif
+    std::memset(m_data, 0, bytes);
+}
+
+TexelBuffer::TexelBuffer(const TexelBuffer& other) : TexelBuffer(other.m_size) {
+    if (m_size) std::memcpy(m_data, other.m_data, m_size * sizeof(float));
+}
+
+TexelBuffer::TexelBuffer(TexelBuffer&& other) noexcept
+    : m_data(std::exchange(other.m_data, nullptr)), m_size(std::exchange(other.m_size, 0)) {}
+
+TexelBuffer& TexelBuffer::operator=(TexelBuffer other) noexcept {
+    std::swap(m_data, other.m_data);
+    std::swap(m_size, other.m_size);
+    return *this;
+}
+
+TexelBuffer::~TexelBuffer() {
+    std::free(m_data);
+}
+
+Image::Image(int width, int height, int channels, const std::vector<float>& texels, WrapMode wrap_s,
              WrapMode wrap_t)
-    : m_width(width),
-      m_height(height),
-      m_channels(channels),
-      m_wrap_s(wrap_s),
-      m_wrap_t(wrap_t),
-      m_texels(std::move(texels)) {
+    : m_width(width), m_height(height), m_channels(channels), m_wrap_s(wrap_s), m_wrap_t(wrap_t) {
     if (width <= 0 || height <= 0) throw TextureError("image size must be positive");
     if (channels < 1 || channels > 4) throw TextureError("image must have 1 to 4 channels");
-    if (m_texels.size() != static_cast<std::size_t>(width) * height * channels)
+    if (texels.size() != static_cast<std::size_t>(width) * height * channels)
         throw TextureError("texel count does not match width*height*channels");
+    m_tiles_x = static_cast<std::size_t>((width + kTile - 1) >> kTileLog2);
+    const std::size_t tiles_y = static_cast<std::size_t>((height + kTile - 1) >> kTileLog2);
+    m_texels = TexelBuffer(m_tiles_x * tiles_y * kTile * kTile * channels);
     std::array<double, 4> sum{};
-    for (std::size_t k = 0; k < m_texels.size(); ++k) sum[k % channels] += m_texels[k];
+    for (int j = 0; j < height; ++j)
+        for (int i = 0; i < width; ++i) {
+            const float* src = &texels[(static_cast<std::size_t>(j) * width + i) * channels];
+            float* dst = const_cast<float*>(texel(i, j));
+            for (int c = 0; c < channels; ++c) {
+                dst[c] = src[c];
+                sum[c] += src[c];
+            }
+        }
     double n = static_cast<double>(width) * height;
     for (int c = 0; c < channels; ++c) m_mean[c] = static_cast<float>(sum[c] / n);
+}
+
+std::vector<float> Image::row_major() const {
+    std::vector<float> out(static_cast<std::size_t>(m_width) * m_height * m_channels);
+    for (int j = 0; j < m_height; ++j)
+        for (int i = 0; i < m_width; ++i)
+            std::copy_n(texel(i, j), m_channels,
+                        &out[(static_cast<std::size_t>(j) * m_width + i) * m_channels]);
+    return out;
 }
 
 Texel Image::fetch(int64_t i, int64_t j) const {
@@ -83,33 +139,7 @@ Texel nearest(const Image& image, double u, double v) {
 Texel bilinear(const Image& image, double u, double v) {
     double s = u * image.width() - 0.5, t = v * image.height() - 0.5;
     if (!usable(s) || !usable(t)) return image.mean();
-    int64_t i0 = floor_to_int(s), j0 = floor_to_int(t);
-    float fs = static_cast<float>(s - static_cast<double>(i0)),
-          ft = static_cast<float>(t - static_cast<double>(j0));
-    // Tiled textures: move the lattice cell into the base period so the fast path applies.
-    if (image.wrap_s() == WrapMode::Repeat) i0 = wrap_index(i0, image.width(), WrapMode::Repeat);
-    if (image.wrap_t() == WrapMode::Repeat) j0 = wrap_index(j0, image.height(), WrapMode::Repeat);
-    int nc = image.channels();
-    Texel out{};
-    // Fast path: all four texels inside the image.
-    if (i0 >= 0 && j0 >= 0 && i0 + 1 < image.width() && j0 + 1 < image.height()) {
-        const float* a = image.texel(static_cast<int>(i0), static_cast<int>(j0));
-        const float* c = a + static_cast<std::ptrdiff_t>(image.width()) * nc;
-        const float w00 = (1 - fs) * (1 - ft), w10 = fs * (1 - ft), w01 = (1 - fs) * ft,
-                    w11 = fs * ft;
-        auto blend = [&](int k) {
-            return w00 * a[k] + w10 * a[nc + k] + w01 * c[k] + w11 * c[nc + k];
-        };
-        if (nc == 3) return {blend(0), blend(1), blend(2), 0.0f};
-        if (nc == 1) return {blend(0), 0.0f, 0.0f, 0.0f};
-        for (int k = 0; k < nc; ++k) out[k] = blend(k);
-        return out;
-    }
-    Texel a = image.fetch(i0, j0), b = image.fetch(i0 + 1, j0);
-    Texel c = image.fetch(i0, j0 + 1), d = image.fetch(i0 + 1, j0 + 1);
-    for (int k = 0; k < nc; ++k)
-        out[k] = (1 - ft) * ((1 - fs) * a[k] + fs * b[k]) + ft * ((1 - fs) * c[k] + fs * d[k]);
-    return out;
+    return detail::bilinear_at(image, s, t);
 }
 
 }  // namespace cmam::texture

@@ -152,8 +152,8 @@ Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) cons
     }
     // Black outside: the mean offset must not add texture outside the image.
     if (m_storage == Storage::MeanOffsetFloat &&
-        (m_wrap_s != WrapMode::Repeat && m_wrap_s != WrapMode::Clamp ||
-         m_wrap_t != WrapMode::Repeat && m_wrap_t != WrapMode::Clamp)) {
+        ((m_wrap_s != WrapMode::Repeat && m_wrap_s != WrapMode::Clamp) ||
+         (m_wrap_t != WrapMode::Repeat && m_wrap_t != WrapMode::Clamp))) {
         double cx0 = m_wrap_s == WrapMode::Black ? std::clamp(x0, 0.0, double(m_w)) : x0;
         double cx1 = m_wrap_s == WrapMode::Black ? std::clamp(x1, 0.0, double(m_w)) : x1;
         double cy0 = m_wrap_t == WrapMode::Black ? std::clamp(y0, 0.0, double(m_h)) : y0;

@@ -35,14 +35,40 @@ float linear_to_srgb(float linear);
 /// Up to four channel values; unused channels are 0.
 using Texel = std::array<float, 4>;
 
+/// Float storage aligned to a cache line; large buffers are aligned to 2 MiB and, on Linux,
+/// advised to use transparent huge pages (a filter's reads jump between distant rows).
+class TexelBuffer {
+  public:
+    TexelBuffer() = default;
+    explicit TexelBuffer(std::size_t count);  // zero-filled
+    TexelBuffer(const TexelBuffer& other);
+    TexelBuffer(TexelBuffer&& other) noexcept;
+    TexelBuffer& operator=(TexelBuffer other) noexcept;
+    ~TexelBuffer();
+
+    float* data() { return m_data; }
+    const float* data() const { return m_data; }
+    std::size_t size() const { return m_size; }
+
+  private:
+    float* m_data = nullptr;
+    std::size_t m_size = 0;
+};
+
 /// An image of linear float texels with per-axis wrap modes.
 /// Texel (i,j) covers the cell [i,i+1)x[j,j+1) of continuous texel space (s,t) = (u*W, v*H);
 /// row j = 0 is v = 0, i.e. the bottom of the picture.
+/// Texels are stored in 8x8 tiles (each tile row-major, tiles row-major), so that a filter
+/// footprint spanning several rows touches few cache lines and pages; within a tile row,
+/// texels i..i|7 are contiguous.
 class Image {
   public:
+    static constexpr int kTileLog2 = 3;
+    static constexpr int kTile = 1 << kTileLog2;
+
     Image() = default;
     /// `texels` holds width*height*channels floats, row-major from row j = 0 (v = 0).
-    Image(int width, int height, int channels, std::vector<float> texels,
+    Image(int width, int height, int channels, const std::vector<float>& texels,
           WrapMode wrap_s = WrapMode::Repeat, WrapMode wrap_t = WrapMode::Repeat);
 
     int width() const { return m_width; }
@@ -50,13 +76,24 @@ class Image {
     int channels() const { return m_channels; }
     WrapMode wrap_s() const { return m_wrap_s; }
     WrapMode wrap_t() const { return m_wrap_t; }
-    const std::vector<float>& data() const { return m_texels; }
     std::size_t memory_bytes() const { return m_texels.size() * sizeof(float); }
 
     /// Texel (i,j) without wrapping; precondition 0 <= i < width, 0 <= j < height.
-    const float* texel(int i, int j) const {
-        return &m_texels[(static_cast<std::size_t>(j) * m_width + i) * m_channels];
+    const float* texel(int i, int j) const { return row(j) + column_offset(i) * m_channels; }
+    /// Row j's texel 0; texel (i,j) is row(j) + column_offset(i) * channels().
+    const float* row(int j) const {
+        const std::size_t tile = static_cast<std::size_t>(j >> kTileLog2) * m_tiles_x;
+        const std::size_t k = (tile << (2 * kTileLog2)) + ((j & (kTile - 1)) << kTileLog2);
+        return m_texels.data() + k * m_channels;
     }
+    /// Offset of column i within a row, in texels.
+    static std::ptrdiff_t column_offset(int64_t i) {
+        return static_cast<std::ptrdiff_t>(((i >> kTileLog2) << (2 * kTileLog2)) +
+                                           (i & (kTile - 1)));
+    }
+
+    /// The texels in row-major order from row j = 0 (what the constructor took).
+    std::vector<float> row_major() const;
 
     /// Texel (i,j) with the wrap modes applied; Black outside gives zeros (algorithms.md §1).
     Texel fetch(int64_t i, int64_t j) const;
@@ -66,8 +103,9 @@ class Image {
 
   private:
     int m_width = 0, m_height = 0, m_channels = 0;
+    std::size_t m_tiles_x = 0;
     WrapMode m_wrap_s = WrapMode::Repeat, m_wrap_t = WrapMode::Repeat;
-    std::vector<float> m_texels;
+    TexelBuffer m_texels;
     Texel m_mean{};
 };
 

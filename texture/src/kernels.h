@@ -1,0 +1,76 @@
+// cmam::texture — inner kernels shared by the filters (private header).
+// Bilinear taps resolved per axis once (wrap applied to the pair of indices, never per texel),
+// so no lookup divides unless its coordinate lies outside the base period.
+#pragma once
+
+#include <cmam/texture/image.h>
+
+#include <cstdint>
+
+namespace cmam::texture::detail {
+
+/// The two lattice indices around continuous coordinate `s` (already shifted by -1/2) on an
+/// axis of n texels, with the wrap applied; -1 marks a Black tap. `f` is the weight of i1.
+struct AxisTaps {
+    int i0, i1;
+    float f;
+};
+
+inline AxisTaps axis_taps(double s, int n, WrapMode mode) {
+    int64_t k = floor_to_int(s);
+    AxisTaps t;
+    t.f = static_cast<float>(s - static_cast<double>(k));
+    if (k >= 0 && k + 1 < n) {  // the common case: both inside
+        t.i0 = static_cast<int>(k);
+        t.i1 = t.i0 + 1;
+        return t;
+    }
+    switch (mode) {
+        case WrapMode::Repeat: {
+            int64_t w = wrap_index(k, n, WrapMode::Repeat);
+            t.i0 = static_cast<int>(w);
+            t.i1 = w + 1 == n ? 0 : t.i0 + 1;
+            return t;
+        }
+        case WrapMode::Clamp:
+            t.i0 = static_cast<int>(k < 0 ? 0 : (k >= n ? n - 1 : k));
+            t.i1 = static_cast<int>(k + 1 < 0 ? 0 : (k + 1 >= n ? n - 1 : k + 1));
+            return t;
+        default:
+            t.i0 = static_cast<int>(wrap_index(k, n, mode));
+            t.i1 = static_cast<int>(wrap_index(k + 1, n, mode));
+            return t;
+    }
+}
+
+/// Bilinear interpolation at lattice coordinates (s, t) = (u*W - 1/2, v*H - 1/2), which the
+/// caller has checked to be finite and below 2^30 in magnitude.
+inline Texel bilinear_at(const Image& img, double s, double t) {
+    const AxisTaps x = axis_taps(s, img.width(), img.wrap_s());
+    const AxisTaps y = axis_taps(t, img.height(), img.wrap_t());
+    const int nc = img.channels();
+    const float w00 = (1 - x.f) * (1 - y.f), w10 = x.f * (1 - y.f), w01 = (1 - x.f) * y.f,
+                w11 = x.f * y.f;
+    Texel out{};
+    if ((x.i0 | x.i1 | y.i0 | y.i1) >= 0) {
+        const float *a = img.texel(x.i0, y.i0), *b = img.texel(x.i1, y.i0),
+                    *c = img.texel(x.i0, y.i1), *d = img.texel(x.i1, y.i1);
+        auto blend = [&](int k) { return w00 * a[k] + w10 * b[k] + w01 * c[k] + w11 * d[k]; };
+        if (nc == 3) return {blend(0), blend(1), blend(2), 0.0f};
+        if (nc == 1) return {blend(0), 0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < nc; ++k) out[k] = blend(k);
+        return out;
+    }
+    // Some tap lies outside a Black edge: it contributes zero.
+    const int is[2] = {x.i0, x.i1}, js[2] = {y.i0, y.i1};
+    const float ws[2][2] = {{w00, w10}, {w01, w11}};
+    for (int q = 0; q < 2; ++q)
+        for (int p = 0; p < 2; ++p) {
+            if (is[p] < 0 || js[q] < 0) continue;
+            const float* texel = img.texel(is[p], js[q]);
+            for (int k = 0; k < nc; ++k) out[k] += ws[q][p] * texel[k];
+        }
+    return out;
+}
+
+}  // namespace cmam::texture::detail
