@@ -1,6 +1,8 @@
 #include <cmam/texture/filters.h>
 #include <cmam/texture/mip.h>
 
+#include "kernels.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -88,9 +90,14 @@ Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_use
         return level(L - 1).mean();
     }
     if (lambda_used) *lambda_used = lambda;
-    int l = static_cast<int>(lambda);  // lambda > 0 here
-    float f = static_cast<float>(lambda - l);
-    Texel a = bilinear(l, u, v), b = bilinear(l + 1, u, v);
+    const int l = static_cast<int>(lambda);  // lambda > 0 here
+    const float f = static_cast<float>(lambda - l);
+    const Image &fine = level(l), &coarse = level(l + 1);
+    const double s = u * fine.width() - 0.5, t = v * fine.height() - 0.5;
+    // The coarser level's coordinates are smaller, so one range check covers both.
+    if (!(std::abs(s) < 1073741824.0 && std::abs(t) < 1073741824.0)) return fine.mean();
+    const Texel a = detail::bilinear_at(fine, s, t);
+    const Texel b = detail::bilinear_at(coarse, u * coarse.width() - 0.5, v * coarse.height() - 0.5);
     Texel out{};
     for (int c = 0; c < 4; ++c) out[c] = (1 - f) * a[c] + f * b[c];
     return out;
