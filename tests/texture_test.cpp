@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <tuple>
+#include <vector>
 
 using namespace cmam::texture;
 
@@ -83,4 +85,22 @@ TEST(Image, RejectsBadSizes) {
     EXPECT_THROW(Image(0, 2, 1, {}), TextureError);
     EXPECT_THROW(Image(2, 2, 1, {1, 2, 3}), TextureError);
     EXPECT_THROW(Image(1, 1, 5, std::vector<float>(5)), TextureError);
+}
+
+// Texels are stored in 8x8 tiles; sizes that are not multiples of 8 pad the last tiles.
+TEST(Image, TiledStorageKeepsEveryTexel) {
+    for (auto [w, h, c] : {std::tuple{1, 1, 1}, {13, 5, 3}, {8, 8, 4}, {17, 23, 2}, {64, 9, 1}}) {
+        std::vector<float> px(static_cast<std::size_t>(w) * h * c);
+        for (std::size_t k = 0; k < px.size(); ++k) px[k] = static_cast<float>(k);
+        Image img(w, h, c, px);
+        EXPECT_EQ(img.row_major(), px) << w << "x" << h << "x" << c;
+        for (int j = 0; j < h; ++j)
+            for (int i = 0; i < w; ++i) {
+                EXPECT_EQ(img.texel(i, j), img.row(j) + Image::column_offset(i) * c);
+                EXPECT_EQ(img.texel(i, j)[0], px[(static_cast<std::size_t>(j) * w + i) * c]);
+            }
+        Image copy = img;  // deep copy
+        EXPECT_EQ(copy.row_major(), px);
+        EXPECT_NE(copy.texel(0, 0), img.texel(0, 0));
+    }
 }
