@@ -58,17 +58,24 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
     float acc[4] = {0, 0, 0, 0};
     float wsum = 0;
     int count = 0;
+    // Repeat rows step along with `it` (one division per level, not per row: tiny levels wrap
+    // on nearly every row).
+    const bool repeat_t = img.wrap_t() == WrapMode::Repeat;
+    int64_t jt_next = repeat_t ? wrap_index(t_lo, H, WrapMode::Repeat) : 0;
     for (int64_t it = t_lo; it <= t_hi; ++it) {
+        const int64_t jt = repeat_t ? jt_next : wrap_index(it, H, img.wrap_t());
+        if (repeat_t) jt_next = jt_next + 1 == H ? 0 : jt_next + 1;
         const double y = double(it) - t0;
         // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0, i.e. |x - xc| < sqrt(disc)/2A.
         const double disc = 4 * A - delta * y * y;
         if (!(disc > 0)) continue;
         const double half = std::sqrt(disc) * inv2a, xc = s0 - B * y * inv2a;
         const int64_t s_lo = ceil_to_int(xc - half), s_hi = floor_to_int(xc + half);
-        const int64_t jt = wrap_index(it, H, img.wrap_t());
         const float* row = jt >= 0 ? img.row(static_cast<int>(jt)) : nullptr;
         const double by = B * y, cyy = C * y * y;
-        int64_t js = CW == ColumnWrap::Repeat ? wrap_index(s_lo, W, WrapMode::Repeat) : 0;
+        int64_t js = 0;
+        if constexpr (CW == ColumnWrap::Repeat)  // a mask for power-of-two widths, no division
+            js = (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
         // Q is evaluated directly per texel (not incrementally): the weight-table index
         // floor(Q * N) must not depend on accumulated rounding.
         double xi = double(s_lo);
