@@ -132,11 +132,9 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
         return img.fetch(0, 0);
     }
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
-    const double A = a_t * a_t + b_t * b_t + 1, B = -2 * (a_s * a_t + b_s * b_t),
-                 C = a_s * a_s + b_s * b_s + 1;
-    const double inv_f = 1 / (A * C - B * B / 4);
-    const double An = A * inv_f, Bn = B * inv_f, Cn = C * inv_f;
-    const double hy = 2 * std::sqrt(An / (4 * An * Cn - Bn * Bn));
+    const EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
+    const double inv_f = 1 / e.F, An = e.A * inv_f, Bn = e.B * inv_f, Cn = e.C * inv_f;
+    const double hy = e.hy;
     float sum[4] = {0, 0, 0, 0};
     double wsum = 0;
     int count = 0;
