@@ -1,10 +1,10 @@
 #include <cmam/texture/filters.h>
 #include <cmam/texture/mip.h>
 
-#include "kernels.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "kernels.h"
 
 namespace cmam::texture {
 
@@ -97,7 +97,8 @@ Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_use
     // The coarser level's coordinates are smaller, so one range check covers both.
     if (!(std::abs(s) < 1073741824.0 && std::abs(t) < 1073741824.0)) return fine.mean();
     const Texel a = detail::bilinear_at(fine, s, t);
-    const Texel b = detail::bilinear_at(coarse, u * coarse.width() - 0.5, v * coarse.height() - 0.5);
+    const Texel b =
+        detail::bilinear_at(coarse, u * coarse.width() - 0.5, v * coarse.height() - 0.5);
     Texel out{};
     for (int c = 0; c < 4; ++c) out[c] = (1 - f) * a[c] + f * b[c];
     return out;
