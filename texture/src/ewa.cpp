@@ -27,11 +27,10 @@ EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t) {
     e.B = -2 * (a_s * a_t + b_s * b_t);
     e.C = a_s * a_s + b_s * b_s + 1;
     e.F = e.A * e.C - e.B * e.B / 4;
-    // Normalised (divided by F): delta = 4AC - B^2; hx = 2 sqrt(C/delta), hy = 2 sqrt(A/delta).
-    double A = e.A / e.F, B = e.B / e.F, C = e.C / e.F;
-    double delta = 4 * A * C - B * B;
-    e.hx = 2 * std::sqrt(C / delta);
-    e.hy = 2 * std::sqrt(A / delta);
+    // Normalised (divided by F) the half-extents are 2 sqrt(C/delta) and 2 sqrt(A/delta) with
+    // delta = 4AC - B^2 = 4/F, which is sqrt(C) and sqrt(A) of the unnormalised coefficients.
+    e.hx = std::sqrt(e.C);
+    e.hy = std::sqrt(e.A);
     return e;
 }
 
@@ -49,11 +48,11 @@ enum class ColumnWrap { Repeat, Clamp, Other };
 // NC > 0 fixes the channel count at compile time.
 template <int NC, ColumnWrap CW>
 void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, double C, double hy,
-                    float* sum, double* wsum_out, int* count_out) {
+                    double inv2a, float* sum, double* wsum_out, int* count_out) {
     const int64_t W = img.width(), H = img.height();
     const int nc = NC > 0 ? NC : img.channels();
     const float* lut = ewa_weight_lut();
-    const double delta = 4 * A * C - B * B, inv2a = 0.5 / A;
+    const double delta = 4 * A * C - B * B;
     const int64_t t_lo = ceil_to_int(t0 - hy), t_hi = floor_to_int(t0 + hy);
     float acc[4] = {0, 0, 0, 0};
     float wsum = 0;
@@ -107,17 +106,17 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
 
 template <int NC>
 void ewa_accumulate_nc(const Image& img, double s0, double t0, double A, double B, double C,
-                       double hy, float* sum, double* wsum, int* count) {
+                       double hy, double inv_2a, float* sum, double* wsum, int* count) {
     switch (img.wrap_s()) {
         case WrapMode::Repeat:
-            return ewa_accumulate<NC, ColumnWrap::Repeat>(img, s0, t0, A, B, C, hy, sum, wsum,
-                                                          count);
+            return ewa_accumulate<NC, ColumnWrap::Repeat>(img, s0, t0, A, B, C, hy, inv_2a, sum,
+                                                          wsum, count);
         case WrapMode::Clamp:
-            return ewa_accumulate<NC, ColumnWrap::Clamp>(img, s0, t0, A, B, C, hy, sum, wsum,
-                                                         count);
+            return ewa_accumulate<NC, ColumnWrap::Clamp>(img, s0, t0, A, B, C, hy, inv_2a, sum,
+                                                         wsum, count);
         default:
-            return ewa_accumulate<NC, ColumnWrap::Other>(img, s0, t0, A, B, C, hy, sum, wsum,
-                                                         count);
+            return ewa_accumulate<NC, ColumnWrap::Other>(img, s0, t0, A, B, C, hy, inv_2a, sum,
+                                                         wsum, count);
     }
 }
 
@@ -134,19 +133,19 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
     const EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
     const double inv_f = 1 / e.F, An = e.A * inv_f, Bn = e.B * inv_f, Cn = e.C * inv_f;
-    const double hy = e.hy;
+    const double hy = e.hy, inv_2a = 0.5 * e.F / e.A;  // 1 / 2An, beside 1/F rather than after it
     float sum[4] = {0, 0, 0, 0};
     double wsum = 0;
     int count = 0;
     switch (nc) {
         case 1:
-            ewa_accumulate_nc<1>(img, s0, t0, An, Bn, Cn, hy, sum, &wsum, &count);
+            ewa_accumulate_nc<1>(img, s0, t0, An, Bn, Cn, hy, inv_2a, sum, &wsum, &count);
             break;
         case 3:
-            ewa_accumulate_nc<3>(img, s0, t0, An, Bn, Cn, hy, sum, &wsum, &count);
+            ewa_accumulate_nc<3>(img, s0, t0, An, Bn, Cn, hy, inv_2a, sum, &wsum, &count);
             break;
         default:
-            ewa_accumulate_nc<0>(img, s0, t0, An, Bn, Cn, hy, sum, &wsum, &count);
+            ewa_accumulate_nc<0>(img, s0, t0, An, Bn, Cn, hy, inv_2a, sum, &wsum, &count);
             break;
     }
     if (texels_read) *texels_read += count;
