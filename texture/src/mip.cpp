@@ -80,11 +80,11 @@ Texel MipPyramid::bilinear(int l, double u, double v) const {
 
 Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_used) const {
     const int L = levels();
-    double lambda = std::log2(std::max(width, 1e-8));
-    if (!(lambda > 0)) {  // magnification (or NaN width): level 0
+    if (!(width > 1)) {  // magnification (or NaN width): level 0, no logarithm needed
         if (lambda_used) *lambda_used = 0;
         return bilinear(0, u, v);
     }
+    const double lambda = std::log2(width);
     if (lambda >= L - 1) {
         if (lambda_used) *lambda_used = L - 1;
         return level(L - 1).mean();
