@@ -106,17 +106,17 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
 
 template <int NC>
 void ewa_accumulate_nc(const Image& img, double s0, double t0, double A, double B, double C,
-                       double hy, double inv_2a, float* sum, double* wsum, int* count) {
+                       double hy, double inv2a, float* sum, double* wsum, int* count) {
     switch (img.wrap_s()) {
         case WrapMode::Repeat:
-            return ewa_accumulate<NC, ColumnWrap::Repeat>(img, s0, t0, A, B, C, hy, inv_2a, sum,
+            return ewa_accumulate<NC, ColumnWrap::Repeat>(img, s0, t0, A, B, C, hy, inv2a, sum,
                                                           wsum, count);
         case WrapMode::Clamp:
-            return ewa_accumulate<NC, ColumnWrap::Clamp>(img, s0, t0, A, B, C, hy, inv_2a, sum,
-                                                         wsum, count);
+            return ewa_accumulate<NC, ColumnWrap::Clamp>(img, s0, t0, A, B, C, hy, inv2a, sum, wsum,
+                                                         count);
         default:
-            return ewa_accumulate<NC, ColumnWrap::Other>(img, s0, t0, A, B, C, hy, inv_2a, sum,
-                                                         wsum, count);
+            return ewa_accumulate<NC, ColumnWrap::Other>(img, s0, t0, A, B, C, hy, inv2a, sum, wsum,
+                                                         count);
     }
 }
 
@@ -133,19 +133,19 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
     const EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
     const double inv_f = 1 / e.F, An = e.A * inv_f, Bn = e.B * inv_f, Cn = e.C * inv_f;
-    const double hy = e.hy, inv_2a = 0.5 * e.F / e.A;  // 1 / 2An, beside 1/F rather than after it
+    const double hy = e.hy, inv2a = 0.5 * e.F / e.A;  // 1 / 2An, beside 1/F rather than after it
     float sum[4] = {0, 0, 0, 0};
     double wsum = 0;
     int count = 0;
     switch (nc) {
         case 1:
-            ewa_accumulate_nc<1>(img, s0, t0, An, Bn, Cn, hy, inv_2a, sum, &wsum, &count);
+            ewa_accumulate_nc<1>(img, s0, t0, An, Bn, Cn, hy, inv2a, sum, &wsum, &count);
             break;
         case 3:
-            ewa_accumulate_nc<3>(img, s0, t0, An, Bn, Cn, hy, inv_2a, sum, &wsum, &count);
+            ewa_accumulate_nc<3>(img, s0, t0, An, Bn, Cn, hy, inv2a, sum, &wsum, &count);
             break;
         default:
-            ewa_accumulate_nc<0>(img, s0, t0, An, Bn, Cn, hy, inv_2a, sum, &wsum, &count);
+            ewa_accumulate_nc<0>(img, s0, t0, An, Bn, Cn, hy, inv2a, sum, &wsum, &count);
             break;
     }
     if (texels_read) *texels_read += count;
