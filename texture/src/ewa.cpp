@@ -5,6 +5,10 @@
 #include <array>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace cmam::texture {
 
 const float* ewa_weight_lut() {
@@ -44,6 +48,43 @@ int64_t ceil_to_int(double x) {
 // with the unwrapped one, Clamp clamps it; anything else wraps each texel.
 enum class ColumnWrap { Repeat, Clamp, Other };
 
+// Accumulates weighted texels: with SSE2, three or four channels are one 4-wide multiply-add
+// (a 4-float load of a 3-channel texel reads the next texel's first channel, or the buffer's
+// slack after the last one, into a lane that is never used). Per lane the arithmetic is the
+// scalar w * t + acc, so results do not depend on which path ran.
+template <int NC>
+struct TexelSum {
+#if defined(__SSE2__)
+    static constexpr bool kVector = NC == 3 || NC == 4;
+#else
+    static constexpr bool kVector = false;
+#endif
+    void add(float w, const float* t, int nc) {
+#if defined(__SSE2__)
+        if constexpr (kVector) {
+            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(w), _mm_loadu_ps(t)));
+            return;
+        }
+#endif
+        for (int c = 0; c < (NC > 0 ? NC : nc); ++c) s[c] += w * t[c];
+    }
+    void store(float* out, int nc) const {
+#if defined(__SSE2__)
+        if constexpr (kVector) {
+            float tmp[4];
+            _mm_storeu_ps(tmp, v);
+            for (int c = 0; c < nc; ++c) out[c] = tmp[c];
+            return;
+        }
+#endif
+        for (int c = 0; c < nc; ++c) out[c] = s[c];
+    }
+#if defined(__SSE2__)
+    __m128 v = _mm_setzero_ps();
+#endif
+    float s[4] = {0, 0, 0, 0};
+};
+
 // The ellipse's weighted sum at one level. Coefficients are normalised (Q < 1 inside);
 // NC > 0 fixes the channel count at compile time.
 template <int NC, ColumnWrap CW>
@@ -53,55 +94,91 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
     const int nc = NC > 0 ? NC : img.channels();
     const float* lut = ewa_weight_lut();
     const double delta = 4 * A * C - B * B;
+    // The weight-table index is floor(Q N). Scaling the coefficients by N, a power of two, is
+    // exact, so Q N below carries exactly the rounding of Q and the index is the same.
+    constexpr double N = kEwaLutSize;
+    const double An = A * N, Bn = B * N, Cn = C * N;
     const int64_t t_lo = ceil_to_int(t0 - hy), t_hi = floor_to_int(t0 + hy);
-    float acc[4] = {0, 0, 0, 0};
+    TexelSum<NC> acc;
     float wsum = 0;
-    int count = 0;
+    int64_t count = 0;
+    // Rows are done in two passes: first every row's span (independent of one another, so their
+    // square roots and conversions overlap), then the texels, row after row. One pass per row
+    // would start each row's texels only after its own span's long chain of dependent steps.
+    struct Span {
+        int64_t s_lo, s_hi, jt;
+        double by, cyy;
+    };
+    constexpr int kRows = 32;
+    Span spans[kRows];
     // Repeat rows step along with `it` (one division per level, not per row: tiny levels wrap
     // on nearly every row).
     const bool repeat_t = img.wrap_t() == WrapMode::Repeat;
     int64_t jt_next = repeat_t ? wrap_index(t_lo, H, WrapMode::Repeat) : 0;
-    for (int64_t it = t_lo; it <= t_hi; ++it) {
-        const int64_t jt = repeat_t ? jt_next : wrap_index(it, H, img.wrap_t());
-        if (repeat_t) jt_next = jt_next + 1 == H ? 0 : jt_next + 1;
-        const double y = double(it) - t0;
-        // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0, i.e. |x - xc| < sqrt(disc)/2A.
-        const double disc = 4 * A - delta * y * y;
-        if (!(disc > 0)) continue;
-        const double half = std::sqrt(disc) * inv2a, xc = s0 - B * y * inv2a;
-        const int64_t s_lo = ceil_to_int(xc - half), s_hi = floor_to_int(xc + half);
-        const float* row = jt >= 0 ? img.row(static_cast<int>(jt)) : nullptr;
-        const double by = B * y, cyy = C * y * y;
-        int64_t js = 0;
-        if constexpr (CW == ColumnWrap::Repeat)  // a mask for power-of-two widths, no division
-            js = (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
-        // Q is evaluated directly per texel (not incrementally): the weight-table index
-        // floor(Q * N) must not depend on accumulated rounding.
-        double xi = double(s_lo);
-        for (int64_t is = s_lo; is <= s_hi; ++is, xi += 1) {
-            const double x = xi - s0;
-            const double r2 = A * x * x + by * x + cyy;
-            int64_t col;
-            if constexpr (CW == ColumnWrap::Repeat) {
-                col = js;
-                js = js + 1 == W ? 0 : js + 1;
-            } else if constexpr (CW == ColumnWrap::Clamp) {
-                col = is < 0 ? 0 : (is >= W ? W - 1 : is);
-            } else {
-                col = wrap_index(is, W, img.wrap_s());
+    for (int64_t it0 = t_lo; it0 <= t_hi; it0 += kRows) {
+        const int64_t it1 = std::min(t_hi, it0 + kRows - 1);
+        int n = 0;
+        for (int64_t it = it0; it <= it1; ++it) {
+            const int64_t jt = repeat_t ? jt_next : wrap_index(it, H, img.wrap_t());
+            if (repeat_t) jt_next = jt_next + 1 == H ? 0 : jt_next + 1;
+            const double y = double(it) - t0;
+            // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0, i.e.
+            // |x - xc| < sqrt(disc)/2A.
+            const double disc = 4 * A - delta * y * y;
+            if (!(disc > 0)) continue;
+            const double half = std::sqrt(disc) * inv2a, xc = s0 - B * y * inv2a;
+            spans[n++] = {ceil_to_int(xc - half), floor_to_int(xc + half), jt, Bn * y, Cn * y * y};
+        }
+        for (int k = 0; k < n; ++k) {
+            const auto [s_lo, s_hi, jt, by, cyy] = spans[k];
+            if (s_hi < s_lo) continue;
+            // Q is evaluated directly per texel (not incrementally): the weight-table index
+            // floor(Q N) must not depend on accumulated rounding. The span's end texels can
+            // still fall just outside (Q >= 1) by rounding; they are skipped and not counted.
+            int64_t outside = 0;
+            double xi = double(s_lo);
+            if (jt < 0) {  // a row outside a black edge: the weights count, nothing adds
+                for (int64_t is = s_lo; is <= s_hi; ++is, xi += 1) {
+                    const double x = xi - s0, q = An * x * x + by * x + cyy;
+                    if (!(q < N)) {
+                        ++outside;
+                        continue;
+                    }
+                    wsum += lut[static_cast<int64_t>(q)];
+                }
+                count += s_hi - s_lo + 1 - outside;
+                continue;
             }
-            if (!(r2 < 1)) continue;
-            const float w = lut[static_cast<int>(r2 * kEwaLutSize)];
-            ++count;
-            wsum += w;
-            if (!row || col < 0) continue;  // outside a black edge: the weight counts, 0 adds
-            const float* t = row + Image::column_offset(col) * nc;
-            for (int c = 0; c < nc; ++c) acc[c] += w * t[c];
+            const float* row = img.row(static_cast<int>(jt));
+            int64_t js = 0;
+            if constexpr (CW == ColumnWrap::Repeat)  // a mask for power-of-two widths
+                js = (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
+            for (int64_t is = s_lo; is <= s_hi; ++is, xi += 1) {
+                const double x = xi - s0, q = An * x * x + by * x + cyy;
+                int64_t col;
+                if constexpr (CW == ColumnWrap::Repeat) {
+                    col = js;
+                    js = js + 1 == W ? 0 : js + 1;
+                } else if constexpr (CW == ColumnWrap::Clamp) {
+                    col = is < 0 ? 0 : (is >= W ? W - 1 : is);
+                } else {
+                    col = wrap_index(is, W, img.wrap_s());
+                }
+                if (!(q < N)) {
+                    ++outside;
+                    continue;
+                }
+                const float w = lut[static_cast<int64_t>(q)];
+                wsum += w;
+                if (CW == ColumnWrap::Other && col < 0) continue;  // outside a black edge
+                acc.add(w, row + Image::column_offset(col) * nc, nc);
+            }
+            count += s_hi - s_lo + 1 - outside;
         }
     }
-    for (int c = 0; c < nc; ++c) sum[c] = acc[c];
+    acc.store(sum, nc);
     *wsum_out = wsum;
-    *count_out = count;
+    *count_out = static_cast<int>(count);
 }
 
 template <int NC>

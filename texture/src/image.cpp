@@ -50,7 +50,9 @@ float linear_to_srgb(float c) {
 TexelBuffer::TexelBuffer(std::size_t count) : m_size(count) {
     if (count == 0) return;
     constexpr std::size_t kHuge = std::size_t{2} << 20;
-    const std::size_t bytes = count * sizeof(float);
+    // Four floats of slack after the last texel: a filter may load a 3-channel texel as four
+    // floats (the fourth is never used).
+    const std::size_t bytes = (count + 4) * sizeof(float);
     const std::size_t align = bytes >= kHuge ? kHuge : 64;
     const std::size_t rounded = (bytes + align - 1) / align * align;
     m_data = static_cast<float*>(std::aligned_alloc(align, rounded));
