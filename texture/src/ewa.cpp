@@ -44,6 +44,10 @@ int64_t ceil_to_int(double x) {
     return -floor_to_int(-x);
 }
 
+// Coordinates and extents are kept below 2^30 texels (ewa_level), so that every conversion to
+// an integer is in range.
+constexpr double kMaxCoord = 1073741824.0;  // 2^30
+
 // Column wrap handled at compile time where it is cheap: Repeat steps the wrapped column along
 // with the unwrapped one, Clamp clamps it; anything else wraps each texel.
 enum class ColumnWrap { Repeat, Clamp, Other };
@@ -209,6 +213,12 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
     }
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
     const EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
+    // Beyond 2^30 texels (as for bilinear lookups) the texture's mean: texel indices there are
+    // not representable in the arithmetic below.
+    if (!(std::abs(s0) + e.hx < kMaxCoord && std::abs(t0) + e.hy < kMaxCoord)) {
+        if (texels_read) *texels_read += 1;
+        return img.mean();
+    }
     const double inv_f = 1 / e.F, An = e.A * inv_f, Bn = e.B * inv_f, Cn = e.C * inv_f;
     const double hy = e.hy, inv2a = 0.5 * e.F / e.A;  // 1 / 2An, beside 1/F rather than after it
     float sum[4] = {0, 0, 0, 0};
