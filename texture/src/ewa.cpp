@@ -213,8 +213,8 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
     }
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
     const EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
-    // Beyond 2^30 texels (as for bilinear lookups) the texture's mean: texel indices there are
-    // not representable in the arithmetic below.
+    // Beyond 2^30 texels the texture's mean, as for bilinear lookups: no coordinate outside an
+    // integer's range is ever converted to one.
     if (!(std::abs(s0) + e.hx < kMaxCoord && std::abs(t0) + e.hy < kMaxCoord)) {
         if (texels_read) *texels_read += 1;
         return img.mean();
