@@ -48,9 +48,32 @@ int64_t ceil_to_int(double x) {
 // an integer is in range.
 constexpr double kMaxCoord = 1073741824.0;  // 2^30
 
-// Column wrap handled at compile time where it is cheap: Repeat steps the wrapped column along
-// with the unwrapped one, Clamp clamps it; anything else wraps each texel.
+// The along-line wrap handled at compile time where it is cheap: Repeat runs through the
+// two-period offset table from the wrapped start, Clamp clamps; anything else wraps each texel.
 enum class ColumnWrap { Repeat, Clamp, Other };
+
+// The image seen as lines of texels: its rows (along s) or its columns (along t). The ellipse is
+// walked line by line with an exact span per line, so the cost has a part per texel and a part
+// per line. Walking the direction with fewer lines (along the ellipse's longer extent) visits,
+// for a thin ellipse at a random angle, about 40% fewer lines than walking rows only. Texel (i along, k across) is data + line[k] + along[i], both offsets
+// from the image's two-period tables.
+template <bool Columns>
+struct Lines {
+    explicit Lines(const Image& img)
+        : data(img.row(0)),
+          along(Columns ? img.row_offsets() : img.column_offsets()),
+          line(Columns ? img.column_offsets() : img.row_offsets()),
+          n_along(Columns ? img.height() : img.width()),
+          n_across(Columns ? img.width() : img.height()),
+          wrap_along(Columns ? img.wrap_t() : img.wrap_s()),
+          wrap_across(Columns ? img.wrap_s() : img.wrap_t()),
+          nc(img.channels()) {}
+    const float* data;
+    const std::ptrdiff_t *along, *line;
+    int64_t n_along, n_across;
+    WrapMode wrap_along, wrap_across;
+    int nc;
+};
 
 // Accumulates weighted texels: with SSE2, three or four channels are one 4-wide multiply-add
 // (a 4-float load of a 3-channel texel reads the next texel's first channel, or the buffer's
@@ -89,13 +112,16 @@ struct TexelSum {
     float s[4] = {0, 0, 0, 0};
 };
 
-// The ellipse's weighted sum at one level. Coefficients are normalised (Q < 1 inside);
-// NC > 0 fixes the channel count at compile time.
-template <int NC, ColumnWrap CW>
-void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, double C, double hy,
+// The ellipse's weighted sum at one level, walked along the lines L. Coordinates are in L's
+// terms: s0 along a line, t0 across the lines, and Q = A x^2 + B x y + C y^2 with x along and y
+// across; coefficients are normalised (Q < 1 inside). hy is the half-extent across the lines and
+// inv2a = 1 / 2A. NC > 0 fixes the channel count at compile time.
+template <int NC, ColumnWrap CW, class L>
+void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, double C, double hy,
                     double inv2a, float* sum, double* wsum_out, int* count_out) {
-    const int64_t W = img.width(), H = img.height();
-    const int nc = NC > 0 ? NC : img.channels();
+    const int64_t W = lines.n_along, H = lines.n_across;
+    const std::ptrdiff_t* along = lines.along;
+    const int nc = NC > 0 ? NC : lines.nc;
     const float* lut = ewa_weight_lut();
     const double delta = 4 * A * C - B * B;
     // The weight-table index is floor(Q N). Scaling the coefficients by N, a power of two, is
@@ -117,13 +143,13 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
     Span spans[kRows];
     // Repeat rows step along with `it` (one division per level, not per row: tiny levels wrap
     // on nearly every row).
-    const bool repeat_t = img.wrap_t() == WrapMode::Repeat;
+    const bool repeat_t = lines.wrap_across == WrapMode::Repeat;
     int64_t jt_next = repeat_t ? wrap_index(t_lo, H, WrapMode::Repeat) : 0;
     for (int64_t it0 = t_lo; it0 <= t_hi; it0 += kRows) {
         const int64_t it1 = std::min(t_hi, it0 + kRows - 1);
         int n = 0;
         for (int64_t it = it0; it <= it1; ++it) {
-            const int64_t jt = repeat_t ? jt_next : wrap_index(it, H, img.wrap_t());
+            const int64_t jt = repeat_t ? jt_next : wrap_index(it, H, lines.wrap_across);
             if (repeat_t) jt_next = jt_next + 1 == H ? 0 : jt_next + 1;
             const double y = double(it) - t0;
             // Exact span of this row: A x^2 + (B y) x + (C y^2 - 1) < 0, i.e.
@@ -136,9 +162,11 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
         for (int k = 0; k < n; ++k) {
             const auto [s_lo, s_hi, jt, by, cyy] = spans[k];
             if (s_hi < s_lo) continue;
-            // Q is evaluated directly per texel (not incrementally): the weight-table index
-            // floor(Q N) must not depend on accumulated rounding. The span's end texels can
-            // still fall just outside (Q >= 1) by rounding; they are skipped and not counted.
+            // Q is evaluated directly per texel, not by forward differences: the weight-table
+            // index floor(Q N) must not depend on accumulated rounding (texels exactly on a
+            // table step, common on symmetric footprints, would change weight). The span's end
+            // texels can still fall just outside (Q >= 1) by rounding; they are skipped and not
+            // counted.
             int64_t outside = 0;
             double xi = double(s_lo);
             if (jt < 0) {  // a row outside a black edge: the weights count, nothing adds
@@ -153,29 +181,42 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
                 count += s_hi - s_lo + 1 - outside;
                 continue;
             }
-            const float* row = img.row(static_cast<int>(jt));
-            int64_t js = 0;
-            if constexpr (CW == ColumnWrap::Repeat)  // a mask for power-of-two widths
-                js = (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
-            for (int64_t is = s_lo; is <= s_hi; ++is, xi += 1) {
+            const float* row = lines.data + lines.line[jt];
+            // One texel of the span; t is null outside a black edge (the weight still counts).
+            auto visit = [&](const float* t, bool black) {
                 const double x = xi - s0, q = An * x * x + by * x + cyy;
-                int64_t col;
-                if constexpr (CW == ColumnWrap::Repeat) {
-                    col = js;
-                    js = js + 1 == W ? 0 : js + 1;
-                } else if constexpr (CW == ColumnWrap::Clamp) {
-                    col = is < 0 ? 0 : (is >= W ? W - 1 : is);
-                } else {
-                    col = wrap_index(is, W, img.wrap_s());
-                }
+                xi += 1;
                 if (!(q < N)) {
                     ++outside;
-                    continue;
+                } else {
+                    const float w = lut[static_cast<int64_t>(q)];
+                    wsum += w;
+                    if (!black) acc.add(w, t, nc);
                 }
-                const float w = lut[static_cast<int64_t>(q)];
-                wsum += w;
-                if (CW == ColumnWrap::Other && col < 0) continue;  // outside a black edge
-                acc.add(w, row + Image::column_offset(col) * nc, nc);
+            };
+            if constexpr (CW == ColumnWrap::Repeat) {
+                // Through the two-period table from the wrapped start, in pieces of at most one
+                // period (one piece unless the span is longer than the image).
+                int64_t j =
+                    (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
+                for (int64_t left = s_hi - s_lo + 1; left > 0;) {
+                    const int64_t end = j + std::min(left, W);
+                    left -= end - j;
+                    for (; j < end; ++j) visit(row + along[j], false);
+                    j -= W;
+                }
+            } else {
+                for (int64_t is = s_lo; is <= s_hi; ++is) {
+                    int64_t col;
+                    if constexpr (CW == ColumnWrap::Clamp)
+                        col = is < 0 ? 0 : (is >= W ? W - 1 : is);
+                    else
+                        col = wrap_index(is, W, lines.wrap_along);
+                    if (col < 0)  // outside a black edge
+                        visit(nullptr, true);
+                    else
+                        visit(row + along[col], false);
+                }
             }
             count += s_hi - s_lo + 1 - outside;
         }
@@ -185,20 +226,32 @@ void ewa_accumulate(const Image& img, double s0, double t0, double A, double B, 
     *count_out = static_cast<int>(count);
 }
 
-template <int NC>
-void ewa_accumulate_nc(const Image& img, double s0, double t0, double A, double B, double C,
-                       double hy, double inv2a, float* sum, double* wsum, int* count) {
-    switch (img.wrap_s()) {
+template <int NC, class L>
+void ewa_accumulate_wrap(const L& lines, double s0, double t0, double A, double B, double C,
+                         double hy, double inv2a, float* sum, double* wsum, int* count) {
+    switch (lines.wrap_along) {
         case WrapMode::Repeat:
-            return ewa_accumulate<NC, ColumnWrap::Repeat>(img, s0, t0, A, B, C, hy, inv2a, sum,
+            return ewa_accumulate<NC, ColumnWrap::Repeat>(lines, s0, t0, A, B, C, hy, inv2a, sum,
                                                           wsum, count);
         case WrapMode::Clamp:
-            return ewa_accumulate<NC, ColumnWrap::Clamp>(img, s0, t0, A, B, C, hy, inv2a, sum, wsum,
-                                                         count);
+            return ewa_accumulate<NC, ColumnWrap::Clamp>(lines, s0, t0, A, B, C, hy, inv2a, sum,
+                                                         wsum, count);
         default:
-            return ewa_accumulate<NC, ColumnWrap::Other>(img, s0, t0, A, B, C, hy, inv2a, sum, wsum,
-                                                         count);
+            return ewa_accumulate<NC, ColumnWrap::Other>(lines, s0, t0, A, B, C, hy, inv2a, sum,
+                                                         wsum, count);
     }
+}
+
+// Rows when the ellipse is at least as wide as it is tall, columns otherwise (A, C and the
+// half-extents trade places).
+template <int NC>
+void ewa_accumulate_nc(const Image& img, double s0, double t0, const EwaEllipse& e, double A,
+                       double B, double C, float* sum, double* wsum, int* count) {
+    if (e.hy <= e.hx)
+        return ewa_accumulate_wrap<NC>(Lines<false>(img), s0, t0, A, B, C, e.hy, 0.5 * e.F / e.A,
+                                       sum, wsum, count);
+    return ewa_accumulate_wrap<NC>(Lines<true>(img), t0, s0, C, B, A, e.hx, 0.5 * e.F / e.C, sum,
+                                   wsum, count);
 }
 
 }  // namespace
@@ -220,19 +273,18 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
         return img.mean();
     }
     const double inv_f = 1 / e.F, An = e.A * inv_f, Bn = e.B * inv_f, Cn = e.C * inv_f;
-    const double hy = e.hy, inv2a = 0.5 * e.F / e.A;  // 1 / 2An, beside 1/F rather than after it
     float sum[4] = {0, 0, 0, 0};
     double wsum = 0;
     int count = 0;
     switch (nc) {
         case 1:
-            ewa_accumulate_nc<1>(img, s0, t0, An, Bn, Cn, hy, inv2a, sum, &wsum, &count);
+            ewa_accumulate_nc<1>(img, s0, t0, e, An, Bn, Cn, sum, &wsum, &count);
             break;
         case 3:
-            ewa_accumulate_nc<3>(img, s0, t0, An, Bn, Cn, hy, inv2a, sum, &wsum, &count);
+            ewa_accumulate_nc<3>(img, s0, t0, e, An, Bn, Cn, sum, &wsum, &count);
             break;
         default:
-            ewa_accumulate_nc<0>(img, s0, t0, An, Bn, Cn, hy, inv2a, sum, &wsum, &count);
+            ewa_accumulate_nc<0>(img, s0, t0, e, An, Bn, Cn, sum, &wsum, &count);
             break;
     }
     if (texels_read) *texels_read += count;

@@ -90,6 +90,12 @@ Image::Image(int width, int height, int channels, const std::vector<float>& texe
     m_tiles_x = static_cast<std::size_t>((width + kTile - 1) >> kTileLog2);
     const std::size_t tiles_y = static_cast<std::size_t>((height + kTile - 1) >> kTileLog2);
     m_texels = TexelBuffer(m_tiles_x * tiles_y * kTile * kTile * channels);
+    m_column_offsets.resize(2 * static_cast<std::size_t>(width));
+    for (std::size_t k = 0; k < m_column_offsets.size(); ++k)
+        m_column_offsets[k] = column_offset(static_cast<int64_t>(k % width)) * channels;
+    m_row_offsets.resize(2 * static_cast<std::size_t>(height));
+    for (std::size_t k = 0; k < m_row_offsets.size(); ++k)
+        m_row_offsets[k] = row_offset(static_cast<int64_t>(k % height)) * channels;
     std::array<double, 4> sum{};
     for (int j = 0; j < height; ++j)
         for (int i = 0; i < width; ++i) {

@@ -76,21 +76,35 @@ class Image {
     int channels() const { return m_channels; }
     WrapMode wrap_s() const { return m_wrap_s; }
     WrapMode wrap_t() const { return m_wrap_t; }
-    std::size_t memory_bytes() const { return m_texels.size() * sizeof(float); }
+    std::size_t memory_bytes() const {
+        return m_texels.size() * sizeof(float) +
+               (m_column_offsets.size() + m_row_offsets.size()) * sizeof(std::ptrdiff_t);
+    }
 
     /// Texel (i,j) without wrapping; precondition 0 <= i < width, 0 <= j < height.
     const float* texel(int i, int j) const { return row(j) + column_offset(i) * m_channels; }
     /// Row j's texel 0; texel (i,j) is row(j) + column_offset(i) * channels().
-    const float* row(int j) const {
-        const std::size_t tile = static_cast<std::size_t>(j >> kTileLog2) * m_tiles_x;
-        const std::size_t k = (tile << (2 * kTileLog2)) + ((j & (kTile - 1)) << kTileLog2);
-        return m_texels.data() + k * m_channels;
+    const float* row(int j) const { return m_texels.data() + row_offset(j) * m_channels; }
+    /// Offset of row j from row 0, in texels: texel (i,j) is texel (0,0) + row_offset(j) +
+    /// column_offset(i). Rows 8 apart are tile_row_offset() apart.
+    std::ptrdiff_t row_offset(int64_t j) const {
+        return (j >> kTileLog2) * tile_row_offset() + ((j & (kTile - 1)) << kTileLog2);
+    }
+    std::ptrdiff_t tile_row_offset() const {
+        return static_cast<std::ptrdiff_t>(m_tiles_x) << (2 * kTileLog2);
     }
     /// Offset of column i within a row, in texels.
     static std::ptrdiff_t column_offset(int64_t i) {
         return static_cast<std::ptrdiff_t>(((i >> kTileLog2) << (2 * kTileLog2)) +
                                            (i & (kTile - 1)));
     }
+
+    /// Tables of the offsets above times channels(), in floats: texel (i,j) is
+    /// row(0) + row_offsets()[j] + column_offsets()[i]. Each holds two periods (entry n + k
+    /// equals entry k), so n consecutive Repeat-wrapped indices from any start in [0,n) are read
+    /// without wrapping.
+    const std::ptrdiff_t* column_offsets() const { return m_column_offsets.data(); }
+    const std::ptrdiff_t* row_offsets() const { return m_row_offsets.data(); }
 
     /// The texels in row-major order from row j = 0 (what the constructor took).
     std::vector<float> row_major() const;
@@ -106,6 +120,7 @@ class Image {
     std::size_t m_tiles_x = 0;
     WrapMode m_wrap_s = WrapMode::Repeat, m_wrap_t = WrapMode::Repeat;
     TexelBuffer m_texels;
+    std::vector<std::ptrdiff_t> m_column_offsets, m_row_offsets;
     Texel m_mean{};
 };
 
