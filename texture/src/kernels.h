@@ -1,6 +1,7 @@
 // cmam::texture — inner kernels shared by the filters (private header).
 // Bilinear taps resolved per axis once (wrap applied to the pair of indices, never per texel),
-// so no lookup divides unless its coordinate lies outside the base period.
+// so no lookup divides unless its coordinate lies outside the base period; texel addresses come
+// from the image's row and column offset tables (two loads each instead of the tile arithmetic).
 #pragma once
 
 #include <cmam/texture/image.h>
@@ -53,8 +54,11 @@ inline Texel bilinear_at(const Image& img, double s, double t) {
                 w11 = x.f * y.f;
     Texel out{};
     if ((x.i0 | x.i1 | y.i0 | y.i1) >= 0) {
-        const float *a = img.texel(x.i0, y.i0), *b = img.texel(x.i1, y.i0),
-                    *c = img.texel(x.i0, y.i1), *d = img.texel(x.i1, y.i1);
+        const float* base = img.row(0);
+        const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
+        const float *r0 = base + rows[y.i0], *r1 = base + rows[y.i1];
+        const std::ptrdiff_t c0 = cols[x.i0], c1 = cols[x.i1];
+        const float *a = r0 + c0, *b = r0 + c1, *c = r1 + c0, *d = r1 + c1;
         auto blend = [&](int k) { return w00 * a[k] + w10 * b[k] + w01 * c[k] + w11 * d[k]; };
         if (nc == 3) return {blend(0), blend(1), blend(2), 0.0f};
         if (nc == 1) return {blend(0), 0.0f, 0.0f, 0.0f};
