@@ -55,8 +55,9 @@ enum class ColumnWrap { Repeat, Clamp, Other };
 // The image seen as lines of texels: its rows (along s) or its columns (along t). The ellipse is
 // walked line by line with an exact span per line, so the cost has a part per texel and a part
 // per line. Walking the direction with fewer lines (along the ellipse's longer extent) visits,
-// for a thin ellipse at a random angle, about 40% fewer lines than walking rows only. Texel (i along, k across) is data + line[k] + along[i], both offsets
-// from the image's two-period tables.
+// for a thin ellipse at a random angle, about 40% fewer lines than walking rows only.
+// Texel (i along, k across) is data + line[k] + along[i], both offsets from the image's
+// two-period tables.
 template <bool Columns>
 struct Lines {
     explicit Lines(const Image& img)
@@ -141,8 +142,8 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
     };
     constexpr int kRows = 32;
     Span spans[kRows];
-    // Repeat rows step along with `it` (one division per level, not per row: tiny levels wrap
-    // on nearly every row).
+    // Repeat lines step along with `it` (one division per level, not per line: tiny levels wrap
+    // on nearly every line).
     const bool repeat_t = lines.wrap_across == WrapMode::Repeat;
     int64_t jt_next = repeat_t ? wrap_index(t_lo, H, WrapMode::Repeat) : 0;
     for (int64_t it0 = t_lo; it0 <= t_hi; it0 += kRows) {
