@@ -160,6 +160,21 @@ TEST(Mip, NonPowerOfTwoLevelsPreserveTheMeanAndStayInside) {
     }
 }
 
+TEST(Mip, TrilinearAtALevelOfDetailMatchesTheWidth) {
+    std::vector<float> px(37 * 20 * 3);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(0, 1);
+    for (float& x : px) x = unit(rng);
+    MipPyramid p(Image(37, 20, 3, px));
+    // Magnification, between levels, exactly on a level, and beyond the coarsest level.
+    for (double w : {0.5, 1.0, 1.7, 2.0, 3.3, 9.0, 31.0, 32.0, 100.0}) {
+        const Texel a = p.trilinear(0.31, 0.77, w), b = p.trilinear_lod(0.31, 0.77, std::log2(w));
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 1e-6) << w;
+    }
+    EXPECT_NEAR(p.trilinear_lod(0.31, 0.77, 100)[0], p.level(p.levels() - 1).mean()[0], 1e-7);
+    EXPECT_NEAR(p.trilinear_lod(0.31, 0.77, -3)[0], p.bilinear(0, 0.31, 0.77)[0], 1e-7);
+}
+
 TEST(Mip, TrilinearIsContinuousAtLambdaOneAndLevelMonotonic) {
     MipPyramid p(tmip1());
     double below = p.trilinear(0.3, 0.6, 2 - 1e-9)[0], at = p.trilinear(0.3, 0.6, 2)[0];

@@ -151,8 +151,10 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
                          (rect[3] - rect[1]) * (rect[3] - rect[1]);
             }
             const MipPyramid& pyr = pyramid();
-            double lambda = 0;
-            Texel t = pyr.trilinear(u, v, std::sqrt(width2), &lambda);
+            // log2(width) from the width squared: no square root before the level is known.
+            const double lambda =
+                width2 > 1 ? std::min(0.5 * std::log2(width2), double(pyr.levels() - 1)) : 0;
+            Texel t = pyr.trilinear_lod(u, v, lambda);
             if (info) {
                 in.width = std::sqrt(width2);
                 in.lambda = lambda;

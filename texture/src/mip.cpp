@@ -79,17 +79,19 @@ Texel MipPyramid::bilinear(int l, double u, double v) const {
 }
 
 Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_used) const {
-    const int L = levels();
     if (!(width > 1)) {  // magnification (or NaN width): level 0, no logarithm needed
         if (lambda_used) *lambda_used = 0;
         return bilinear(0, u, v);
     }
     const double lambda = std::log2(width);
-    if (lambda >= L - 1) {
-        if (lambda_used) *lambda_used = L - 1;
-        return level(L - 1).mean();
-    }
-    if (lambda_used) *lambda_used = lambda;
+    if (lambda_used) *lambda_used = std::min(lambda, double(levels() - 1));
+    return trilinear_lod(u, v, lambda);
+}
+
+Texel MipPyramid::trilinear_lod(double u, double v, double lambda) const {
+    const int L = levels();
+    if (!(lambda > 0)) return bilinear(0, u, v);
+    if (lambda >= L - 1) return level(L - 1).mean();
     const int l = static_cast<int>(lambda);  // lambda > 0 here
     const float f = static_cast<float>(lambda - l);
     const Image &fine = level(l), &coarse = level(l + 1);

@@ -25,6 +25,10 @@ class MipPyramid {
     /// Trilinear lookup for a footprint `width` in level-0 texels (lambda = log2(width)).
     /// `levels_used` (optional) receives the fractional level lambda, clamped to [0, L-1].
     Texel trilinear(double u, double v, double width, double* lambda_used = nullptr) const;
+    /// The same at a given level of detail `lambda` (log2 of the width in level-0 texels):
+    /// lambda <= 0 (or NaN) is bilinear at level 0, lambda >= L-1 the coarsest level's mean.
+    /// For callers that have the width squared: lambda = log2(width^2) / 2 needs no square root.
+    Texel trilinear_lod(double u, double v, double lambda) const;
 
   private:
     std::vector<Image> m_levels;
