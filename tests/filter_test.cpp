@@ -175,6 +175,30 @@ TEST(Mip, TrilinearAtALevelOfDetailMatchesTheWidth) {
     EXPECT_NEAR(p.trilinear_lod(0.31, 0.77, -3)[0], p.bilinear(0, 0.31, 0.77)[0], 1e-7);
 }
 
+TEST(Mip, TrilinearLookupMatchesThePyramid) {
+    // FilteredTexture::lookup takes the level from the squared width's exponent and the blend
+    // weight from its logarithm; MipPyramid::trilinear takes both from log2(width).
+    std::vector<float> px(64 * 48 * 3);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(0, 1);
+    for (float& x : px) x = float(unit(rng));
+    FilteredTexture t(Image(64, 48, 3, px));
+    // Widths on and either side of every power of two, and random ones.
+    std::vector<double> widths;
+    for (int k = 0; k <= 8; ++k)
+        for (double d : {-1e-12, 0.0, 1e-12}) widths.push_back(std::ldexp(1.0, k) * (1 + d));
+    for (int k = 0; k < 200; ++k) widths.push_back(std::exp2(9 * unit(rng) - 1));
+    for (double w : widths) {
+        const double u = unit(rng), v = unit(rng);
+        LookupInfo info;
+        const Texel a = t.lookup(u, v, Footprint::axes({w / 64, 0}, {0, 0.5 / 48}),
+                                 {FilterKind::Trilinear}, &info);
+        const Texel b = t.pyramid().trilinear(u, v, w);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 1e-6) << "width " << w;
+        EXPECT_NEAR(info.lambda, std::clamp(std::log2(w), 0.0, t.pyramid().levels() - 1.0), 1e-12);
+    }
+}
+
 TEST(Mip, TrilinearIsContinuousAtLambdaOneAndLevelMonotonic) {
     MipPyramid p(tmip1());
     double below = p.trilinear(0.3, 0.6, 2 - 1e-9)[0], at = p.trilinear(0.3, 0.6, 2)[0];

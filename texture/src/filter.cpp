@@ -2,7 +2,9 @@
 #include <cmam/texture/filters.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <limits>
 
 namespace cmam::texture {
 
@@ -151,10 +153,24 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
                          (rect[3] - rect[1]) * (rect[3] - rect[1]);
             }
             const MipPyramid& pyr = pyramid();
-            // log2(width) from the width squared: no square root before the level is known.
-            const double lambda =
-                width2 > 1 ? std::min(0.5 * std::log2(width2), double(pyr.levels() - 1)) : 0;
-            Texel t = pyr.trilinear_lod(u, v, lambda);
+            double lambda = 0;
+            Texel t;
+            if (width2 > 1) {
+                // lambda = log2(width^2) / 2, with no square root. With width^2 = m 2^e
+                // (1 <= m < 2), lambda = (e + log2 m) / 2 lies in [floor(e/2), floor(e/2) + 1):
+                // the level comes from the exponent alone, so the texel reads need not wait
+                // for the logarithm; only the blend weight does.
+                static_assert(std::numeric_limits<double>::is_iec559);
+                const int e =
+                    static_cast<int>((std::bit_cast<uint64_t>(width2) >> 52) & 0x7ff) - 1023;
+                const int l = e >> 1;
+                lambda = 0.5 * std::log2(width2);
+                t = pyr.trilinear_levels(u, v, l,
+                                         static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));
+                lambda = std::min(lambda, double(pyr.levels() - 1));
+            } else {
+                t = pyr.bilinear(0, u, v);
+            }
             if (info) {
                 in.width = std::sqrt(width2);
                 in.lambda = lambda;

@@ -93,7 +93,11 @@ Texel MipPyramid::trilinear_lod(double u, double v, double lambda) const {
     if (!(lambda > 0)) return bilinear(0, u, v);
     if (lambda >= L - 1) return level(L - 1).mean();
     const int l = static_cast<int>(lambda);  // lambda > 0 here
-    const float f = static_cast<float>(lambda - l);
+    return trilinear_levels(u, v, l, static_cast<float>(lambda - l));
+}
+
+Texel MipPyramid::trilinear_levels(double u, double v, int l, float f) const {
+    if (l >= levels() - 1) return level(levels() - 1).mean();
     const Image &fine = level(l), &coarse = level(l + 1);
     const double s = u * fine.width() - 0.5, t = v * fine.height() - 0.5;
     // The coarser level's coordinates are smaller, so one range check covers both.
