@@ -270,6 +270,27 @@ TEST(Ewa, TMip2RampIsSymmetric) {
         EXPECT_NEAR(ewa(p, 0.5, 0.5, au, av, bu, bv).value[0], 7.5, 1e-4);
 }
 
+TEST(Ewa, LevelIsContinuousAcrossPowersOfTwo) {
+    // The level is |b|'s binary exponent and the blend weight log2|b| minus it; either side of
+    // a power of two the result must not jump.
+    std::vector<float> px(128 * 128 * 3);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> unit(0, 1);
+    for (float& x : px) x = unit(rng);
+    MipPyramid p(Image(128, 128, 3, px));
+    for (int k = 0; k <= 7; ++k)
+        for (double d : {-1e-9, 0.0, 1e-9}) {
+            // Axes 3|b| and |b| long at 30 degrees, |b| = 2^k (1 + d) level-0 texels.
+            auto look = [&](double lb) {
+                const double b = lb / 128, c = std::cos(M_PI / 6), s = std::sin(M_PI / 6);
+                return ewa(p, 0.37, 0.61, 3 * b * c, 3 * b * s, -b * s, b * c);
+            };
+            const EwaResult r = look(std::ldexp(1.0, k) * (1 + d)), at = look(std::ldexp(1.0, k));
+            EXPECT_NEAR(r.lambda, std::clamp(std::log2(r.minor), 0.0, 7.0), 1e-9) << k << " " << d;
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.value[c], at.value[c], 1e-5) << k << " " << d;
+        }
+}
+
 TEST(Ewa, DegenerateMinorAxisStillFiltersAndCostIsBounded) {
     std::vector<float> px(256 * 256);
     for (int j = 0; j < 256; ++j)

@@ -9,6 +9,8 @@
 #include <emmintrin.h>
 #endif
 
+#include "kernels.h"
+
 namespace cmam::texture {
 
 const float* ewa_weight_lut() {
@@ -335,19 +337,24 @@ EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, d
     }
     r.major = la;
     r.minor = lb;
-    double lambda = std::max(0.0, std::log2(lb));
-    if (lambda >= L - 1) {
+    // lambda = max(0, log2 |b|). Its integer part is |b|'s binary exponent, so the first level's
+    // texels need not wait for the logarithm; only the blend weight does.
+    const int l = lb < 1 ? 0 : detail::floor_log2(lb);
+    if (l >= L - 1) {
         r.value = pyr.level(L - 1).mean();
         r.lambda = L - 1;
         r.texels_read = 1;
         return r;
     }
-    int l = static_cast<int>(std::floor(lambda));
-    double f = lambda - l;
-    r.lambda = lambda;
+    const double lambda = lb < 1 ? 0 : std::log2(lb);
+    const double f = std::clamp(lambda - l, 0.0, 1.0);
+    r.lambda = std::min(lambda, double(L - 1));
+    // Level-0 texels to level-lev texels: multiplications by W_lev / W_0 (the reciprocals do not
+    // depend on the lookup, so they are ready before the level is).
+    const double inv_w = 1.0 / base.width(), inv_h = 1.0 / base.height();
     auto at_level = [&](int lev) {
         const Image& img = pyr.level(lev);
-        double ks = double(img.width()) / base.width(), kt = double(img.height()) / base.height();
+        const double ks = img.width() * inv_w, kt = img.height() * inv_h;
         return ewa_level(img, u, v, as * ks, at * kt, bs * ks, bt * kt, &r.texels_read);
     };
     Texel a = at_level(l);

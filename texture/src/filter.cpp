@@ -2,9 +2,9 @@
 #include <cmam/texture/filters.h>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
-#include <limits>
+
+#include "kernels.h"
 
 namespace cmam::texture {
 
@@ -160,10 +160,7 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
                 // (1 <= m < 2), lambda = (e + log2 m) / 2 lies in [floor(e/2), floor(e/2) + 1):
                 // the level comes from the exponent alone, so the texel reads need not wait
                 // for the logarithm; only the blend weight does.
-                static_assert(std::numeric_limits<double>::is_iec559);
-                const int e =
-                    static_cast<int>((std::bit_cast<uint64_t>(width2) >> 52) & 0x7ff) - 1023;
-                const int l = e >> 1;
+                const int l = detail::floor_log2(width2) >> 1;
                 lambda = 0.5 * std::log2(width2);
                 t = pyr.trilinear_levels(u, v, l,
                                          static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));

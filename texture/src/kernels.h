@@ -6,9 +6,18 @@
 
 #include <cmam/texture/image.h>
 
+#include <bit>
 #include <cstdint>
+#include <limits>
 
 namespace cmam::texture::detail {
+
+/// floor(log2(x)) for x >= 1 (infinity included), exactly, from the binary exponent: a level
+/// chosen this way does not wait for a logarithm.
+inline int floor_log2(double x) {
+    static_assert(std::numeric_limits<double>::is_iec559);
+    return static_cast<int>((std::bit_cast<uint64_t>(x) >> 52) & 0x7ff) - 1023;
+}
 
 /// The two lattice indices around continuous coordinate `s` (already shifted by -1/2) on an
 /// axis of n texels, with the wrap applied; -1 marks a Black tap. `f` is the weight of i1.
