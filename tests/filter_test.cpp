@@ -17,6 +17,14 @@ Image tex2x2(WrapMode w) {
 Image tmip1(WrapMode w = WrapMode::Repeat) {
     return Image(4, 4, 1, {3, 0, 1, 2, 5, 7, 4, 1, 0, 2, 6, 3, 1, 1, 0, 4}, w, w);
 }
+// A w x h image of uniform random texels in [0,1), three channels.
+Image random_rgb(int w, int h, unsigned seed, WrapMode wrap = WrapMode::Repeat) {
+    std::vector<float> px(std::size_t(w) * h * 3);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0, 1);
+    for (float& x : px) x = unit(rng);
+    return Image(w, h, 3, px, wrap, wrap);
+}
 double avg(const SummedAreaTable& s, double x0, double x1, double y0, double y1) {
     return s.average(x0, y0, x1, y1)[0];
 }
@@ -161,11 +169,7 @@ TEST(Mip, NonPowerOfTwoLevelsPreserveTheMeanAndStayInside) {
 }
 
 TEST(Mip, TrilinearAtALevelOfDetailMatchesTheWidth) {
-    std::vector<float> px(37 * 20 * 3);
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> unit(0, 1);
-    for (float& x : px) x = unit(rng);
-    MipPyramid p(Image(37, 20, 3, px));
+    MipPyramid p(random_rgb(37, 20, 3));
     // Magnification, between levels, exactly on a level, and beyond the coarsest level.
     for (double w : {0.5, 1.0, 1.7, 2.0, 3.3, 9.0, 31.0, 32.0, 100.0}) {
         const Texel a = p.trilinear(0.31, 0.77, w), b = p.trilinear_lod(0.31, 0.77, std::log2(w));
@@ -178,11 +182,9 @@ TEST(Mip, TrilinearAtALevelOfDetailMatchesTheWidth) {
 TEST(Mip, TrilinearLookupMatchesThePyramid) {
     // FilteredTexture::lookup takes the level from the squared width's exponent and the blend
     // weight from its logarithm; MipPyramid::trilinear takes both from log2(width).
-    std::vector<float> px(64 * 48 * 3);
+    FilteredTexture t(random_rgb(64, 48, 5));
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0, 1);
-    for (float& x : px) x = float(unit(rng));
-    FilteredTexture t(Image(64, 48, 3, px));
     // Widths on and either side of every power of two, and random ones.
     std::vector<double> widths;
     for (int k = 0; k <= 8; ++k)
@@ -273,11 +275,7 @@ TEST(Ewa, TMip2RampIsSymmetric) {
 TEST(Ewa, LevelIsContinuousAcrossPowersOfTwo) {
     // The level is |b|'s binary exponent and the blend weight log2|b| minus it; either side of
     // a power of two the result must not jump.
-    std::vector<float> px(128 * 128 * 3);
-    std::mt19937 rng(9);
-    std::uniform_real_distribution<float> unit(0, 1);
-    for (float& x : px) x = unit(rng);
-    MipPyramid p(Image(128, 128, 3, px));
+    MipPyramid p(random_rgb(128, 128, 9));
     for (int k = 0; k <= 7; ++k)
         for (double d : {-1e-9, 0.0, 1e-9}) {
             // Axes 3|b| and |b| long at 30 degrees, |b| = 2^k (1 + d) level-0 texels.
@@ -337,9 +335,7 @@ TEST_P(EwaWrap, LevelMatchesABoundingBoxScan) {
     std::uniform_real_distribution<double> unit(0, 1);
     // Sizes include odd ones and images narrower than the ellipse (spans longer than a period).
     for (auto [w, h] : {std::pair{37, 20}, {5, 3}, {16, 16}, {1, 9}}) {
-        std::vector<float> px(std::size_t(w) * h * 3);
-        for (float& x : px) x = float(unit(rng));
-        const Image img(w, h, 3, px, GetParam(), GetParam());
+        const Image img = random_rgb(w, h, unsigned(w * 100 + h), GetParam());
         for (int k = 0; k < 300; ++k) {
             // Axes in level texels, any orientation, 0.2 to 24 texels long, so that the walk
             // runs along rows for some ellipses and along columns for others.
