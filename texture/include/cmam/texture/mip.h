@@ -29,7 +29,7 @@ class MipPyramid {
     /// lambda <= 0 (or NaN) is bilinear at level 0, lambda >= L-1 the coarsest level's mean.
     /// For callers that have the width squared: lambda = log2(width^2) / 2 needs no square root.
     Texel trilinear_lod(double u, double v, double lambda) const;
-    /// Levels l and l+1 blended with weight f (in [0,1]) on level l+1, i.e. lambda = l + f;
+    /// Levels l >= 0 and l+1 blended with weight f (in [0,1]) on level l+1, i.e. lambda = l + f;
     /// l >= L-1 is the coarsest level's mean. For callers that know the level before the
     /// weight: the texel reads need not wait for the logarithm.
     Texel trilinear_levels(double u, double v, int l, float f) const;
