@@ -120,8 +120,8 @@ struct TexelSum {
 // across; coefficients are normalised (Q < 1 inside). hy is the half-extent across the lines and
 // inv2a = 1 / 2A. NC > 0 fixes the channel count at compile time.
 template <int NC, ColumnWrap CW, class L>
-void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, double C, double hy,
-                    double inv2a, float* sum, double* wsum_out, int* count_out) {
+void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, double C, double hx,
+                    double hy, double inv2a, float* sum, double* wsum_out, int* count_out) {
     const int64_t W = lines.n_along, H = lines.n_across;
     const std::ptrdiff_t* along = lines.along;
     const int nc = NC > 0 ? NC : lines.nc;
@@ -148,6 +148,37 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
     // on nearly every line).
     const bool repeat_t = lines.wrap_across == WrapMode::Repeat;
     int64_t jt_next = repeat_t ? wrap_index(t_lo, H, WrapMode::Repeat) : 0;
+    if constexpr (CW == ColumnWrap::Repeat) {
+        // A small ellipse (up to 4 x 4 texels, as at the coarser level of a round footprint):
+        // a window of four texels per line, without branches. Texels outside the ellipse get
+        // the table's last entry, 0, and are not counted; the window's columns are read from
+        // the two-period table from the wrapped start (j0 + 3 < 2W as W >= 4). Q as in the
+        // spans below, so the weights are the same.
+        const int64_t s_lo = ceil_to_int(s0 - hx), n_s = floor_to_int(s0 + hx) - s_lo + 1;
+        if (n_s <= 4 && t_hi - t_lo < 4 && W >= 4 && repeat_t) {
+            const int64_t j0 =
+                (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
+            const double xs = double(s_lo);
+            for (int64_t it = t_lo; it <= t_hi; ++it) {
+                const int64_t jt = jt_next;
+                jt_next = jt_next + 1 == H ? 0 : jt_next + 1;
+                const double y = double(it) - t0, by = Bn * y, cyy = Cn * y * y;
+                const float* row = lines.data + lines.line[jt];
+                for (int k = 0; k < 4; ++k) {
+                    const double x = (xs + k) - s0, q = An * x * x + by * x + cyy;
+                    const bool in = q < N;
+                    const float w = lut[in ? static_cast<int64_t>(q) : kEwaLutSize - 1];
+                    wsum += w;
+                    count += in;
+                    acc.add(w, row + along[j0 + k], nc);
+                }
+            }
+            acc.store(sum, nc);
+            *wsum_out = wsum;
+            *count_out = static_cast<int>(count);
+            return;
+        }
+    }
     for (int64_t it0 = t_lo; it0 <= t_hi; it0 += kRows) {
         const int64_t it1 = std::min(t_hi, it0 + kRows - 1);
         int n = 0;
@@ -231,16 +262,16 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
 
 template <int NC, class L>
 void ewa_accumulate_wrap(const L& lines, double s0, double t0, double A, double B, double C,
-                         double hy, double inv2a, float* sum, double* wsum, int* count) {
+                         double hx, double hy, double inv2a, float* sum, double* wsum, int* count) {
     switch (lines.wrap_along) {
         case WrapMode::Repeat:
-            return ewa_accumulate<NC, ColumnWrap::Repeat>(lines, s0, t0, A, B, C, hy, inv2a, sum,
-                                                          wsum, count);
+            return ewa_accumulate<NC, ColumnWrap::Repeat>(lines, s0, t0, A, B, C, hx, hy, inv2a,
+                                                          sum, wsum, count);
         case WrapMode::Clamp:
-            return ewa_accumulate<NC, ColumnWrap::Clamp>(lines, s0, t0, A, B, C, hy, inv2a, sum,
+            return ewa_accumulate<NC, ColumnWrap::Clamp>(lines, s0, t0, A, B, C, hx, hy, inv2a, sum,
                                                          wsum, count);
         default:
-            return ewa_accumulate<NC, ColumnWrap::Other>(lines, s0, t0, A, B, C, hy, inv2a, sum,
+            return ewa_accumulate<NC, ColumnWrap::Other>(lines, s0, t0, A, B, C, hx, hy, inv2a, sum,
                                                          wsum, count);
     }
 }
@@ -251,10 +282,10 @@ template <int NC>
 void ewa_accumulate_nc(const Image& img, double s0, double t0, const EwaEllipse& e, double A,
                        double B, double C, float* sum, double* wsum, int* count) {
     if (e.hy <= e.hx)
-        return ewa_accumulate_wrap<NC>(Lines<false>(img), s0, t0, A, B, C, e.hy, 0.5 * e.F / e.A,
-                                       sum, wsum, count);
-    return ewa_accumulate_wrap<NC>(Lines<true>(img), t0, s0, C, B, A, e.hx, 0.5 * e.F / e.C, sum,
-                                   wsum, count);
+        return ewa_accumulate_wrap<NC>(Lines<false>(img), s0, t0, A, B, C, e.hx, e.hy,
+                                       0.5 * e.F / e.A, sum, wsum, count);
+    return ewa_accumulate_wrap<NC>(Lines<true>(img), t0, s0, C, B, A, e.hy, e.hx, 0.5 * e.F / e.C,
+                                   sum, wsum, count);
 }
 
 }  // namespace
