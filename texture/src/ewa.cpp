@@ -117,8 +117,8 @@ struct TexelSum {
 
 // The ellipse's weighted sum at one level, walked along the lines L. Coordinates are in L's
 // terms: s0 along a line, t0 across the lines, and Q = A x^2 + B x y + C y^2 with x along and y
-// across; coefficients are normalised (Q < 1 inside). hy is the half-extent across the lines and
-// inv2a = 1 / 2A. NC > 0 fixes the channel count at compile time.
+// across; coefficients are normalised (Q < 1 inside). hx and hy are the half-extents along and
+// across the lines, and inv2a = 1 / 2A. NC > 0 fixes the channel count at compile time.
 template <int NC, ColumnWrap CW, class L>
 void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, double C, double hx,
                     double hy, double inv2a, float* sum, double* wsum_out, int* count_out) {
@@ -135,9 +135,9 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
     TexelSum<NC> acc;
     float wsum = 0;
     int64_t count = 0;
-    // Rows are done in two passes: first every row's span (independent of one another, so their
-    // square roots and conversions overlap), then the texels, row after row. One pass per row
-    // would start each row's texels only after its own span's long chain of dependent steps.
+    // Lines are done in two passes: first every line's span (independent of one another, so
+    // their square roots and conversions overlap), then the texels, line after line. One pass
+    // per line would start each line's texels only after its own span's chain of dependent steps.
     struct Span {
         int64_t s_lo, s_hi, jt;
         double by, cyy;
@@ -148,6 +148,10 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
     // on nearly every line).
     const bool repeat_t = lines.wrap_across == WrapMode::Repeat;
     int64_t jt_next = repeat_t ? wrap_index(t_lo, H, WrapMode::Repeat) : 0;
+    // Index i along a line wrapped into [0, W) under Repeat (a mask for power-of-two widths).
+    auto repeat_along = [W](int64_t i) {
+        return (W & (W - 1)) == 0 ? (i & (W - 1)) : wrap_index(i, W, WrapMode::Repeat);
+    };
     if constexpr (CW == ColumnWrap::Repeat) {
         // A small ellipse (up to 4 x 4 texels, as at the coarser level of a round footprint):
         // a window of four texels per line, without branches. Texels outside the ellipse get
@@ -156,8 +160,7 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
         // spans below, so the weights are the same.
         const int64_t s_lo = ceil_to_int(s0 - hx), n_s = floor_to_int(s0 + hx) - s_lo + 1;
         if (n_s <= 4 && t_hi - t_lo < 4 && W >= 4 && repeat_t) {
-            const int64_t j0 =
-                (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
+            const int64_t j0 = repeat_along(s_lo);
             const double xs = double(s_lo);
             for (int64_t it = t_lo; it <= t_hi; ++it) {
                 const int64_t jt = jt_next;
@@ -203,20 +206,7 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
             // counted.
             int64_t outside = 0;
             double xi = double(s_lo);
-            if (jt < 0) {  // a row outside a black edge: the weights count, nothing adds
-                for (int64_t is = s_lo; is <= s_hi; ++is, xi += 1) {
-                    const double x = xi - s0, q = An * x * x + by * x + cyy;
-                    if (!(q < N)) {
-                        ++outside;
-                        continue;
-                    }
-                    wsum += lut[static_cast<int64_t>(q)];
-                }
-                count += s_hi - s_lo + 1 - outside;
-                continue;
-            }
-            const float* row = lines.data + lines.line[jt];
-            // One texel of the span; t is null outside a black edge (the weight still counts).
+            // One texel of the span; outside a black edge (t null) only the weight counts.
             auto visit = [&](const float* t, bool black) {
                 const double x = xi - s0, q = An * x * x + by * x + cyy;
                 xi += 1;
@@ -228,11 +218,16 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
                     if (!black) acc.add(w, t, nc);
                 }
             };
+            if (jt < 0) {  // a line outside a black edge
+                for (int64_t is = s_lo; is <= s_hi; ++is) visit(nullptr, true);
+                count += s_hi - s_lo + 1 - outside;
+                continue;
+            }
+            const float* row = lines.data + lines.line[jt];
             if constexpr (CW == ColumnWrap::Repeat) {
                 // Through the two-period table from the wrapped start, in pieces of at most one
                 // period (one piece unless the span is longer than the image).
-                int64_t j =
-                    (W & (W - 1)) == 0 ? (s_lo & (W - 1)) : wrap_index(s_lo, W, WrapMode::Repeat);
+                int64_t j = repeat_along(s_lo);
                 for (int64_t left = s_hi - s_lo + 1; left > 0;) {
                     const int64_t end = j + std::min(left, W);
                     left -= end - j;
