@@ -102,9 +102,20 @@ Texel MipPyramid::trilinear_levels(double u, double v, int l, float f) const {
     const double s = u * fine.width() - 0.5, t = v * fine.height() - 0.5;
     // The coarser level's coordinates are smaller, so one range check covers both.
     if (!(std::abs(s) < 1073741824.0 && std::abs(t) < 1073741824.0)) return fine.mean();
+    const double sc = u * coarse.width() - 0.5, tc = v * coarse.height() - 0.5;
+#if defined(__SSE2__)
+    // Both levels' texels stay in registers through the blend.
+    if (fine.channels() >= 3) {
+        __m128 a, b;
+        if (detail::bilinear_inside4(fine, s, t, &a) &&
+            detail::bilinear_inside4(coarse, sc, tc, &b))
+            return detail::to_texel(
+                _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - f), a), _mm_mul_ps(_mm_set1_ps(f), b)),
+                fine.channels());
+    }
+#endif
     const Texel a = detail::bilinear_at(fine, s, t);
-    const Texel b =
-        detail::bilinear_at(coarse, u * coarse.width() - 0.5, v * coarse.height() - 0.5);
+    const Texel b = detail::bilinear_at(coarse, sc, tc);
     Texel out{};
     for (int c = 0; c < 4; ++c) out[c] = (1 - f) * a[c] + f * b[c];
     return out;
