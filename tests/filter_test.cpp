@@ -171,10 +171,14 @@ TEST(Mip, NonPowerOfTwoLevelsPreserveTheMeanAndStayInside) {
 
 TEST(Mip, TrilinearAtALevelOfDetailMatchesTheWidth) {
     MipPyramid p(random_rgb(37, 20, 3));
-    // Magnification, between levels, exactly on a level, and beyond the coarsest level.
-    for (double w : {0.5, 1.0, 1.7, 2.0, 3.3, 9.0, 31.0, 32.0, 100.0}) {
+    // Magnification, between levels, exactly on a level, a double's step below and above one
+    // (where trilinear takes the level from the exponent and log2 may round up to the next
+    // level), and beyond the coarsest level. Both go through trilinear_levels: exactly equal.
+    for (double w :
+         {0.5, 1.0, 1.7, 2.0, 3.3, 9.0, 31.0, 32.0, 100.0, std::nextafter(2.0, 0.0),
+          std::nextafter(8.0, 0.0), std::nextafter(8.0, 9.0), std::nextafter(16.0, 0.0)}) {
         const Texel a = p.trilinear(0.31, 0.77, w), b = p.trilinear_lod(0.31, 0.77, std::log2(w));
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 1e-6) << w;
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(a[c], b[c]) << w;
     }
     EXPECT_NEAR(p.trilinear_lod(0.31, 0.77, 100)[0], p.level(p.levels() - 1).mean()[0], 1e-7);
     EXPECT_NEAR(p.trilinear_lod(0.31, 0.77, -3)[0], p.bilinear(0, 0.31, 0.77)[0], 1e-7);

@@ -83,9 +83,13 @@ Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_use
         if (lambda_used) *lambda_used = 0;
         return bilinear(0, u, v);
     }
+    // The level is the width's binary exponent, so the texel reads need not wait for the
+    // logarithm; only the blend weight does (FilteredTexture::lookup does the same with the
+    // squared width's).
+    const int l = detail::floor_log2(width);
     const double lambda = std::log2(width);
     if (lambda_used) *lambda_used = std::min(lambda, double(levels() - 1));
-    return trilinear_lod(u, v, lambda);
+    return trilinear_levels(u, v, l, static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));
 }
 
 Texel MipPyramid::trilinear_lod(double u, double v, double lambda) const {

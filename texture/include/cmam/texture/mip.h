@@ -23,7 +23,7 @@ class MipPyramid {
     /// Bilinear lookup at level `l` (lattice s' = u*W_l - 1/2 with that level's own size).
     Texel bilinear(int l, double u, double v) const;
     /// Trilinear lookup for a footprint `width` in level-0 texels (lambda = log2(width)).
-    /// `levels_used` (optional) receives the fractional level lambda, clamped to [0, L-1].
+    /// `lambda_used` (optional) receives the fractional level lambda, clamped to [0, L-1].
     Texel trilinear(double u, double v, double width, double* lambda_used = nullptr) const;
     /// The same at a given level of detail `lambda` (log2 of the width in level-0 texels):
     /// lambda <= 0 (or NaN) is bilinear at level 0, lambda >= L-1 the coarsest level's mean.
