@@ -1,7 +1,7 @@
 // Nanoseconds per lookup of each filter over footprints of 1 to 4096 texels and anisotropy
 // 1 to 16 on a 2048^2 RGB texture, beside the same lookups (same uv and derivatives) through
-// OpenImageIO's TextureSystem on a MIP-mapped copy (its trilinear and anisotropic modes).
-// Prints our/their lookups-per-second ratios and EWA's cost spread across footprint sizes.
+// OpenImageIO's TextureSystem on a MIP-mapped copy (its trilinear and anisotropic modes), the two
+// run alternately. Prints our/their ratios and EWA's cost spread across footprint sizes.
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/texture.h>
@@ -9,6 +9,7 @@
 #include <cmam/texture/filter.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -102,55 +103,84 @@ void record(benchmark::State& state) {
                            benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
-void BM_Ours(benchmark::State& state, FilterKind kind) {
-    Fixture& f = fixture();
-    auto q = queries(double(state.range(0)), double(state.range(1)));
+// Our lookups of one case, and OpenImageIO's (its trilinear mode, or its anisotropic mode with
+// the same maximum anisotropy), on the same uv and derivatives.
+struct Case {
+    std::vector<Query> q;
     std::vector<Footprint> fps;
-    for (const Query& x : q) fps.push_back(Footprint::axes({x.au, x.av}, {x.bu, x.bv}));
-    FilterOptions opt{kind, 8};
-    for (auto _ : state)
+    FilterOptions ours;
+    OIIO::TextureOpt theirs;
+    Case(const benchmark::State& state, FilterKind kind, bool aniso)
+        : q(queries(double(state.range(0)), double(state.range(1)))), ours{kind, 8} {
+        for (const Query& x : q) fps.push_back(Footprint::axes({x.au, x.av}, {x.bu, x.bv}));
+        theirs.mipmode =
+            aniso ? OIIO::TextureOpt::MipModeAniso : OIIO::TextureOpt::MipModeTrilinear;
+        theirs.interpmode = OIIO::TextureOpt::InterpBilinear;
+        theirs.anisotropic = 8;
+        theirs.swrap = theirs.twrap = OIIO::TextureOpt::WrapPeriodic;
+    }
+    void run_ours(Fixture& f) const {
         for (int i = 0; i < kBatch; ++i) {
-            Texel t = f.ours->lookup(q[i].u, q[i].v, fps[i], opt);
+            Texel t = f.ours->lookup(q[i].u, q[i].v, fps[i], ours);
             benchmark::DoNotOptimize(t);
         }
-    record(state);
-}
-
-void BM_Oiio(benchmark::State& state, bool aniso) {
-    Fixture& f = fixture();
-    auto q = queries(double(state.range(0)), double(state.range(1)));
-    OIIO::TextureOpt opt;
-    opt.mipmode = aniso ? OIIO::TextureOpt::MipModeAniso : OIIO::TextureOpt::MipModeTrilinear;
-    opt.interpmode = OIIO::TextureOpt::InterpBilinear;
-    opt.anisotropic = 8;
-    opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
-    auto* pt = f.ts->get_perthread_info();
-    auto* h = f.ts->get_texture_handle(f.file);
-    float out[3];
-    for (auto _ : state)
+    }
+    void run_theirs(Fixture& f, OIIO::TextureSystem::Perthread* pt,
+                    OIIO::TextureSystem::TextureHandle* h) const {
+        float out[3];
+        OIIO::TextureOpt opt = theirs;  // texture() takes it by non-const reference
         for (const Query& x : q) {
             f.ts->texture(h, pt, opt, x.u, 1 - x.v, x.au, -x.av, x.bu, -x.bv, 3, out);
             benchmark::DoNotOptimize(out);
         }
+    }
+};
+
+void BM_Ours(benchmark::State& state, FilterKind kind) {
+    Fixture& f = fixture();
+    const Case c(state, kind, false);
+    for (auto _ : state) c.run_ours(f);
     record(state);
 }
 
-// Registered case by case, ours beside theirs, so that each ratio compares runs made seconds
-// apart: a shared machine's speed drifts over minutes. Three repetitions each, and the summary
-// uses medians.
+// Ours and theirs alternately, a batch of each per iteration, each side timed on its own: the
+// ratio compares the two under the same machine conditions (a shared machine's speed drifts by
+// tens of percent within seconds, which separate runs would read as a difference between the
+// libraries). Counters: "ours" and "oiio" in ns per lookup, "ratio" = their time over ours.
+void BM_Versus(benchmark::State& state, FilterKind kind) {
+    Fixture& f = fixture();
+    const Case c(state, kind, kind == FilterKind::Ewa);
+    auto* pt = f.ts->get_perthread_info();
+    auto* h = f.ts->get_texture_handle(f.file);
+    using Clock = std::chrono::steady_clock;
+    Clock::duration ours{}, theirs{};
+    for (auto _ : state) {
+        const auto t0 = Clock::now();
+        c.run_ours(f);
+        const auto t1 = Clock::now();
+        c.run_theirs(f, pt, h);
+        ours += t1 - t0;
+        theirs += Clock::now() - t1;
+    }
+    const double n = double(state.iterations()) * kBatch;
+    state.counters["ours"] = std::chrono::duration<double, std::nano>(ours).count() / n;
+    state.counters["oiio"] = std::chrono::duration<double, std::nano>(theirs).count() / n;
+    state.counters["ratio"] =
+        std::chrono::duration<double>(theirs).count() / std::chrono::duration<double>(ours).count();
+}
+
+// Three repetitions of each case, and the summary uses medians.
 void register_benchmarks() {
     for (int size : kSizes)
         for (int aniso : kAnisos) {
-            auto add = [&](const char* name, auto fn, auto arg) {
-                benchmark::RegisterBenchmark(name, fn, arg)
+            auto add = [&](const char* name, auto fn, FilterKind kind) {
+                benchmark::RegisterBenchmark(name, fn, kind)
                     ->Args({size, aniso})
                     ->MinTime(0.1)
                     ->Repetitions(3);
             };
-            add("BM_Ours/trilinear", BM_Ours, FilterKind::Trilinear);
-            add("BM_Oiio/trilinear", BM_Oiio, false);
-            add("BM_Ours/ewa", BM_Ours, FilterKind::Ewa);
-            add("BM_Oiio/aniso", BM_Oiio, true);
+            add("BM_Versus/trilinear", BM_Versus, FilterKind::Trilinear);
+            add("BM_Versus/ewa", BM_Versus, FilterKind::Ewa);
             add("BM_Ours/sat", BM_Ours, FilterKind::Sat);
         }
 }
@@ -161,15 +191,17 @@ class SummaryReporter : public benchmark::ConsoleReporter {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
             if (r.run_type != Run::RT_Aggregate || r.aggregate_name != "median") continue;
-            auto it = r.counters.find("ns/lookup");
-            if (it != r.counters.end()) m_ns[r.run_name.str()] = it->second * 1e9;
+            for (const char* c : {"ours", "oiio", "ratio"}) {
+                auto it = r.counters.find(c);
+                if (it != r.counters.end()) m_value[r.run_name.str() + "#" + c] = it->second;
+            }
         }
     }
     void Finalize() override {
         ConsoleReporter::Finalize();
         std::printf("\n%-12s %8s %10s %10s %10s %10s %10s  %s\n", "size/aniso", "ours-tri",
                     "oiio-tri", "ratio", "ours-ewa", "oiio-aniso", "ratio",
-                    "(ns per lookup; ratio = our lookups/s over theirs)");
+                    "(ns per lookup; ratio = their time over ours, measured alternately)");
         double ewa_min = 1e30, ewa_max = 0, worst_tri = 1e30, worst_ewa = 1e30;
         // Per anisotropy: fastest and slowest over all sizes, and over the sizes that minify
         // (16-4096: at size 1 the footprint is under a texel, so EWA reads only a few texels).
@@ -179,15 +211,22 @@ class SummaryReporter : public benchmark::ConsoleReporter {
             for (int aniso : kAnisos) {
                 std::string key = "/" + std::to_string(size) + "/" + std::to_string(aniso) +
                                   "/min_time:0.100/repeats:3";
-                double ot = m_ns["BM_Ours/trilinear" + key], tt = m_ns["BM_Oiio/trilinear" + key];
-                double oe = m_ns["BM_Ours/ewa" + key], te = m_ns["BM_Oiio/aniso" + key];
+                auto get = [&](const char* name, const char* counter) {
+                    auto it = m_value.find(std::string(name) + key + "#" + counter);
+                    return it == m_value.end() ? 0.0 : it->second;
+                };
+                const double ot = get("BM_Versus/trilinear", "ours"),
+                             tt = get("BM_Versus/trilinear", "oiio"),
+                             rt = get("BM_Versus/trilinear", "ratio");
+                const double oe = get("BM_Versus/ewa", "ours"), te = get("BM_Versus/ewa", "oiio"),
+                             re = get("BM_Versus/ewa", "ratio");
                 if (ot <= 0 || tt <= 0 || oe <= 0 || te <= 0) continue;
                 std::printf("%5d/%-6d %8.1f %10.1f %9.2fx %10.1f %10.1f %9.2fx\n", size, aniso, ot,
-                            tt, tt / ot, oe, te, te / oe);
-                worst_tri = std::min(worst_tri, tt / ot);
-                worst_ewa = std::min(worst_ewa, te / oe);
+                            tt, rt, oe, te, re);
+                worst_tri = std::min(worst_tri, rt);
+                worst_ewa = std::min(worst_ewa, re);
                 auto& w = worst_ewa_at.try_emplace(aniso, 1e30).first->second;
-                w = std::min(w, te / oe);
+                w = std::min(w, re);
                 ewa_min = std::min(ewa_min, oe);
                 ewa_max = std::max(ewa_max, oe);
                 auto& [lo, hi] = spread.try_emplace(aniso, 1e30, 0.0).first->second;
@@ -217,7 +256,7 @@ class SummaryReporter : public benchmark::ConsoleReporter {
     }
 
   private:
-    std::map<std::string, double> m_ns;
+    std::map<std::string, double> m_value;  // "name/args#counter" -> median
 };
 
 }  // namespace
