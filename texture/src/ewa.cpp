@@ -115,6 +115,80 @@ struct TexelSum {
     float s[4] = {0, 0, 0, 0};
 };
 
+// Ellipses spanning at most this many lines (and 4 or 8 texels along them) take a window.
+constexpr int64_t kWindowLines = 8;
+
+// A small ellipse, repeat-wrapped both ways: a window of K (4 or 8) texels per line from s_lo
+// (wrapped: j0), lines t_lo..t_hi (the first wrapped: jt), without branches. Texels outside the
+// ellipse get the table's last entry, 0, and are not counted; as they add exactly zero, the sums
+// are those of the exact spans, in the same order. An, Bn, Cn are the coefficients times the
+// table size N, as in ewa_accumulate. With SSE2, Q is computed two texels per instruction with
+// the scalar expression's operations in its order (so the same values), and the table index is
+// converted by an instruction defined for any input (out-of-range gives INT_MIN, masked to the
+// last entry): texels near the ellipse's edge, inside or outside at random, cost no mispredicted
+// branch.
+template <int K, int NC, class L>
+void ewa_window(const L& lines, int64_t s_lo, int64_t j0, int64_t t_lo, int64_t t_hi, int64_t jt,
+                double s0, double t0, double An, double Bn, double Cn, TexelSum<NC>& acc,
+                float& wsum, int64_t& count) {
+    const int64_t H = lines.n_across;
+    const int nc = NC > 0 ? NC : lines.nc;
+    const float* lut = ewa_weight_lut();
+    constexpr double N = kEwaLutSize;
+    const double xs = double(s_lo);
+    // The window's columns from the two-period table (j0 + K - 1 < 2W as W >= K).
+    std::ptrdiff_t off[K];
+    for (int k = 0; k < K; ++k) off[k] = lines.along[j0 + k];
+#if defined(__SSE2__)
+    // x and A x^2 per column pair; per line only B y x and C y^2 change.
+    __m128d x[K / 2], ax2[K / 2];
+    for (int p = 0; p < K / 2; ++p) {
+        x[p] =
+            _mm_sub_pd(_mm_add_pd(_mm_set1_pd(xs), _mm_setr_pd(2 * p, 2 * p + 1)), _mm_set1_pd(s0));
+        ax2[p] = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(An), x[p]), x[p]);
+    }
+    const __m128d vn = _mm_set1_pd(N);
+    const __m128i last = _mm_set1_epi32(kEwaLutSize - 1);
+#endif
+    for (int64_t it = t_lo; it <= t_hi; ++it) {
+        const double y = double(it) - t0, by = Bn * y, cyy = Cn * y * y;
+        const float* row = lines.data + lines.line[jt];
+        jt = jt + 1 == H ? 0 : jt + 1;
+#if defined(__SSE2__)
+        const __m128d vby = _mm_set1_pd(by), vcyy = _mm_set1_pd(cyy);
+        for (int g = 0; g < K / 4; ++g) {
+            const __m128d q0 = _mm_add_pd(_mm_add_pd(ax2[2 * g], _mm_mul_pd(vby, x[2 * g])), vcyy);
+            const __m128d q1 =
+                _mm_add_pd(_mm_add_pd(ax2[2 * g + 1], _mm_mul_pd(vby, x[2 * g + 1])), vcyy);
+            // Four lanes: inside (all ones) or not, and the table index.
+            const __m128 in = _mm_shuffle_ps(_mm_castpd_ps(_mm_cmplt_pd(q0, vn)),
+                                             _mm_castpd_ps(_mm_cmplt_pd(q1, vn)), 0x88);
+            const __m128i m = _mm_castps_si128(in);
+            __m128i idx = _mm_unpacklo_epi64(_mm_cvttpd_epi32(q0), _mm_cvttpd_epi32(q1));
+            idx = _mm_or_si128(_mm_and_si128(m, idx), _mm_andnot_si128(m, last));
+            alignas(16) int32_t ix[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(ix), idx);
+            const int bits = _mm_movemask_ps(in);
+            count += (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1) + (bits >> 3);
+            for (int k = 0; k < 4; ++k) {
+                const float w = lut[ix[k]];
+                wsum += w;
+                acc.add(w, row + off[4 * g + k], nc);
+            }
+        }
+#else
+        for (int k = 0; k < K; ++k) {
+            const double x = (xs + k) - s0, q = An * x * x + by * x + cyy;
+            const bool in = q < N;
+            const float w = lut[in ? static_cast<int64_t>(q) : kEwaLutSize - 1];
+            wsum += w;
+            count += in;
+            acc.add(w, row + off[k], nc);
+        }
+#endif
+    }
+}
+
 // The ellipse's weighted sum at one level, walked along the lines L. Coordinates are in L's
 // terms: s0 along a line, t0 across the lines, and Q = A x^2 + B x y + C y^2 with x along and y
 // across; coefficients are normalised (Q < 1 inside). hx and hy are the half-extents along and
@@ -153,29 +227,20 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
         return (W & (W - 1)) == 0 ? (i & (W - 1)) : wrap_index(i, W, WrapMode::Repeat);
     };
     if constexpr (CW == ColumnWrap::Repeat) {
-        // A small ellipse (up to 4 x 4 texels, as at the coarser level of a round footprint):
-        // a window of four texels per line, without branches. Texels outside the ellipse get
-        // the table's last entry, 0, and are not counted; the window's columns are read from
-        // the two-period table from the wrapped start (j0 + 3 < 2W as W >= 4). Q as in the
-        // spans below, so the weights are the same.
+        // A small ellipse (the levels of a round footprint, the coarser level of most others):
+        // a fixed window of 4 or 8 texels per line instead of the spans.
         const int64_t s_lo = ceil_to_int(s0 - hx), n_s = floor_to_int(s0 + hx) - s_lo + 1;
-        if (n_s <= 4 && t_hi - t_lo < 4 && W >= 4 && repeat_t) {
-            const int64_t j0 = repeat_along(s_lo);
-            const double xs = double(s_lo);
-            for (int64_t it = t_lo; it <= t_hi; ++it) {
-                const int64_t jt = jt_next;
-                jt_next = jt_next + 1 == H ? 0 : jt_next + 1;
-                const double y = double(it) - t0, by = Bn * y, cyy = Cn * y * y;
-                const float* row = lines.data + lines.line[jt];
-                for (int k = 0; k < 4; ++k) {
-                    const double x = (xs + k) - s0, q = An * x * x + by * x + cyy;
-                    const bool in = q < N;
-                    const float w = lut[in ? static_cast<int64_t>(q) : kEwaLutSize - 1];
-                    wsum += w;
-                    count += in;
-                    acc.add(w, row + along[j0 + k], nc);
-                }
-            }
+        const int window = !(repeat_t && t_hi - t_lo < kWindowLines) ? 0
+                           : n_s <= 4 && W >= 4                      ? 4
+                           : n_s <= 8 && W >= 8                      ? 8
+                                                                     : 0;
+        if (window != 0) {
+            if (window == 4)
+                ewa_window<4>(lines, s_lo, repeat_along(s_lo), t_lo, t_hi, jt_next, s0, t0, An, Bn,
+                              Cn, acc, wsum, count);
+            else
+                ewa_window<8>(lines, s_lo, repeat_along(s_lo), t_lo, t_hi, jt_next, s0, t0, An, Bn,
+                              Cn, acc, wsum, count);
             acc.store(sum, nc);
             *wsum_out = wsum;
             *count_out = static_cast<int>(count);
