@@ -149,6 +149,7 @@ void ewa_window(const L& lines, int64_t s_lo, int64_t j0, int64_t t_lo, int64_t 
     }
     const __m128d vn = _mm_set1_pd(N);
     const __m128i last = _mm_set1_epi32(kEwaLutSize - 1);
+    __m128i inside = _mm_setzero_si128();  // per lane, minus the number of texels inside
 #endif
     for (int64_t it = t_lo; it <= t_hi; ++it) {
         const double y = double(it) - t0, by = Bn * y, cyy = Cn * y * y;
@@ -168,8 +169,7 @@ void ewa_window(const L& lines, int64_t s_lo, int64_t j0, int64_t t_lo, int64_t 
             idx = _mm_or_si128(_mm_and_si128(m, idx), _mm_andnot_si128(m, last));
             alignas(16) int32_t ix[4];
             _mm_store_si128(reinterpret_cast<__m128i*>(ix), idx);
-            const int bits = _mm_movemask_ps(in);
-            count += (bits & 1) + ((bits >> 1) & 1) + ((bits >> 2) & 1) + (bits >> 3);
+            inside = _mm_add_epi32(inside, m);
             for (int k = 0; k < 4; ++k) {
                 const float w = lut[ix[k]];
                 wsum += w;
@@ -187,6 +187,11 @@ void ewa_window(const L& lines, int64_t s_lo, int64_t j0, int64_t t_lo, int64_t 
         }
 #endif
     }
+#if defined(__SSE2__)
+    alignas(16) int32_t n[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(n), inside);
+    count -= int64_t(n[0]) + n[1] + n[2] + n[3];
+#endif
 }
 
 // The ellipse's weighted sum at one level, walked along the lines L. Coordinates are in L's
@@ -384,8 +389,10 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
     if (texels_read) *texels_read += count;
     Texel out{};
     if (wsum <= 0) return texture::bilinear(img, u, v);
+    // All four lanes (unused channels' sums are 0, and 1 / wsum is finite: a texel inside weighs
+    // at least the table's smallest positive entry), so the loop is one multiply.
     const float inv = static_cast<float>(1 / wsum);
-    for (int c = 0; c < nc; ++c) out[c] = sum[c] * inv;
+    for (int c = 0; c < 4; ++c) out[c] = sum[c] * inv;
     return out;
 }
 

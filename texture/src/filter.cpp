@@ -109,21 +109,25 @@ void points_box(const Footprint& fp, double W, double H, double* r) {
 
 Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
                               LookupInfo* info) const {
-    LookupInfo scratch;  // written only when the caller asks for it
-    LookupInfo& in = info ? *info : scratch;
+    // Written only when the caller asks for it (no scratch copy to clear on the hot paths).
+    auto note = [info](int texels_read, bool fallback = false) {
+        if (info) {
+            info->texels_read = texels_read;
+            info->fallback = fallback;
+        }
+    };
     if (info) *info = LookupInfo{};
     const double W = m_image.width(), H = m_image.height();
     if (!finite(fp, u, v)) {
-        in.fallback = true;
-        in.texels_read = 1;
+        note(1, true);
         return m_image.mean();
     }
     if (opts.kind == FilterKind::Nearest) {
-        in.texels_read = 1;
+        note(1);
         return nearest(m_image, u, v);
     }
     if (fp.kind == Footprint::Kind::None || opts.kind == FilterKind::Bilinear) {
-        in.texels_read = 4;
+        note(4);
         return bilinear(m_image, u, v);
     }
     // Reduce the footprint to two axis vectors (uv units).
@@ -169,12 +173,12 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
                 t = pyr.bilinear(0, u, v);
             }
             if (info) {
-                in.width = std::sqrt(width2);
-                in.lambda = lambda;
-                in.level_lo = static_cast<int>(std::floor(lambda));
-                in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-                in.texels_read =
-                    lambda >= pyr.levels() - 1 ? 1 : (in.level_lo == in.level_hi ? 4 : 8);
+                info->width = std::sqrt(width2);
+                info->lambda = lambda;
+                info->level_lo = static_cast<int>(std::floor(lambda));
+                info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
+                info->texels_read =
+                    lambda >= pyr.levels() - 1 ? 1 : (info->level_lo == info->level_hi ? 4 : 8);
             }
             return t;
         }
@@ -194,32 +198,31 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             constexpr double kMax = 1073741824.0;  // 2^30 texels: beyond, sums lose all precision
             if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) <
                   kMax)) {
-                in.fallback = true;
-                in.texels_read = 1;
+                note(1, true);
                 return m_image.mean();
             }
             if (info) {
-                std::copy(r, r + 4, in.rect);
-                in.texels_read = 16;
+                std::copy(r, r + 4, info->rect);
+                info->texels_read = 16;
             }
             return sat().average(r[0], r[1], r[2], r[3]);
         }
         case FilterKind::Ewa: {
             EwaResult r = ewa(pyramid(), u, v, a.u, a.v, b.u, b.v, opts.max_aniso);
             if (info) {
-                in.lambda = r.lambda;
-                in.level_lo = static_cast<int>(std::floor(r.lambda));
-                in.level_hi = r.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-                in.texels_read = r.texels_read;
-                in.major = r.major;
-                in.minor = r.minor;
+                info->lambda = r.lambda;
+                info->level_lo = static_cast<int>(std::floor(r.lambda));
+                info->level_hi = r.lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
+                info->texels_read = r.texels_read;
+                info->major = r.major;
+                info->minor = r.minor;
             }
             return r.value;
         }
         default:
             break;
     }
-    in.texels_read = 4;
+    note(4);
     return bilinear(m_image, u, v);
 }
 
