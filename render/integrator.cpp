@@ -341,48 +341,68 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                                                       options.threads);
     std::atomic<int> rows_done{0};
 
+    // Scanline tags with several samples per pixel: the paper's scanline is a row of sample
+    // strata. Sub-row sy of pixel row py has ID py * ny + sy, its samples are numbered left to
+    // right (col * nx + sx), and the row is traced sub-row by sub-row, so each sample's cached
+    // neighbours are one stratum to the left and (2-D CMAM) one stratum above, as the pixels
+    // are at one sample per pixel. Pixel tags trace pixel by pixel. Either way every sample has
+    // the same position and seed and each pixel sums its samples in the same order, so only the
+    // CMAM sees the difference.
+    const bool sub_rows = scene.tags == TagPolicy::Scanline;
     auto render_row = [&](int row, CmamRowState& cmam) {
-        int py = film.y0 + row;
-        float* out = &fb.rgb[static_cast<std::size_t>(row) * fb.width * 3];
+        const int py = film.y0 + row;
+        const int width = fb.width;
         RayCounts counts;
-        for (int col = 0; col < fb.width; ++col) {
-            int px = film.x0 + col;
-            uint64_t pixel_seed =
-                mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
-            Rng jitter(pixel_seed);
-            double sum[3] = {0, 0, 0};
-            for (int sy = 0; sy < ny; ++sy)
-                for (int sx = 0; sx < nx; ++sx) {
-                    float jx = smp.jitter ? jitter.next_float() : 0.5f;
-                    float jy = smp.jitter ? jitter.next_float() : 0.5f;
-                    float fx = px + (sx + jx) / nx, fy = py + (sy + jy) / ny;
-                    CameraSample cs;
-                    scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
-                    if (scene.needs_differentials)
-                        cs.diff = camera_differential(scene.camera, fx, fy, footprint_scale);
-                    cs.cone = camera_spread;
-                    const int sample = sy * nx + sx;
-                    texture::RayTag tag;
-                    if (scene.tags == TagPolicy::Scanline) {
-                        tag.id = static_cast<uint32_t>(py);
-                        tag.seq = static_cast<uint32_t>(col * spp + sample);
-                    } else {
-                        tag.id = static_cast<uint32_t>(py * film.xres + px);
-                        tag.seq = static_cast<uint32_t>(sample);
-                    }
-                    Aov aov{options.aov};
-                    Rgb L =
-                        trace_one(scene, cs, mix_seed(pixel_seed, uint64_t(sample) + 1), &counts,
-                                  tag, &cmam, options.aov == AovKind::None ? nullptr : &aov);
-                    if (options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
-                    if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b))
-                        L = Rgb();
-                    sum[0] += L.r;
-                    sum[1] += L.g;
-                    sum[2] += L.b;
-                }
-            for (int c = 0; c < 3; ++c) out[3 * col + c] = static_cast<float>(sum[c] / spp);
+        // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
+        std::vector<float> jitter(static_cast<std::size_t>(width) * spp * 2, 0.5f);
+        std::vector<uint64_t> seeds(static_cast<std::size_t>(width));
+        for (int col = 0; col < width; ++col) {
+            const int px = film.x0 + col;
+            seeds[col] = mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
+            if (!smp.jitter) continue;
+            Rng rng(seeds[col]);
+            for (int k = 0; k < 2 * spp; ++k)
+                jitter[static_cast<std::size_t>(col) * spp * 2 + k] = rng.next_float();
         }
+        std::vector<double> sum(static_cast<std::size_t>(width) * 3, 0.0);
+        auto trace_sample = [&](int col, int sx, int sy) {
+            const int px = film.x0 + col, sample = sy * nx + sx;
+            const float* j = &jitter[(static_cast<std::size_t>(col) * spp + sample) * 2];
+            const float fx = px + (sx + j[0]) / nx, fy = py + (sy + j[1]) / ny;
+            CameraSample cs;
+            scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
+            if (scene.needs_differentials)
+                cs.diff = camera_differential(scene.camera, fx, fy, footprint_scale);
+            cs.cone = camera_spread;
+            texture::RayTag tag;
+            if (sub_rows) {
+                tag.id = static_cast<uint32_t>(py * ny + sy);
+                tag.seq = static_cast<uint32_t>(col * nx + sx);
+            } else {
+                tag.id = static_cast<uint32_t>(py * film.xres + px);
+                tag.seq = static_cast<uint32_t>(sample);
+            }
+            Aov aov{options.aov};
+            Rgb L = trace_one(scene, cs, mix_seed(seeds[col], uint64_t(sample) + 1), &counts, tag,
+                              &cmam, options.aov == AovKind::None ? nullptr : &aov);
+            if (options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
+            if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
+            double* acc = &sum[static_cast<std::size_t>(col) * 3];
+            acc[0] += L.r;
+            acc[1] += L.g;
+            acc[2] += L.b;
+        };
+        if (sub_rows) {
+            for (int sy = 0; sy < ny; ++sy)
+                for (int col = 0; col < width; ++col)
+                    for (int sx = 0; sx < nx; ++sx) trace_sample(col, sx, sy);
+        } else {
+            for (int col = 0; col < width; ++col)
+                for (int sy = 0; sy < ny; ++sy)
+                    for (int sx = 0; sx < nx; ++sx) trace_sample(col, sx, sy);
+        }
+        float* out = &fb.rgb[static_cast<std::size_t>(row) * width * 3];
+        for (std::size_t i = 0; i < sum.size(); ++i) out[i] = static_cast<float>(sum[i] / spp);
         counts.add_to(stats);
         int done = ++rows_done;
         if (options.progress) options.progress(done, fb.height);

@@ -226,3 +226,25 @@ TEST(Cmam, TwoDimensionalCmamFixesTheCollinearSatBoxes) {
     double two_d = rmse(ref, render_with(1, Lod::Cmam, true));
     EXPECT_LT(two_d, 0.8 * one_d) << two_d << " vs " << one_d;
 }
+
+TEST(Cmam, ScanlineTagsFollowSampleRowsSoErrorFallsWithSamples) {
+    // With several samples per pixel, a scanline is a row of sample strata: the 2-D CMAM's
+    // vectors are then one stratum long and its footprint shrinks with the sample spacing, as
+    // ray differentials scaled by 1/sqrt(spp) do. (Tagging whole pixel rows made the vector to
+    // the sample above a full pixel long at any spp, and the error stayed where 1 spp left it.)
+    std::string scenes = CMAM_SCENES_DIR;
+    pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
+    auto render_with = [&](int spp, Lod lod, texture::FilterKind f) {
+        BuildOptions bo;
+        bo.lod = lod;
+        bo.filter = f;
+        bo.cmam.two_d = true;
+        return render_floor(d, bo, spp);
+    };
+    auto ref = render_with(64, Lod::None, texture::FilterKind::Bilinear);
+    for (auto f : {texture::FilterKind::Trilinear, texture::FilterKind::Ewa}) {
+        double one = rmse(ref, render_with(1, Lod::Cmam, f));
+        double sixteen = rmse(ref, render_with(16, Lod::Cmam, f));
+        EXPECT_LT(sixteen, 0.7 * one) << texture::to_string(f) << ": " << sixteen << " vs " << one;
+    }
+}
