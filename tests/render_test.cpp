@@ -150,9 +150,16 @@ TEST(Scenes, EveryBundledSceneBuilds) {
 }
 
 namespace {
-// Rows 100..180 of the paper's scene 1 (the floor from just below the horizon).
-std::vector<float> render_floor(const pbrt::SceneDesc& d, BuildOptions bo, int spp) {
+// Rows 100..180 of the paper's scene 1 (the floor from just below the horizon), rendered with
+// the given footprint source, filter and samples per pixel.
+std::vector<float> scene1_floor(int spp, Lod lod, texture::FilterKind filter, bool two_d = false) {
+    static const pbrt::SceneDesc d =
+        pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/paper/scene1.pbrt");
+    BuildOptions bo;
     bo.spp_override = spp;
+    bo.lod = lod;
+    bo.filter = filter;
+    bo.cmam.two_d = two_d;
     auto s = build_scene(d, bo, {});
     s->film.y0 = 100;
     s->film.y1 = 180;
@@ -193,18 +200,11 @@ TEST(Cmam, IdenticalImagesForOneAndTwoThreadsWithEitherTagPolicy) {
 TEST(Cmam, ReducesTheErrorOfARecedingTexturedPlane) {
     // The paper's scene 1 at low resolution: CMAM-filtered 1-spp renders are closer to a
     // supersampled point-sampled reference than the 1-spp point-sampled render.
-    std::string scenes = CMAM_SCENES_DIR;
-    pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
-    auto render_with = [&](int spp, Lod lod, texture::FilterKind f) {
-        BuildOptions bo;
-        bo.lod = lod;
-        bo.filter = f;
-        return render_floor(d, bo, spp);
-    };
-    auto ref = render_with(64, Lod::None, texture::FilterKind::Bilinear);
-    double off = rmse(ref, render_with(1, Lod::None, texture::FilterKind::Bilinear));
-    double tri = rmse(ref, render_with(1, Lod::Cmam, texture::FilterKind::Trilinear));
-    double ewa = rmse(ref, render_with(1, Lod::Cmam, texture::FilterKind::Ewa));
+    using texture::FilterKind;
+    auto ref = scene1_floor(64, Lod::None, FilterKind::Bilinear);
+    double off = rmse(ref, scene1_floor(1, Lod::None, FilterKind::Bilinear));
+    double tri = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Trilinear));
+    double ewa = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Ewa));
     EXPECT_LT(tri, 0.75 * off) << tri << " vs " << off;
     EXPECT_LT(ewa, 0.75 * off) << ewa << " vs " << off;
 }
@@ -212,18 +212,10 @@ TEST(Cmam, ReducesTheErrorOfARecedingTexturedPlane) {
 TEST(Cmam, TwoDimensionalCmamFixesTheCollinearSatBoxes) {
     // At 1 spp with scanline tags the paper's cached samples lie along the row, so the SAT box
     // is one texel tall; the 2-D CMAM adds the pixel above and filters vertically too.
-    std::string scenes = CMAM_SCENES_DIR;
-    pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
-    auto render_with = [&](int spp, Lod lod, bool two_d) {
-        BuildOptions bo;
-        bo.lod = lod;
-        bo.filter = texture::FilterKind::Sat;
-        bo.cmam.two_d = two_d;
-        return render_floor(d, bo, spp);
-    };
-    auto ref = render_with(64, Lod::None, false);
-    double one_d = rmse(ref, render_with(1, Lod::Cmam, false));
-    double two_d = rmse(ref, render_with(1, Lod::Cmam, true));
+    using texture::FilterKind;
+    auto ref = scene1_floor(64, Lod::None, FilterKind::Bilinear);
+    double one_d = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Sat));
+    double two_d = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Sat, true));
     EXPECT_LT(two_d, 0.8 * one_d) << two_d << " vs " << one_d;
 }
 
@@ -232,19 +224,11 @@ TEST(Cmam, ScanlineTagsFollowSampleRowsSoErrorFallsWithSamples) {
     // vectors are then one stratum long and its footprint shrinks with the sample spacing, as
     // ray differentials scaled by 1/sqrt(spp) do. (Tagging whole pixel rows made the vector to
     // the sample above a full pixel long at any spp, and the error stayed where 1 spp left it.)
-    std::string scenes = CMAM_SCENES_DIR;
-    pbrt::SceneDesc d = pbrt::parse_file(scenes + "/paper/scene1.pbrt");
-    auto render_with = [&](int spp, Lod lod, texture::FilterKind f) {
-        BuildOptions bo;
-        bo.lod = lod;
-        bo.filter = f;
-        bo.cmam.two_d = true;
-        return render_floor(d, bo, spp);
-    };
-    auto ref = render_with(64, Lod::None, texture::FilterKind::Bilinear);
-    for (auto f : {texture::FilterKind::Trilinear, texture::FilterKind::Ewa}) {
-        double one = rmse(ref, render_with(1, Lod::Cmam, f));
-        double sixteen = rmse(ref, render_with(16, Lod::Cmam, f));
+    using texture::FilterKind;
+    auto ref = scene1_floor(64, Lod::None, FilterKind::Bilinear);
+    for (auto f : {FilterKind::Trilinear, FilterKind::Ewa}) {
+        double one = rmse(ref, scene1_floor(1, Lod::Cmam, f, true));
+        double sixteen = rmse(ref, scene1_floor(16, Lod::Cmam, f, true));
         EXPECT_LT(sixteen, 0.7 * one) << texture::to_string(f) << ": " << sixteen << " vs " << one;
     }
 }
