@@ -14,8 +14,8 @@ struct LookupCounts {
 };
 
 /// The CMAM caches of one block of rows: one per (textured object, texture). Rows are rendered
-/// whole, left to right and top to bottom within a block, so samples reach the caches in scan
-/// order.
+/// whole, left to right and top to bottom within a block (with scanline tags, one row of sample
+/// strata at a time), so samples reach the caches in scan order.
 class CmamRowState {
   public:
     texture::CmamCache& cache(uint32_t object, uint32_t texture_node) {

@@ -2,10 +2,10 @@
 """Writes scenes/textures/bricks.png: a 512x512 8-bit grey paving-brick texture that tiles.
 
 Running bond, 8 bricks of 64x32 texels per course and 16 courses, 4-texel mortar joints; each
-brick has its own tone, every texel a little periodic value noise and speckle, and brick edges are slightly
-darkened. Everything is periodic in 512, so the image repeats without a seam: the scenes repeat
-it tens of times across a floor, where a seam would show as a line through the image. Python's
-standard library only; the output is the same on every run (fixed seed).
+brick has its own tone, every texel a little periodic value noise and speckle, and brick edges
+are slightly darkened. Everything is periodic in 512, so the image repeats without a seam: the
+scenes repeat it tens of times across a floor, where a seam would show as a line through the
+image. Python's standard library only; the output is the same on every run (fixed seed).
 
     usage: scripts/make-bricks.py [OUTPUT]   (default: scenes/textures/bricks.png)
 """
@@ -74,8 +74,9 @@ def write_png(path, rows):
         return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
 
     raw = b"".join(b"\x00" + r for r in rows)
-    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0))
-           + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)  # 8-bit grey, no interlace
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9))
+           + chunk(b"IEND", b""))
     tmp = path + ".tmp"
     with open(tmp, "wb") as f:
         f.write(png)
