@@ -80,9 +80,9 @@ struct Query {
 // With `spread`, each run's size is scaled by 2^x, x uniform in [-1/2, 1/2): the level of detail
 // then has a uniformly distributed fractional part, as a renderer's footprints do. At the exact
 // sizes (powers of two) every lookup's level of detail is an integer to within rounding, a
-// boundary case of level selection: there our EWA and trilinear compute, on about half the
-// lookups, a second level whose weight is within about 1e-7 of 0 or 1 (as pbrt-v3 does), while
-// OpenImageIO is up to 30% faster there than at the sizes between.
+// boundary case of level selection: there OpenImageIO and our EWA, which both take the level
+// from the minor axis in single precision, mostly read one level, and our trilinear reads its
+// two levels as always.
 std::vector<Query> queries(double size, double aniso, bool spread) {
     std::mt19937 rng(static_cast<unsigned>(size * 131 + aniso));
     std::uniform_real_distribution<double> u(0, 1), ang(0, 2 * M_PI);

@@ -278,20 +278,47 @@ TEST(Ewa, TMip2RampIsSymmetric) {
 }
 
 TEST(Ewa, LevelIsContinuousAcrossPowersOfTwo) {
-    // The level is |b|'s binary exponent and the blend weight log2|b| minus it; either side of
-    // a power of two the result must not jump.
+    // The level is |b|'s binary exponent and the blend weight log2|b| minus it, with |b| rounded
+    // to single precision; either side of a power of two the result must not jump.
     MipPyramid p(random_rgb(128, 128, 9));
     for (int k = 0; k <= 7; ++k)
-        for (double d : {-1e-9, 0.0, 1e-9}) {
+        for (double d : {-1e-5, -1e-9, 0.0, 1e-9, 1e-5}) {
             // Axes 3|b| and |b| long at 30 degrees, |b| = 2^k (1 + d) level-0 texels.
             auto look = [&](double lb) {
                 const double b = lb / 128, c = std::cos(M_PI / 6), s = std::sin(M_PI / 6);
                 return ewa(p, 0.37, 0.61, 3 * b * c, 3 * b * s, -b * s, b * c);
             };
             const EwaResult r = look(std::ldexp(1.0, k) * (1 + d)), at = look(std::ldexp(1.0, k));
-            EXPECT_NEAR(r.lambda, std::clamp(std::log2(r.minor), 0.0, 7.0), 1e-9) << k << " " << d;
-            for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.value[c], at.value[c], 1e-5) << k << " " << d;
+            const double single = static_cast<float>(r.minor);
+            EXPECT_EQ(r.lambda, std::clamp(std::log2(single), 0.0, 7.0)) << k << " " << d;
+            EXPECT_NEAR(r.lambda, std::clamp(std::log2(r.minor), 0.0, 7.0), 1e-7) << k << " " << d;
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.value[c], at.value[c], 1e-4) << k << " " << d;
         }
+}
+
+TEST(Ewa, PowerOfTwoMinorAxisToSinglePrecisionReadsOneLevel) {
+    // A rotated footprint's minor axis is a power of two only to within the rounding of its
+    // components. When it rounds to one in single precision the lookup reads one level, as an
+    // axis-aligned footprint of that size does, instead of a second level weighted about 1e-7.
+    MipPyramid p(random_rgb(256, 256, 21));
+    int rotated_one_level = 0;
+    for (int deg = 1; deg < 90; ++deg)
+        for (int aniso : {1, 4}) {
+            const double th = deg * M_PI / 180, b = 8.0 / 256, a = b * aniso;
+            const float au = float(a * std::cos(th)), av = float(a * std::sin(th)),
+                        bu = float(-b * std::sin(th)), bv = float(b * std::cos(th));
+            const EwaResult r = ewa(p, 0.41, 0.27, au, av, bu, bv);
+            EXPECT_NEAR(r.lambda, 3.0, 2e-7) << deg << " " << aniso;
+            if (static_cast<float>(r.minor) != 8.0f) continue;
+            EXPECT_EQ(r.lambda, 3.0) << deg << " " << aniso;
+            int level3 = 0;  // what the level-3 ellipse alone reads (level 3 is 32 texels wide)
+            ewa_level(p.level(3), 0.41, 0.27, au * 32.0, av * 32.0, bu * 32.0, bv * 32.0, &level3);
+            EXPECT_EQ(r.texels_read, level3) << deg << " " << aniso;
+            rotated_one_level += r.minor != 8.0;
+        }
+    // Most rotations leave |b| inexact in double precision but exact in single.
+    EXPECT_GT(rotated_one_level, 89) << rotated_one_level;
+    EXPECT_EQ(ewa(p, 0.41, 0.27, 8.0 / 256, 0, 0, 8.0 / 256).lambda, 3.0);
 }
 
 TEST(Ewa, DegenerateMinorAxisStillFiltersAndCostIsBounded) {

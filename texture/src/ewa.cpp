@@ -435,16 +435,22 @@ EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, d
     }
     r.major = la;
     r.minor = lb;
-    // lambda = max(0, log2 |b|). Its integer part is |b|'s binary exponent, so the first level's
-    // texels need not wait for the logarithm; only the blend weight does.
-    const int l = lb < 1 ? 0 : detail::floor_log2(lb);
+    // lambda = max(0, log2 |b|), taken from |b| rounded to single precision, the precision
+    // pbrt-v3 and OpenImageIO compute the level of detail in. A minor axis that is a power of
+    // two to that precision (a rotated footprint's rounded components leave it within about
+    // 1e-7 of one) then gives f = 0 and one level, rather than a second level weighted about
+    // 1e-7; lambda moves by at most about 1e-7. Its integer part is the binary exponent, so the
+    // first level's texels need not wait for the logarithm; only the blend weight does. (The
+    // min keeps the conversion in float's range; any |b| that large gives the coarsest level.)
+    const double lod_b = static_cast<float>(std::min(lb, 1e30));
+    const int l = lod_b < 1 ? 0 : detail::floor_log2(lod_b);
     if (l >= L - 1) {
         r.value = pyr.level(L - 1).mean();
         r.lambda = L - 1;
         r.texels_read = 1;
         return r;
     }
-    const double lambda = lb < 1 ? 0 : std::log2(lb);
+    const double lambda = lod_b < 1 ? 0 : std::log2(lod_b);
     const double f = std::clamp(lambda - l, 0.0, 1.0);
     r.lambda = std::min(lambda, double(L - 1));
     // Level-0 texels to level-lev texels: multiplications by W_lev / W_0 (the reciprocals do not
