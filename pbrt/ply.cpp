@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace cmam::pbrt {
@@ -67,6 +70,11 @@ struct Element {
 
 enum class Format { Ascii, BinaryLE, BinaryBE };
 
+// Longest list accepted: in a face (its vertices, read into memory) and in anything else (read
+// and dropped; a longer one would be a corrupt count, read until the data ran out).
+constexpr double kMaxFaceList = 1 << 20;
+constexpr double kMaxSkippedList = 2147483647.0;
+
 class Reader {
   public:
     Reader(std::istream& in, Format f, const std::string& path)
@@ -123,6 +131,34 @@ class Reader {
             }
         }
         return 0;
+    }
+    // A list's length: a whole number from 0 to `max`, whatever type holds it (floats included).
+    std::size_t read_count(Scalar s, double max) {
+        const double n = read(s);
+        if (!(n >= 0 && n <= max && n == std::floor(n)))
+            fail("invalid list length " + number(n) + " (at most " + number(max) + ")");
+        return static_cast<std::size_t>(n);
+    }
+    // A vertex index: a whole number in int's range (whether it names a vertex is checked once
+    // all vertices are read).
+    int read_index(Scalar s) {
+        const double v = read(s);
+        if (!(v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max() &&
+              v == std::floor(v)))
+            fail("vertex index " + number(v) + " is not a whole number in int's range");
+        return static_cast<int>(v);
+    }
+    // A vertex attribute as stored: a finite single-precision number.
+    float to_float(double v, std::size_t vertex, const std::string& property) {
+        if (!(std::abs(v) <= std::numeric_limits<float>::max()))
+            fail("vertex " + std::to_string(vertex) + " property \"" + property + "\" is " +
+                 number(v) + ", not a finite single-precision number");
+        return static_cast<float>(v);
+    }
+    static std::string number(double v) {
+        std::ostringstream os;
+        os << std::setprecision(15) << v;
+        return os.str();
     }
     [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
 
@@ -227,19 +263,18 @@ PlyMesh read_ply(const std::string& path) {
                 for (std::size_t k = 0; k < e.props.size(); ++k) {
                     const Property& p = e.props[k];
                     if (p.is_list) {
-                        auto n = static_cast<long long>(r.read(p.count_type));
-                        for (long long c = 0; c < n; ++c) r.read(p.type);
+                        const std::size_t n = r.read_count(p.count_type, kMaxSkippedList);
+                        for (std::size_t c = 0; c < n; ++c) r.read(p.type);
                         vals[k] = 0;
                     } else {
                         vals[k] = r.read(p.type);
                     }
                 }
-                mesh.positions.insert(mesh.positions.end(),
-                                      {float(vals[ix]), float(vals[iy]), float(vals[iz])});
+                auto get = [&](int k) { return r.to_float(vals[k], i, e.props[k].name); };
+                mesh.positions.insert(mesh.positions.end(), {get(ix), get(iy), get(iz)});
                 if (normals)
-                    mesh.normals.insert(mesh.normals.end(),
-                                        {float(vals[inx]), float(vals[iny]), float(vals[inz])});
-                if (uvs) mesh.uvs.insert(mesh.uvs.end(), {float(vals[iu]), float(vals[iv])});
+                    mesh.normals.insert(mesh.normals.end(), {get(inx), get(iny), get(inz)});
+                if (uvs) mesh.uvs.insert(mesh.uvs.end(), {get(iu), get(iv)});
             }
         } else if (e.name == "face") {
             for (std::size_t i = 0; i < e.count; ++i) {
@@ -248,11 +283,16 @@ PlyMesh read_ply(const std::string& path) {
                         r.read(p.type);
                         continue;
                     }
-                    auto n = static_cast<long long>(r.read(p.count_type));
-                    if (n < 0 || n > 1 << 20) r.fail("face has an invalid vertex count");
-                    std::vector<int> f(static_cast<std::size_t>(n));
-                    for (auto& x : f) x = static_cast<int>(r.read(p.type));
-                    if (p.name != "vertex_indices" && p.name != "vertex_index") continue;
+                    // Other lists of a face (texture coordinates, say) are read and dropped.
+                    const bool indices = p.name == "vertex_indices" || p.name == "vertex_index";
+                    const std::size_t n =
+                        r.read_count(p.count_type, indices ? kMaxFaceList : kMaxSkippedList);
+                    if (!indices) {
+                        for (std::size_t c = 0; c < n; ++c) r.read(p.type);
+                        continue;
+                    }
+                    std::vector<int> f(n);
+                    for (auto& x : f) x = r.read_index(p.type);
                     if (n == 3) {
                         mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
                     } else if (n == 4) {
@@ -268,8 +308,8 @@ PlyMesh read_ply(const std::string& path) {
             for (std::size_t i = 0; i < e.count; ++i)
                 for (const Property& p : e.props) {
                     if (p.is_list) {
-                        auto n = static_cast<long long>(r.read(p.count_type));
-                        for (long long c = 0; c < n; ++c) r.read(p.type);
+                        const std::size_t n = r.read_count(p.count_type, kMaxSkippedList);
+                        for (std::size_t c = 0; c < n; ++c) r.read(p.type);
                     } else {
                         r.read(p.type);
                     }

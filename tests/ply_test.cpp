@@ -85,3 +85,55 @@ TEST(Ply, ErrorsNameTheFile) {
     EXPECT_THROW(read_ply(write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n")),
                  PlyError);
 }
+
+// Numbers that do not fit what they are read into are errors naming the file and the value,
+// never a conversion out of range (the asan preset traps those).
+TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
+    const std::string head =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+        "property double z\n";
+    auto error_of = [](const std::string& path) -> std::string {
+        try {
+            read_ply(path);
+        } catch (const PlyError& e) {
+            return e.what();
+        }
+        return "no error";
+    };
+    struct Case {
+        const char* name;
+        std::string text;
+        std::string expected;
+    };
+    const std::string verts = "0 0 0\n1 0 0\n0 1 0\n";
+    const Case cases[] = {
+        {"f.ply",
+         head + "element face 1\nproperty list double int vertex_indices\nend_header\n" + verts +
+             "1e30 0 1 2\n",
+         "invalid list length 1e+30 (at most 1048576)"},
+        {"g.ply",
+         head + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + verts +
+             "3 0 1 2.5\n",
+         "vertex index 2.5 is not a whole number in int's range"},
+        {"h.ply",
+         head + "element face 1\nproperty list uchar uint vertex_indices\nend_header\n" + verts +
+             "3 0 1 4294967295\n",
+         "vertex index 4294967295 is not a whole number in int's range"},
+        {"i.ply", head + "end_header\n0 0 0\n1e300 0 0\n0 1 0\n",
+         "vertex 1 property \"x\" is 1e+300, not a finite single-precision number"},
+        {"k.ply",
+         head +
+             "element face 1\nproperty list uchar float texcoord\n"
+             "property list uchar int vertex_indices\nend_header\n" +
+             verts + "2 0.5 0.25 3 0 1 7\n",
+         "face index 7 out of range (3 vertices)"},
+        {"j.ply",
+         head + "element extra 1\nproperty list float uchar junk\nend_header\n" + verts +
+             "-2 1 2\n",
+         "invalid list length -2 (at most 2147483647)"},
+    };
+    for (const Case& c : cases) {
+        const std::string path = write_temp(c.name, c.text);
+        EXPECT_EQ(error_of(path), path + ": " + c.expected) << c.name;
+    }
+}
