@@ -202,8 +202,8 @@ PlyMesh read_ply(const std::string& path) {
         } else if (word == "element") {
             Element e;
             long long count = -1;
-            ls >> e.name >> count;
-            if (count < 0) throw PlyError(path + ": malformed element line \"" + line + "\"");
+            if (!(ls >> e.name >> count) || count < 0)  // a count beyond long long fails too
+                throw PlyError(path + ": malformed element line \"" + line + "\"");
             e.count = static_cast<std::size_t>(count);
             elements.push_back(std::move(e));
         } else if (word == "property") {
@@ -233,6 +233,8 @@ PlyMesh read_ply(const std::string& path) {
     Reader r(in, format, path);
     bool have_vertices = false;
     for (const Element& e : elements) {
+        // Without properties there is nothing to read, however large the count.
+        if (e.props.empty() && e.name != "vertex") continue;
         if (e.name == "vertex") {
             have_vertices = true;
             int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;

@@ -127,6 +127,10 @@ TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
              "property list uchar int vertex_indices\nend_header\n" +
              verts + "2 0.5 0.25 3 0 1 7\n",
          "face index 7 out of range (3 vertices)"},
+        {"l.ply",
+         "ply\nformat ascii 1.0\nelement vertex 99999999999999999999\nproperty float x\n"
+         "end_header\n",
+         "malformed element line \"element vertex 99999999999999999999\""},
         {"j.ply",
          head + "element extra 1\nproperty list float uchar junk\nend_header\n" + verts +
              "-2 1 2\n",
@@ -136,4 +140,10 @@ TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
         const std::string path = write_temp(c.name, c.text);
         EXPECT_EQ(error_of(path), path + ": " + c.expected) << c.name;
     }
+    // An element without properties has nothing to read, whatever its count says (the count
+    // once drove an empty loop of 2^63 steps).
+    const PlyMesh m = read_ply(
+        write_temp("m.ply", head + "element face 9223372036854775807\nend_header\n" + verts));
+    EXPECT_EQ(m.positions.size(), 9u);
+    EXPECT_TRUE(m.indices.empty());
 }

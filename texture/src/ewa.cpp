@@ -267,7 +267,10 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
             spans[n++] = {ceil_to_int(xc - half), floor_to_int(xc + half), jt, Bn * y, Cn * y * y};
         }
         for (int k = 0; k < n; ++k) {
-            const auto [s_lo, s_hi, jt, by, cyy] = spans[k];
+            // Plain copies, not a structured binding: the lambda below uses two of them, and
+            // Clang before 16 cannot capture structured bindings (a C++20 addition).
+            const int64_t s_lo = spans[k].s_lo, s_hi = spans[k].s_hi, jt = spans[k].jt;
+            const double by = spans[k].by, cyy = spans[k].cyy;
             if (s_hi < s_lo) continue;
             // Q is evaluated directly per texel, not by forward differences: the weight-table
             // index floor(Q N) must not depend on accumulated rounding (texels exactly on a
