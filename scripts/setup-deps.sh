@@ -8,9 +8,10 @@ packages=(
   libembree-dev libopenimageio-dev openimageio-tools libtbb-dev libcli11-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
 )
-# With --test, also what the tests need beyond the build: Chromium opens the HTML report.
+# With --test, also what the tests need beyond the build: Chromium opens the HTML report, and
+# Clang builds the filtering library a second time.
 if [[ "${1:-}" == "--test" ]]; then
-  packages+=(chromium)
+  packages+=(chromium clang)
 fi
 
 missing=()
