@@ -1,7 +1,10 @@
 // render — turns a parsed pbrt-v3 description into a renderable Scene, with pbrt-v3's
 // defaults and meanings, reporting unsupported input at its file location.
+#include <cmam/texture/ewa.h>
+
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 
 #include "pbrt/parser.h"
 #include "pbrt/ply.h"
@@ -336,6 +339,12 @@ class Builder {
             if (!(n.filter.max_aniso >= 1))
                 throw SceneError(e.params.find("maxanisotropy")->loc,
                                  "maxanisotropy must be at least 1");
+            if (n.filter.max_aniso > texture::kEwaMaxAnisotropy) {
+                std::ostringstream m;
+                m << "maxanisotropy " << n.filter.max_aniso << " is above cmam's limit of "
+                  << texture::kEwaMaxAnisotropy << ", which is used instead";
+                warn(e.params.find("maxanisotropy")->loc, m.str());
+            }
         } else if (e.type == "constant") {
             n.kind = TextureNode::Kind::Constant;
             n.constant = input("value", 1).value;

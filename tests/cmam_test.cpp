@@ -261,3 +261,30 @@ TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
     cmam_lookup(tex, c, {3, 0, 2}, 0.2, 0.6, o, nullptr, &r);  // ID 3 after 1: no row above
     EXPECT_FALSE(r.used_above);
 }
+
+TEST(Cmam, FarOrNonNumericSamplesGiveTheMeanAndAreNotCached) {
+    // A position beyond 2^30 texels gets the mean, as in every filter, and is not cached, so
+    // the next sample's region never spans to it; a maximum anisotropy below 1 (or NaN) is 1.
+    FilteredTexture tex(tmip1());
+    for (FilterKind f : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa})
+        for (double aniso : {8.0, std::nan(""), 1e-300}) {
+            CmamOptions o;
+            o.filter = f;
+            o.max_aniso = aniso;
+            o.hull = f == FilterKind::Sat;
+            CmamCache c;
+            CmamRegion r;
+            LookupInfo info;
+            const Texel far = cmam_lookup(tex, c, {2, 0, 0}, 1e12, 0.5, o, &info);
+            EXPECT_TRUE(info.fallback);
+            EXPECT_FLOAT_EQ(far[0], tex.image().mean()[0]);
+            EXPECT_FALSE(c.last.valid);
+            cmam_lookup(tex, c, {2, 0, 1}, 0.25, 0.5, o, &info, &r);
+            EXPECT_EQ(r.matches, 0);
+            const Texel near = cmam_lookup(tex, c, {2, 0, 2}, 0.3, 0.5, o, &info, &r);
+            EXPECT_EQ(r.matches, 1);
+            EXPECT_TRUE(std::isfinite(near[0]));
+            EXPECT_GE(near[0], 0.0f);
+            EXPECT_LE(near[0], 7.0f);
+        }
+}

@@ -2,9 +2,12 @@
 // property tests parametrised over filter x wrap mode.
 #include <cmam/texture/filter.h>
 #include <cmam/texture/filters.h>
+#include <cmam/texture/polygon.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 
@@ -519,4 +522,44 @@ TEST(Filter, PbrtTrilinearWidthUsesTheLargestComponent) {
     t.lookup(0.3, 0.6, fp, {FilterKind::Trilinear, 8, true}, &pbrt);
     EXPECT_NEAR(gl.width, std::sqrt(2.0), 1e-12);
     EXPECT_NEAR(pbrt.width, 1.0, 1e-12);
+}
+
+TEST(Ewa, MaximumAnisotropyIsCappedSoCostStaysBounded) {
+    // A footprint a million times longer than wide: with the maximum anisotropy unbounded it
+    // would read about a million texels per line; it reads what the cap allows, and exactly
+    // what a request at the cap reads.
+    MipPyramid p(random_rgb(256, 256, 5));
+    const double th = 0.3, a = 4096.0 / 256, b = a / 1e6;
+    auto look = [&](double max_aniso) {
+        return ewa(p, 0.4, 0.6, a * std::cos(th), a * std::sin(th), -b * std::sin(th),
+                   b * std::cos(th), max_aniso);
+    };
+    const EwaResult capped = look(kEwaMaxAnisotropy);
+    for (double m : {1e6, 1e300, std::numeric_limits<double>::infinity()}) {
+        const EwaResult r = look(m);
+        EXPECT_EQ(r.texels_read, capped.texels_read) << m;
+        EXPECT_EQ(r.minor, capped.minor) << m;
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(r.value[c], capped.value[c]) << m;
+    }
+    EXPECT_LT(capped.texels_read, 4000);
+    EXPECT_EQ(look(std::nan("")).minor, look(1).minor);  // NaN is 1, as below 1
+}
+
+TEST(Sat, CornersBeyondRangeOrNotNumbersGiveTheMean) {
+    const Image img = random_rgb(16, 8, 3);
+    for (WrapMode w : {WrapMode::Repeat, WrapMode::Clamp, WrapMode::Black}) {
+        const Image wrapped(16, 8, 3, img.row_major(), w, w);
+        const SummedAreaTable sat(wrapped);
+        const double nan = std::nan("");
+        for (const auto& r : std::vector<std::array<double, 4>>{
+                 {0, 0, 3e9, 2}, {-5e12, 1, 2, 3}, {nan, 0, 1, 1}, {0, 0, 1, -INFINITY}}) {
+            const Texel avg = sat.average(r[0], r[1], r[2], r[3]);
+            for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(avg[c], wrapped.mean()[c]);
+        }
+        const Texel big = sat.integral(0, 0, 3e9, 2);
+        EXPECT_NEAR(big[0], wrapped.mean()[0] * 6e9, 1e3);
+        EXPECT_EQ(sat.integral(nan, 0, 1, 1)[0], 0.0f);
+        const Texel poly = polygon_integral(sat, {{0, 0}, {4e9, 0}, {0, 1}});
+        EXPECT_NEAR(poly[1], wrapped.mean()[1] * 2e9, 1e3);
+    }
 }

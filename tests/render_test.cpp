@@ -232,3 +232,22 @@ TEST(Cmam, ScanlineTagsFollowSampleRowsSoErrorFallsWithSamples) {
         EXPECT_LT(sixteen, 0.7 * one) << texture::to_string(f) << ": " << sixteen << " vs " << one;
     }
 }
+
+TEST(Scenes, MaxAnisotropyAboveTheLimitIsClampedWithALocatedWarning) {
+    const std::string text =
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+        "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"textures/bricks.png\"\n"
+        "  \"float maxanisotropy\" 1000\n"
+        "Material \"matte\" \"texture Kd\" \"t\"\nShape \"sphere\"\nWorldEnd\n";
+    const std::string file = std::string(CMAM_SCENES_DIR) + "/aniso.pbrt";
+    std::vector<std::string> warnings;
+    auto s = build_scene(pbrt::parse_string(text, file), {},
+                         [&](const std::string& w) { warnings.push_back(w); });
+    std::erase_if(warnings, [](const std::string& w) {  // keep this test's warning only
+        return w.find("maxanisotropy") == std::string::npos;
+    });
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0], file +
+                               ":5:3: warning: maxanisotropy 1000 is above cmam's limit of 256, "
+                               "which is used instead");
+}

@@ -45,6 +45,7 @@ namespace {
 // Minimum extent per axis (algorithms.md §6.4): max(extent, 1 texel, other extent / maxAniso),
 // centred on the original box.
 void min_extent(double* r, double max_aniso) {
+    if (!(max_aniso >= 1)) max_aniso = 1;  // below 1 (or NaN) would widen without bound
     double w = r[2] - r[0], h = r[3] - r[1];
     double nw = std::max({w, 1.0, h / max_aniso}), nh = std::max({h, 1.0, w / max_aniso});
     double cx = 0.5 * (r[0] + r[2]), cy = 0.5 * (r[1] + r[3]);
@@ -174,8 +175,12 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     if (same(cache.last, 1)) matches = same(cache.second_last, 2) ? 2 : 1;
     const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
     // Shift the cache: the most recent becomes the second, the current the most recent.
+    // Positions beyond 2^30 texels (or not numbers) get the mean, as in every filter; they are
+    // not cached, so every region's samples lie within that range.
+    constexpr double kMaxCoord = 1073741824.0;
+    const bool in_range = std::abs(s0) < kMaxCoord && std::abs(t0) < kMaxCoord;
     cache.second_last = cache.last;
-    cache.last = {tag, s0, t0, std::isfinite(s0) && std::isfinite(t0)};
+    cache.last = {tag, s0, t0, in_range};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
     CmamCache::Entry above;
     if (o.two_d) {
@@ -199,7 +204,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     LookupInfo scratch;
     LookupInfo& in = info ? *info : scratch;
     if (info) *info = LookupInfo{};
-    if (!std::isfinite(s0) || !std::isfinite(t0)) {
+    if (!in_range) {
         in.fallback = true;
         in.texels_read = 1;
         return img.mean();
@@ -227,16 +232,21 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             for (int k = 0; k < 3; ++k)
                 perimeter +=
                     std::hypot(tri[(k + 1) % 3].x - tri[k].x, tri[(k + 1) % 3].y - tri[k].y);
-            const int level =
-                perimeter > kMaxPerimeter
-                    ? std::min(tex.pyramid().levels() - 1,
-                               static_cast<int>(std::ceil(std::log2(perimeter / kMaxPerimeter))))
-                    : 0;
+            const int L = tex.pyramid().levels();
+            const int want = perimeter > kMaxPerimeter
+                                 ? static_cast<int>(std::ceil(std::log2(perimeter / kMaxPerimeter)))
+                                 : 0;
+            const int level = std::min(L - 1, want);
             const Image& lev = level > 0 ? tex.pyramid().level(level) : img;
             const double kx = lev.width() / W, ky = lev.height() / H;
             double new_area = 0, integral[4] = {0, 0, 0, 0};
             for (Polygon piece : difference(tri, cache.hull)) {
-                new_area += std::abs(signed_area(piece));
+                const double area = std::abs(signed_area(piece));
+                new_area += area;
+                if (want > L - 1) {  // far wider than the texture even at its coarsest level:
+                    for (int c = 0; c < 4; ++c) integral[c] += img.mean()[c] * area;  // the mean
+                    continue;  // (integrating would cost the perimeter in texels there)
+                }
                 for (P2& p : piece) p = {p.x * kx, p.y * ky};
                 Texel t = polygon_integral(tex.level_sat(level), piece);
                 for (int c = 0; c < 4; ++c) integral[c] += t[c] / (kx * ky);

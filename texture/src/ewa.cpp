@@ -410,7 +410,7 @@ EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, d
         r.lambda = L - 1;
         return r;
     }
-    max_aniso = std::max(1.0, max_aniso);
+    max_aniso = max_aniso >= 1 ? std::min(max_aniso, kEwaMaxAnisotropy) : 1;
     // Axes in level-0 texels, per axis scaled.
     double as = au * base.width(), at = av * base.height();
     double bs = bu * base.width(), bt = bv * base.height();

@@ -77,6 +77,14 @@ Polygon convex_hull(std::vector<P2> pts) {
 Texel polygon_integral(const SummedAreaTable& sat, const Polygon& poly) {
     Texel out{};
     const int nc = sat.channels();
+    constexpr double kMax = 1073741824.0;  // 2^30 texels, as for every filter
+    for (const P2& p : poly)
+        if (!(std::abs(p.x) < kMax && std::abs(p.y) < kMax)) {  // NaN included
+            const double area = std::abs(signed_area(poly));
+            if (std::isfinite(area))
+                for (int c = 0; c < nc; ++c) out[c] = static_cast<float>(sat.mean()[c] * area);
+            return out;
+        }
     double acc[4] = {0, 0, 0, 0};
     const double sign = signed_area(poly) < 0 ? -1 : 1;
     std::vector<double> ts;

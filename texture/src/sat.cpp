@@ -90,7 +90,25 @@ double SummedAreaTable::extended(double x, double y, int c) const {
     return 0;
 }
 
+namespace {
+
+// Corners within 2^30 texels (false for NaN): beyond, sums keep no precision, and a corner
+// must never be converted to an integer out of range.
+bool corners_in_range(double x0, double y0, double x1, double y1) {
+    constexpr double kMax = 1073741824.0;
+    return std::abs(x0) < kMax && std::abs(y0) < kMax && std::abs(x1) < kMax && std::abs(y1) < kMax;
+}
+
+}  // namespace
+
 Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) const {
+    if (!corners_in_range(x0, y0, x1, y1)) {
+        const double area = std::abs((x1 - x0) * (y1 - y0));
+        Texel out{};
+        if (std::isfinite(area))
+            for (int c = 0; c < m_c; ++c) out[c] = static_cast<float>(m_mean[c] * area);
+        return out;
+    }
     if (x0 > x1) std::swap(x0, x1);
     if (y0 > y1) std::swap(y0, y1);
     // Translate repeat-wrapped rectangles to the base period: small quotients, no cancellation.
@@ -183,6 +201,7 @@ double SummedAreaTable::row_integral(double x, int64_t j, int c) const {
 }
 
 Texel SummedAreaTable::average(double x0, double y0, double x1, double y1) const {
+    if (!corners_in_range(x0, y0, x1, y1)) return m_mean;
     double area = std::abs((x1 - x0) * (y1 - y0));
     if (!(area >= 1e-12)) {
         double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);

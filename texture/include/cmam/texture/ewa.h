@@ -21,7 +21,13 @@ struct EwaResult {
     double major = 0, minor = 0;  // semi-axes used, level-0 texels (after clamping)
 };
 
-/// EWA lookup at (u,v) with axes `a`, `b` in uv units.
+/// The largest maximum anisotropy EWA applies: the cost of a lookup grows with it (about 2.2
+/// maxAniso texels per line of the finer level), so larger requests, which no display needs
+/// (GPUs stop at 16), are clamped to it rather than allowed to read millions of texels.
+inline constexpr double kEwaMaxAnisotropy = 256;
+
+/// EWA lookup at (u,v) with axes `a`, `b` in uv units. `max_aniso` is clamped to
+/// [1, kEwaMaxAnisotropy] (NaN gives 1).
 EwaResult ewa(const MipPyramid& pyramid, double u, double v, double au, double av, double bu,
               double bv, double max_aniso = 8);
 

@@ -26,7 +26,8 @@ Polygon convex_hull(std::vector<P2> points);
 
 /// Exact integral of the box-reconstructed texture over `p` (texel space, any orientation gives
 /// the integral for its counter-clockwise version), via Green's theorem on the table's row
-/// prefixes: O(perimeter in texels). The wrap modes are the table's.
+/// prefixes: O(perimeter in texels). The wrap modes are the table's. A vertex beyond 2^30 texels
+/// or not a number gives the mean times the area (0 if that is not finite).
 Texel polygon_integral(const SummedAreaTable& sat, const Polygon& p);
 /// The same by clipping `p` to every texel cell it covers: O(cells x vertices); a test oracle.
 Texel polygon_integral_cells(const Image& image, const Polygon& p);

@@ -28,14 +28,19 @@ class SummedAreaTable {
     Storage storage() const { return m_storage; }
     std::size_t memory_bytes() const;
 
+    /// The image's mean texel.
+    const Texel& mean() const { return m_mean; }
     /// Integral of the box-reconstructed texture over [x0,x1]x[y0,y1] in level-0 texel space
-    /// (corners in any order), per channel, with the image's wrap modes.
+    /// (corners in any order), per channel, with the image's wrap modes. A corner beyond 2^30
+    /// texels or not a number gives the mean times the area (0 if that is not finite): no sum
+    /// keeps any precision there.
     Texel integral(double x0, double y0, double x1, double y1) const;
     /// Integral over row `j` (cells j <= t < j+1) from s = 0 to s = x, with the wrap modes:
     /// the row prefix that polygon integration needs (Green's theorem).
     double row_integral(double x, int64_t j, int c) const;
     /// Box average over the rectangle. A rectangle of area below 1e-12 texel^2 returns the
-    /// bilinear-free point value of the cell containing its centre.
+    /// bilinear-free point value of the cell containing its centre; a corner beyond 2^30 texels
+    /// or not a number returns the mean.
     Texel average(double x0, double y0, double x1, double y1) const;
 
   private:
