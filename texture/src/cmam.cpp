@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernels.h"
+
 namespace cmam::texture {
 
 std::optional<CmamMiss> parse_cmam_miss(std::string_view n) {
@@ -177,8 +179,8 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     // Shift the cache: the most recent becomes the second, the current the most recent.
     // Positions beyond 2^30 texels (or not numbers) get the mean, as in every filter; they are
     // not cached, so every region's samples lie within that range.
-    constexpr double kMaxCoord = 1073741824.0;
-    const bool in_range = std::abs(s0) < kMaxCoord && std::abs(t0) < kMaxCoord;
+    const bool in_range =
+        std::abs(s0) < detail::kMaxTexelCoord && std::abs(t0) < detail::kMaxTexelCoord;
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, in_range};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).

@@ -48,7 +48,7 @@ int64_t ceil_to_int(double x) {
 
 // Coordinates and extents are kept below 2^30 texels (ewa_level), so that every conversion to
 // an integer is in range.
-constexpr double kMaxCoord = 1073741824.0;  // 2^30
+constexpr double kMaxCoord = detail::kMaxTexelCoord;
 
 // The along-line wrap handled at compile time where it is cheap: Repeat runs through the
 // two-period offset table from the wrapped start, Clamp clamps; anything else wraps each texel.

@@ -195,7 +195,7 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             } else {
                 points_box(fp, W, H, r);
             }
-            constexpr double kMax = 1073741824.0;  // 2^30 texels: beyond, sums lose all precision
+            constexpr double kMax = detail::kMaxTexelCoord;
             if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) <
                   kMax)) {
                 note(1, true);

@@ -131,7 +131,7 @@ Texel Image::fetch(int64_t i, int64_t j) const {
 
 namespace {
 // Coordinates beyond this magnitude (or non-finite) cannot be floored to an integer safely.
-constexpr double kMaxCoord = 1073741824.0;  // 2^30
+constexpr double kMaxCoord = detail::kMaxTexelCoord;
 
 bool usable(double x) {
     return std::isfinite(x) && std::abs(x) < kMaxCoord;

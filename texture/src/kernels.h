@@ -19,6 +19,10 @@
 
 namespace cmam::texture::detail {
 
+/// Texel coordinates are used up to 2^30 in magnitude: beyond, every filter returns the mean, so
+/// no coordinate is ever converted to an integer out of range and no sum loses all precision.
+inline constexpr double kMaxTexelCoord = 1073741824.0;
+
 /// floor(log2(x)) for x >= 1 (infinity included), exactly, from the binary exponent: a level
 /// chosen this way does not wait for a logarithm.
 inline int floor_log2(double x) {

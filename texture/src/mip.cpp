@@ -105,7 +105,8 @@ Texel MipPyramid::trilinear_levels(double u, double v, int l, float f) const {
     const Image &fine = level(l), &coarse = level(l + 1);
     const double s = u * fine.width() - 0.5, t = v * fine.height() - 0.5;
     // The coarser level's coordinates are smaller, so one range check covers both.
-    if (!(std::abs(s) < 1073741824.0 && std::abs(t) < 1073741824.0)) return fine.mean();
+    if (!(std::abs(s) < detail::kMaxTexelCoord && std::abs(t) < detail::kMaxTexelCoord))
+        return fine.mean();
     const double sc = u * coarse.width() - 0.5, tc = v * coarse.height() - 0.5;
 #if defined(__SSE2__)
     // Both levels' texels stay in registers through the blend.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernels.h"
+
 namespace cmam::texture {
 
 double signed_area(const Polygon& p) {
@@ -77,7 +79,7 @@ Polygon convex_hull(std::vector<P2> pts) {
 Texel polygon_integral(const SummedAreaTable& sat, const Polygon& poly) {
     Texel out{};
     const int nc = sat.channels();
-    constexpr double kMax = 1073741824.0;  // 2^30 texels, as for every filter
+    constexpr double kMax = detail::kMaxTexelCoord;  // as for every filter
     for (const P2& p : poly)
         if (!(std::abs(p.x) < kMax && std::abs(p.y) < kMax)) {  // NaN included
             const double area = std::abs(signed_area(poly));

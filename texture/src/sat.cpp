@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernels.h"
+
 namespace cmam::texture {
 
 SummedAreaTable::SummedAreaTable(const Image& image, Storage storage)
@@ -95,7 +97,7 @@ namespace {
 // Corners within 2^30 texels (false for NaN): beyond, sums keep no precision, and a corner
 // must never be converted to an integer out of range.
 bool corners_in_range(double x0, double y0, double x1, double y1) {
-    constexpr double kMax = 1073741824.0;
+    constexpr double kMax = detail::kMaxTexelCoord;
     return std::abs(x0) < kMax && std::abs(y0) < kMax && std::abs(x1) < kMax && std::abs(y1) < kMax;
 }
 
