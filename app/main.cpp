@@ -2,6 +2,7 @@
 // `cmam eval`.
 // Libraries throw; this file is the only place that prints errors.
 #include <cmam/texture/cmam.h>
+#include <cmam/texture/ewa.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -242,6 +243,10 @@ int run_lookup(const LookupArgs& a) {
         for (int i = 0; i < fp.point_count; ++i) fp.points[i] = {pt[2 * i], pt[2 * i + 1]};
         uv = {pt[0], pt[1]};
     }
+    if (*kind == texture::FilterKind::Ewa && a.max_aniso > texture::kEwaMaxAnisotropy)
+        std::cerr << "cmam lookup: warning: --maxaniso " << a.max_aniso
+                  << " is above cmam's limit of " << texture::kEwaMaxAnisotropy
+                  << ", which is used instead\n";
     texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, *wrap));
     texture::LookupInfo info;
     texture::Texel v = tex.lookup(uv[0], uv[1], fp, {*kind, a.max_aniso}, &info);

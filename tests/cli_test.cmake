@@ -35,6 +35,15 @@ foreach(key value levels texels_read ellipse_texels)
     message(FATAL_ERROR "lookup JSON lacks ${key}: ${out}")
   endif()
 endforeach()
+# A maximum anisotropy above EWA's limit is used at the limit, with a warning, and the lookup
+# reads what it reads at the limit.
+execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv 0.3,0.6 --axes 0.5,0,0,0.0001 --maxaniso 1000 --json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE capped ERROR_VARIABLE err)
+execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv 0.3,0.6 --axes 0.5,0,0,0.0001 --maxaniso 256 --json
+                OUTPUT_VARIABLE at_limit)
+if(NOT rc EQUAL 0 OR NOT err MATCHES "warning: --maxaniso 1000 is above cmam's limit of 256" OR NOT capped STREQUAL at_limit)
+  message(FATAL_ERROR "--maxaniso above the limit must warn and act as the limit: ${err} ${capped} ${at_limit}")
+endif()
 execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv 0.3,nope RESULT_VARIABLE rc ERROR_VARIABLE err)
 if(rc EQUAL 0 OR NOT err MATCHES "--uv: \"nope\" is not a number")
   message(FATAL_ERROR "bad --uv must fail clearly: ${err}")
