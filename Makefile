@@ -28,8 +28,11 @@ demo: deps
 	@$(CMAM) render scenes/demo.pbrt -o $(DEMO_OUT)
 	@echo "demo image: $(abspath $(DEMO_OUT))"
 
+# Configured again after the test dependencies are installed: a build configured before (by
+# make demo) would not have found Clang, and would skip texture.clang_build.
 test:
 	@bash scripts/setup-deps.sh --test
+	@cmake --preset release >/dev/null
 	@$(MAKE) --no-print-directory build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
