@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -210,11 +211,25 @@ std::vector<double> parse_numbers(const std::string& text, const char* flag) {
 std::string json_escape(const std::string& s) {
     std::string out;
     for (char c : s) {
+        if (static_cast<unsigned char>(c) < 0x20) {  // control characters as \u00XX
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+            out += buf;
+            continue;
+        }
         if (c == '"' || c == '\\') out += '\\';
-        if (static_cast<unsigned char>(c) < 0x20) continue;
         out += c;
     }
     return out;
+}
+
+// A number as JSON has it: JSON has no NaN or infinity, so those are null (a NaN --uv given to
+// see the fallback, an infinite PSNR of identical images).
+std::string json_number(double x) {
+    if (!std::isfinite(x)) return "null";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", x);
+    return buf;
 }
 
 int run_lookup(const LookupArgs& a) {
@@ -255,25 +270,26 @@ int run_lookup(const LookupArgs& a) {
                   *kind != texture::FilterKind::Nearest && *kind != texture::FilterKind::Bilinear &&
                   !info.fallback;
     if (a.json) {
-        std::printf(
-            "{\"image\": \"%s\", \"width\": %d, \"height\": %d, \"filter\": \"%s\", \"uv\": [%.9g, "
-            "%.9g], "
-            "\"value\": [%.9g, %.9g, %.9g], \"levels\": [%d, %d], \"lambda\": %.9g, "
-            "\"texels_read\": %d, "
-            "\"fallback\": %s",
-            json_escape(a.image).c_str(), img.width(), img.height(),
-            std::string(texture::to_string(*kind)).c_str(), uv[0], uv[1], v[0], v[1], v[2],
-            info.level_lo, info.level_hi, info.lambda, info.texels_read,
-            info.fallback ? "true" : "false");
+        const auto num = json_number;
+        std::string out = "{\"image\": \"" + json_escape(a.image) +
+                          "\", \"width\": " + std::to_string(img.width()) +
+                          ", \"height\": " + std::to_string(img.height()) + ", \"filter\": \"" +
+                          std::string(texture::to_string(*kind)) + "\", \"uv\": [" + num(uv[0]) +
+                          ", " + num(uv[1]) + "], \"value\": [" + num(v[0]) + ", " + num(v[1]) +
+                          ", " + num(v[2]) + "], \"levels\": [" + std::to_string(info.level_lo) +
+                          ", " + std::to_string(info.level_hi) +
+                          "], \"lambda\": " + num(info.lambda) +
+                          ", \"texels_read\": " + std::to_string(info.texels_read) +
+                          ", \"fallback\": " + (info.fallback ? "true" : "false");
         if (region && *kind == texture::FilterKind::Sat)
-            std::printf(", \"rectangle_texels\": [%.9g, %.9g, %.9g, %.9g]", info.rect[0],
-                        info.rect[1], info.rect[2], info.rect[3]);
+            out += ", \"rectangle_texels\": [" + num(info.rect[0]) + ", " + num(info.rect[1]) +
+                   ", " + num(info.rect[2]) + ", " + num(info.rect[3]) + "]";
         if (region && *kind == texture::FilterKind::Ewa)
-            std::printf(", \"ellipse_texels\": {\"major\": %.9g, \"minor\": %.9g}", info.major,
-                        info.minor);
+            out += ", \"ellipse_texels\": {\"major\": " + num(info.major) +
+                   ", \"minor\": " + num(info.minor) + "}";
         if (region && *kind == texture::FilterKind::Trilinear)
-            std::printf(", \"width_texels\": %.9g", info.width);
-        std::printf("}\n");
+            out += ", \"width_texels\": " + num(info.width);
+        std::printf("%s}\n", out.c_str());
         return 0;
     }
     std::printf("value (linear RGB): %.6f %.6f %.6f\n", v[0], v[1], v[2]);
@@ -312,10 +328,11 @@ int run_compare(const std::string& ref_path, const std::string& img_path, bool j
     eval::ErrorStats s = eval::compare(rgb(ref), rgb(img));
     if (json)
         std::printf(
-            "{\"reference\": \"%s\", \"image\": \"%s\", \"rmse\": %.9g, \"relative_rmse\": %.9g, "
-            "\"psnr\": %.9g, \"pixels\": %zu}\n",
-            json_escape(ref_path).c_str(), json_escape(img_path).c_str(), s.rmse, s.relative_rmse,
-            s.psnr, s.pixels);
+            "{\"reference\": \"%s\", \"image\": \"%s\", \"rmse\": %s, \"relative_rmse\": %s, "
+            "\"psnr\": %s, \"pixels\": %zu}\n",
+            json_escape(ref_path).c_str(), json_escape(img_path).c_str(),
+            json_number(s.rmse).c_str(), json_number(s.relative_rmse).c_str(),
+            json_number(s.psnr).c_str(), s.pixels);
     else
         std::printf("%s vs %s: RMSE %.6f (%.2f%% of the reference mean %.6f), PSNR %.2f dB\n",
                     img_path.c_str(), ref_path.c_str(), s.rmse, 100 * s.relative_rmse,

@@ -48,3 +48,19 @@ execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv 0.3,nop
 if(rc EQUAL 0 OR NOT err MATCHES "--uv: \"nope\" is not a number")
   message(FATAL_ERROR "bad --uv must fail clearly: ${err}")
 endif()
+# JSON output is strict JSON (CMake's parser rejects NaN and infinity): a non-finite --uv, given to
+# see the fallback, is null, and so is the infinite PSNR of an image against itself.
+execute_process(COMMAND ${CMAM} lookup ${SCENES}/textures/brick.png --uv nan,0.6 --axes 0.02,0.005,0,0.01 --json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+string(JSON uv0 ERROR_VARIABLE jerr TYPE "${out}" uv 0)
+string(JSON fallback ERROR_VARIABLE jerr2 GET "${out}" fallback)
+if(NOT rc EQUAL 0 OR NOT uv0 STREQUAL "NULL" OR NOT fallback STREQUAL "ON")
+  message(FATAL_ERROR "lookup with a NaN uv must print valid JSON with a null uv and the fallback: ${out} ${jerr} ${jerr2}")
+endif()
+execute_process(COMMAND ${CMAM} compare ${SCENES}/textures/brick.png ${SCENES}/textures/brick.png --json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+string(JSON psnr ERROR_VARIABLE jerr TYPE "${out}" psnr)
+string(JSON rmse ERROR_VARIABLE jerr2 GET "${out}" rmse)
+if(NOT rc EQUAL 0 OR NOT psnr STREQUAL "NULL" OR NOT rmse EQUAL 0)
+  message(FATAL_ERROR "compare of identical images must print valid JSON with a null PSNR: ${out} ${jerr} ${jerr2}")
+endif()
