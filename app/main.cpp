@@ -104,6 +104,9 @@ void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
                      std::string(texture::to_string(texture::FilterKind(k))).c_str(),
                      (unsigned long long)stats.lookups_by_filter[k]);
     std::fprintf(stderr, "\n");
+    if (stats.lookups_non_finite)
+        std::fprintf(stderr, "lookups with a non-finite uv or footprint (texture mean): %llu\n",
+                     (unsigned long long)stats.lookups_non_finite);
     if (stats.dropped_differentials)
         std::fprintf(stderr, "ray differentials dropped (grazing or non-finite): %llu\n",
                      (unsigned long long)stats.dropped_differentials);

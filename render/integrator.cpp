@@ -52,6 +52,7 @@ struct RayCounts {
         for (int k = 0; k < texture::kFilterKinds; ++k)
             stats->lookups_by_filter[k] += lookups.by_filter[k];
         stats->lookups_point_sampled += lookups.point_sampled;
+        stats->lookups_non_finite += lookups.non_finite;
         stats->dropped_differentials += dropped_differentials;
     }
 };

@@ -17,6 +17,7 @@ struct RenderStats {
     std::atomic<uint64_t> camera_rays{0}, secondary_rays{0}, shadow_rays{0};
     std::atomic<uint64_t> lookups_by_filter[texture::kFilterKinds] = {};  // with a footprint
     std::atomic<uint64_t> lookups_point_sampled{0};                       // without one
+    std::atomic<uint64_t> lookups_non_finite{0};     // non-finite uv or footprint: texture mean
     std::atomic<uint64_t> dropped_differentials{0};  // grazing or non-finite: point sampled
     uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
 };

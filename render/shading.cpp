@@ -7,13 +7,15 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
                             const texture::Footprint& footprint, texture::RayTag tag,
                             LookupCounts* counts) {
     (void)tag;  // consumed by the CMAM, which sits in front of this call
-    if (counts) {
-        if (footprint.kind == texture::Footprint::Kind::None)
-            ++counts->point_sampled;
-        else
-            ++counts->by_filter[static_cast<int>(filter.kind)];
-    }
-    return image.lookup(s, t, footprint, filter);
+    if (!counts) return image.lookup(s, t, footprint, filter);
+    if (footprint.kind == texture::Footprint::Kind::None)
+        ++counts->point_sampled;
+    else
+        ++counts->by_filter[static_cast<int>(filter.kind)];
+    texture::LookupInfo info;
+    texture::Texel x = image.lookup(s, t, footprint, filter, &info);
+    counts->non_finite += info.fallback;
+    return x;
 }
 
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
@@ -52,10 +54,14 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 texture::CmamOptions o = scene.cmam;
                 o.filter = n.filter.kind;
                 o.max_aniso = n.filter.max_aniso;
-                if (ctx.counts) ++ctx.counts->by_filter[static_cast<int>(o.filter)];
+                texture::LookupInfo info;
                 x = texture::cmam_lookup(
                     *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node)), ctx.tag,
-                    s, t, o);
+                    s, t, o, ctx.counts ? &info : nullptr);
+                if (ctx.counts) {
+                    ++ctx.counts->by_filter[static_cast<int>(o.filter)];
+                    ctx.counts->non_finite += info.fallback;
+                }
             } else {
                 x = lookup_image(*n.image, n.filter, s, t, node_footprint(n, ctx), ctx.tag,
                                  ctx.counts);

@@ -11,6 +11,7 @@ namespace cmam::render {
 struct LookupCounts {
     uint64_t by_filter[texture::kFilterKinds] = {};
     uint64_t point_sampled = 0;  // no footprint: bilinear at level 0 whatever the filter
+    uint64_t non_finite = 0;     // non-finite uv or footprint: the texture mean was returned
 };
 
 /// The CMAM caches of one block of rows: one per (textured object, texture). Rows are rendered

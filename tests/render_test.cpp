@@ -251,3 +251,38 @@ TEST(Scenes, MaxAnisotropyAboveTheLimitIsClampedWithALocatedWarning) {
                                ":5:3: warning: maxanisotropy 1000 is above cmam's limit of 256, "
                                "which is used instead");
 }
+
+TEST(Scenes, NonFiniteTextureCoordinatesGiveTheMeanAndAreCounted) {
+    // uscale inf makes every s infinite: each lookup (differentials with EWA, and the CMAM) must
+    // return the texture's mean, never NaN, and --stats must count them. With a finite uscale
+    // none is counted.
+    auto plane = [](const char* uscale, const char* lod) {
+        return std::string(
+                   "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 60\n"
+                   "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+                   "WorldBegin\nLightSource \"distant\" \"point from\" [0 0 5] \"point to\" [0 0 "
+                   "0]\n"
+                   "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" "
+                   "\"textures/bricks.png\" \"float uscale\" ") +
+               uscale + " \"string lod\" \"" + lod +
+               "\"\nMaterial \"matte\" \"texture Kd\" \"t\"\n"
+               "Shape \"trianglemesh\" \"point3 P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] "
+               "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\nWorldEnd\n";
+    };
+    const std::string file = std::string(CMAM_SCENES_DIR) + "/nonfinite.pbrt";
+    for (const char* lod : {"differentials", "cmam"}) {
+        for (const char* uscale : {"inf", "4"}) {
+            render::BuildOptions bo;
+            bo.spp_override = 1;
+            auto s = build_scene(pbrt::parse_string(plane(uscale, lod), file), bo, {});
+            RenderStats st;
+            Framebuffer fb = render::render(*s, {}, &st);
+            uint64_t lookups = st.lookups_point_sampled;
+            for (auto& n : st.lookups_by_filter) lookups += n;
+            EXPECT_EQ(lookups, 16u * 16u) << lod << " " << uscale;
+            EXPECT_EQ(st.lookups_non_finite, std::string(uscale) == "inf" ? lookups : 0u)
+                << lod << " " << uscale;
+            for (float v : fb.rgb) ASSERT_TRUE(std::isfinite(v)) << lod << " " << uscale;
+        }
+    }
+}
