@@ -10,11 +10,11 @@ image. Python's standard library only; the output is the same on every run (fixe
     usage: scripts/make-bricks.py [OUTPUT]   (default: scenes/textures/bricks.png)
 """
 
+import argparse
 import math
 import os
 import random
 import struct
-import sys
 import zlib
 
 SIZE = 512
@@ -85,6 +85,9 @@ def write_png(path, rows):
 
 if __name__ == "__main__":
     here = os.path.dirname(os.path.abspath(__file__))
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "scenes", "textures",
-                                                             "bricks.png")
-    write_png(out, bricks())
+    parser = argparse.ArgumentParser(
+        description="Writes a 512x512 grey paving-brick texture that tiles (a PNG).")
+    parser.add_argument("output", nargs="?",
+                        default=os.path.join(here, "..", "scenes", "textures", "bricks.png"),
+                        help="the PNG to write (default: scenes/textures/bricks.png)")
+    write_png(parser.parse_args().output, bricks())
