@@ -200,6 +200,11 @@ void register_benchmarks() {
             add("BM_VersusSpread/trilinear", BM_Versus, FilterKind::Trilinear, true);
             add("BM_VersusSpread/ewa", BM_Versus, FilterKind::Ewa, true);
             add("BM_Ours/sat", BM_Ours, FilterKind::Sat);
+            // Nearest and bilinear ignore the footprint: one size and anisotropy is enough.
+            if (size == 1 && aniso == 1) {
+                add("BM_Ours/nearest", BM_Ours, FilterKind::Nearest);
+                add("BM_Ours/bilinear", BM_Ours, FilterKind::Bilinear);
+            }
         }
 }
 

@@ -164,6 +164,57 @@ Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) cons
         }
         return out;
     }
+    if (m_wrap_s == WrapMode::Repeat && m_wrap_t == WrapMode::Repeat) {
+        // Repeat both ways (rectangles across the texture's edge, as every rectangle wider than
+        // the texture is): extended() with each corner's quotients, remainders and bilinear
+        // weights computed once for all channels instead of once per channel, and the table's
+        // far column and row read directly (table() reaches them with weights 0 and 1, which
+        // add exactly nothing): the same values.
+        //   S_p(x,y) = qy (qx S(W,H) + S(rx,H)) + (qx S(W,ry) + S(rx,ry))
+        struct Corner {
+            double qx, qy, fx, fy, sign;
+            std::size_t k, kw, kh;  // entries (i,j), (W,j) and (i,H), channel 0
+        };
+        const std::size_t row = static_cast<std::size_t>(m_w + 1) * m_c;
+        auto corner = [&](double x, double y, double sign) {
+            const double qx = std::floor(x / m_w), rx = x - qx * m_w;
+            const double qy = std::floor(y / m_h), ry = y - qy * m_h;
+            const int i = std::clamp(static_cast<int>(std::floor(rx)), 0, m_w - 1);
+            const int j = std::clamp(static_cast<int>(std::floor(ry)), 0, m_h - 1);
+            const std::size_t ci = static_cast<std::size_t>(i) * m_c;
+            return Corner{qx,
+                          qy,
+                          rx - i,
+                          ry - j,
+                          sign,
+                          j * row + ci,
+                          j * row + static_cast<std::size_t>(m_w) * m_c,
+                          static_cast<std::size_t>(m_h) * row + ci};
+        };
+        const Corner cs[4] = {corner(x1, y1, 1), corner(x0, y1, -1), corner(x1, y0, -1),
+                              corner(x0, y0, 1)};
+        auto e = [&](std::size_t k) {
+            return m_storage == Storage::Double ? m_double[k] : double(m_float[k]);
+        };
+        const std::size_t last =
+            static_cast<std::size_t>(m_h) * row + static_cast<std::size_t>(m_w) * m_c;
+        for (int c = 0; c < m_c; ++c) {
+            const double total = e(last + c);  // S(W,H)
+            double v = 0;
+            for (const Corner& k : cs) {
+                const double fx = k.fx, fy = k.fy;
+                const std::size_t b = k.k + c;
+                const double col = (1 - fy) * e(k.kw + c) + fy * e(k.kw + row + c);
+                const double top = (1 - fx) * e(k.kh + c) + fx * e(k.kh + m_c + c);
+                const double in = (1 - fy) * ((1 - fx) * e(b) + fx * e(b + m_c)) +
+                                  fy * ((1 - fx) * e(b + row) + fx * e(b + row + m_c));
+                v += k.sign * (k.qy * (k.qx * total + top) + (k.qx * col + in));
+            }
+            if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
+            out[c] = static_cast<float>(v);
+        }
+        return out;
+    }
     for (int c = 0; c < m_c; ++c) {
         double v =
             extended(x1, y1, c) - extended(x0, y1, c) - extended(x1, y0, c) + extended(x0, y0, c);
