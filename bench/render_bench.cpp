@@ -1,10 +1,12 @@
 // Whole-render throughput of the demo scene beside a bare Embree loop that casts the same
-// camera and shadow rays (rtcIntersect1 / rtcOccluded1, no shading), and their ratio.
+// camera and shadow rays (rtcIntersect1 / rtcOccluded1, no shading), and their ratio; and each
+// footprint method's render time against --lod none, separately and paired.
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -37,6 +39,47 @@ void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind 
         render::Framebuffer fb = render::render(*scene, {}, nullptr);
         benchmark::DoNotOptimize(fb.rgb.data());
     }
+}
+
+// The same render against `--lod none`, alternately within one benchmark (which of the two goes
+// first alternates too), each timed on its own: on a shared machine whose speed drifts by tens
+// of percent between runs, separate benchmarks read the drift as overhead. Counter "overhead":
+// the method's total render time over none's, minus one, in percent.
+void BM_RenderLodVsNone(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+    auto build = [](render::Lod l, texture::FilterKind f) {
+        render::BuildOptions bo;
+        bo.lod = l;
+        bo.filter = f;
+        auto scene = demo_scene(bo);
+        for (auto& [k, tex] : scene->images) {
+            tex->pyramid();
+            tex->sat();
+        }
+        return scene;
+    };
+    const auto scene = build(lod, filter), none = build(render::Lod::None, {});
+    using Clock = std::chrono::steady_clock;
+    Clock::duration with{}, without{};
+    auto timed = [](const render::Scene& sc, Clock::duration& total) {
+        const auto t0 = Clock::now();
+        render::Framebuffer fb = render::render(sc, {}, nullptr);
+        benchmark::DoNotOptimize(fb.rgb.data());
+        total += Clock::now() - t0;
+    };
+    bool method_first = true;
+    for (auto _ : state) {
+        if (method_first) {
+            timed(*scene, with);
+            timed(*none, without);
+        } else {
+            timed(*none, without);
+            timed(*scene, with);
+        }
+        method_first = !method_first;
+    }
+    state.counters["overhead"] = 100.0 * (std::chrono::duration<double>(with).count() /
+                                              std::chrono::duration<double>(without).count() -
+                                          1);
 }
 
 double g_render_rate = 0, g_bare_rate = 0;
@@ -123,41 +166,38 @@ void BM_BareEmbreeDemo(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RenderDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
-BENCHMARK_CAPTURE(BM_RenderLod, none, render::Lod::None, texture::FilterKind::Bilinear)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, cmam_trilinear, render::Lod::Cmam, texture::FilterKind::Trilinear)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, cmam_sat, render::Lod::Cmam, texture::FilterKind::Sat)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, cmam_ewa, render::Lod::Cmam, texture::FilterKind::Ewa)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, differentials_ewa, render::Lod::Differentials,
-                  texture::FilterKind::Ewa)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, differentials_trilinear, render::Lod::Differentials,
-                  texture::FilterKind::Trilinear)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, cones_trilinear, render::Lod::Cones, texture::FilterKind::Trilinear)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
-BENCHMARK_CAPTURE(BM_RenderLod, cones_aniso_ewa, render::Lod::ConesAniso, texture::FilterKind::Ewa)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->MinTime(1.0);
 BENCHMARK(BM_BareEmbreeDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// The footprint methods timed against --lod none (names as in the output).
+struct Method {
+    const char* name;
+    render::Lod lod;
+    texture::FilterKind filter;
+};
+constexpr Method kMethods[] = {
+    {"cmam_trilinear", render::Lod::Cmam, texture::FilterKind::Trilinear},
+    {"cmam_sat", render::Lod::Cmam, texture::FilterKind::Sat},
+    {"cmam_ewa", render::Lod::Cmam, texture::FilterKind::Ewa},
+    {"differentials_ewa", render::Lod::Differentials, texture::FilterKind::Ewa},
+    {"differentials_trilinear", render::Lod::Differentials, texture::FilterKind::Trilinear},
+    {"cones_trilinear", render::Lod::Cones, texture::FilterKind::Trilinear},
+    {"cones_aniso_ewa", render::Lod::ConesAniso, texture::FilterKind::Ewa}};
+
+// Each method alone (BM_RenderLod, after --lod none), then each against --lod none alternately.
+void register_methods() {
+    auto add = [](const std::string& name, auto fn, render::Lod lod, texture::FilterKind filter) {
+        return benchmark::RegisterBenchmark(name.c_str(), fn, lod, filter)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
+    };
+    add("BM_RenderLod/none", BM_RenderLod, render::Lod::None, texture::FilterKind::Bilinear)
+        ->MinTime(1.0);
+    for (const Method& m : kMethods)
+        add(std::string("BM_RenderLod/") + m.name, BM_RenderLod, m.lod, m.filter)->MinTime(1.0);
+    for (const Method& m : kMethods)
+        add(std::string("BM_RenderLodVsNone/") + m.name, BM_RenderLodVsNone, m.lod, m.filter)
+            ->Iterations(8);
+}
 
 // Prints the ratio of the two rays/s figures after the runs.
 class RatioReporter : public benchmark::ConsoleReporter {
@@ -169,6 +209,12 @@ class RatioReporter : public benchmark::ConsoleReporter {
             if (usable && r.benchmark_name().find("BM_RenderLod/") != std::string::npos)
                 m_lod[r.benchmark_name().substr(13, r.benchmark_name().find('/', 13) - 13)] =
                     r.GetAdjustedRealTime();
+            if (usable && r.benchmark_name().find("BM_RenderLodVsNone/") != std::string::npos) {
+                auto o = r.counters.find("overhead");
+                if (o != r.counters.end())
+                    m_paired[r.benchmark_name().substr(19, r.benchmark_name().find('/', 19) - 19)] =
+                        o->second;
+            }
             auto it = r.counters.find("rays/s");
             if (it == r.counters.end()) continue;
             if (r.benchmark_name().find("RenderDemo") != std::string::npos) m_render = it->second;
@@ -180,24 +226,29 @@ class RatioReporter : public benchmark::ConsoleReporter {
         if (m_render > 0 && m_bare > 0)
             std::printf("\nwhole render / bare Embree loop (rays/s): %.1f%%  (target >= 70%%)\n",
                         100.0 * m_render / m_bare);
-        if (m_lod.count("none"))
-            for (const char* k : {"cmam_trilinear", "cmam_sat", "cmam_ewa", "differentials_ewa",
-                                  "differentials_trilinear", "cones_trilinear", "cones_aniso_ewa"})
-                if (m_lod.count(k))
-                    std::printf("--lod %s vs --lod none: %+.1f%% render time%s\n", k,
-                                100.0 * (m_lod[k] / m_lod["none"] - 1),
-                                std::string(k) == "cmam_trilinear" ? "  (target <= +10%)" : "");
+        // Each method's render time over --lod none's: from the paired benchmark when it ran
+        // (the two alternate, so machine drift cancels), else from the separate ones.
+        for (const Method& m : kMethods) {
+            const std::string k = m.name;
+            const bool paired = m_paired.count(k) > 0;
+            if (!paired && !(m_lod.count(k) && m_lod.count("none"))) continue;
+            const double overhead = paired ? m_paired[k] : 100.0 * (m_lod[k] / m_lod["none"] - 1);
+            std::printf("--lod %s vs --lod none: %+.1f%% render time%s%s\n", m.name, overhead,
+                        paired ? " (paired)" : "",
+                        k == "cmam_trilinear" ? "  (target <= +10%)" : "");
+        }
     }
 
   private:
     double m_render = 0, m_bare = 0;
-    std::map<std::string, double> m_lod;
+    std::map<std::string, double> m_lod, m_paired;
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
+    register_methods();
     RatioReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
