@@ -25,16 +25,23 @@ std::unique_ptr<render::Scene> demo_scene(render::BuildOptions bo = {}) {
     return render::build_scene(d, bo, {});
 }
 
-// Whole render of the demo scene with one footprint source and filter (--lod / --filter).
-void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+// The demo scene with one footprint source and filter (--lod / --filter), its pyramids and
+// tables built (outside any timing).
+std::unique_ptr<render::Scene> lod_scene(render::Lod lod, texture::FilterKind filter) {
     render::BuildOptions bo;
     bo.lod = lod;
     bo.filter = filter;
     auto scene = demo_scene(bo);
-    for (auto& [k, tex] : scene->images) {  // build pyramids and tables outside the timing
+    for (auto& [k, tex] : scene->images) {
         tex->pyramid();
         tex->sat();
     }
+    return scene;
+}
+
+// Whole render of the demo scene with one footprint source and filter.
+void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+    const auto scene = lod_scene(lod, filter);
     for (auto _ : state) {
         render::Framebuffer fb = render::render(*scene, {}, nullptr);
         benchmark::DoNotOptimize(fb.rgb.data());
@@ -46,18 +53,8 @@ void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind 
 // of percent between runs, separate benchmarks read the drift as overhead. Counter "overhead":
 // the method's total render time over none's, minus one, in percent.
 void BM_RenderLodVsNone(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
-    auto build = [](render::Lod l, texture::FilterKind f) {
-        render::BuildOptions bo;
-        bo.lod = l;
-        bo.filter = f;
-        auto scene = demo_scene(bo);
-        for (auto& [k, tex] : scene->images) {
-            tex->pyramid();
-            tex->sat();
-        }
-        return scene;
-    };
-    const auto scene = build(lod, filter), none = build(render::Lod::None, {});
+    const auto scene = lod_scene(lod, filter),
+               none = lod_scene(render::Lod::None, texture::FilterKind::Bilinear);
     using Clock = std::chrono::steady_clock;
     Clock::duration with{}, without{};
     auto timed = [](const render::Scene& sc, Clock::duration& total) {
