@@ -84,19 +84,22 @@ class ProgressBar {
 };
 
 void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
-    std::size_t level0 = 0, pyramids = 0, tables = 0;
+    std::size_t level0 = 0, pyramids = 0, tables = 0, prefixes = 0;
     for (const auto& [key, tex] : scene.images) {
         level0 += tex->image().memory_bytes();
         std::size_t all = tex->memory_bytes();
         std::size_t sat = tex->sat_built() ? tex->sat().memory_bytes() : 0;
+        std::size_t rows = tex->row_prefix_bytes();
         tables += sat;
-        pyramids += all - sat - tex->image().memory_bytes();
+        prefixes += rows;
+        pyramids += all - sat - rows - tex->image().memory_bytes();
     }
     auto mb = [](std::size_t b) { return double(b) / (1 << 20); };
     std::fprintf(
         stderr,
-        "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB\n",
-        scene.images.size(), mb(level0), mb(pyramids), mb(tables));
+        "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB, "
+        "row prefix tables (area) %.2f MB\n",
+        scene.images.size(), mb(level0), mb(pyramids), mb(tables), mb(prefixes));
     std::fprintf(stderr, "lookups: point-sampled (no footprint) %llu",
                  (unsigned long long)stats.lookups_point_sampled);
     for (int k = 0; k < texture::kFilterKinds; ++k)
@@ -127,8 +130,8 @@ int run_render(const RenderArgs& a) {
     if (!a.filter.empty()) {
         bo.filter = texture::parse_filter(a.filter);
         if (!bo.filter)
-            throw std::invalid_argument("--filter: unknown \"" + a.filter +
-                                        "\" (expected bilinear, trilinear, sat or ewa)");
+            throw std::invalid_argument("--filter: unknown \"" + a.filter + "\" (expected " +
+                                        texture::filter_names() + ")");
     }
     auto miss = texture::parse_cmam_miss(a.cmam_miss);
     auto tags = render::parse_tag_policy(a.cmam_tags);
@@ -238,14 +241,16 @@ std::string json_number(double x) {
 int run_lookup(const LookupArgs& a) {
     auto kind = texture::parse_filter(a.filter);
     if (!kind)
-        throw std::invalid_argument("--filter: unknown filter \"" + a.filter +
-                                    "\" (expected nearest, bilinear, trilinear, sat or ewa)");
+        throw std::invalid_argument("--filter: unknown filter \"" + a.filter + "\" (expected " +
+                                    texture::filter_names() + ")");
     auto wrap = texture::parse_wrap_mode(a.wrap);
     if (!wrap)
         throw std::invalid_argument("--wrap: unknown wrap mode \"" + a.wrap +
                                     "\" (expected repeat, clamp, black or mirror)");
-    auto uv = parse_numbers(a.uv, "--uv");
-    if (uv.size() != 2) throw std::invalid_argument("--uv needs two numbers: U,V");
+    std::vector<double> uv;  // --points gives the lookup point as its first pair
+    if (!a.uv.empty() || a.points.empty()) uv = parse_numbers(a.uv, "--uv");
+    if (a.points.empty() && uv.size() != 2)
+        throw std::invalid_argument("--uv needs two numbers: U,V");
     texture::Footprint fp;
     if (!a.axes.empty()) {
         auto ax = parse_numbers(a.axes, "--axes");
@@ -292,6 +297,11 @@ int run_lookup(const LookupArgs& a) {
                    ", \"minor\": " + num(info.minor) + "}";
         if (region && *kind == texture::FilterKind::Trilinear)
             out += ", \"width_texels\": " + num(info.width);
+        if (region && *kind == texture::FilterKind::Area)
+            out += ", \"region_texels\": {\"shape\": \"" +
+                   std::string(info.major > 0 ? "parallelogram" : "triangle") +
+                   "\", \"major\": " + num(info.major) + ", \"minor\": " + num(info.minor) +
+                   ", \"area\": " + num(info.area) + "}";
         std::printf("%s}\n", out.c_str());
         return 0;
     }
@@ -308,6 +318,13 @@ int run_lookup(const LookupArgs& a) {
     else if (*kind == texture::FilterKind::Ewa)
         std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n",
                     info.major, info.minor);
+    else if (*kind == texture::FilterKind::Area && info.major > 0)
+        std::printf("footprint: parallelogram, sides %.4f and %.4f texels (with the reconstruction "
+                    "term), area %.4f texels^2, integrated on level %d\n",
+                    info.major, info.minor, info.area, info.level_lo);
+    else if (*kind == texture::FilterKind::Area)
+        std::printf("footprint: the samples' triangle, area %.4f texels^2, integrated on level %d\n",
+                    info.area, info.level_lo);
     else
         std::printf("footprint: width %.4f texels\n", info.width);
     return 0;
@@ -446,7 +463,8 @@ int main(int argc, char** argv) {
         "EXR) or texture (unlit filtered texture of the first non-specular hit)");
     render_cmd->add_option(
         "--filter", ra.filter,
-        "Filter for image textures: bilinear, trilinear, sat or ewa (default: the scene's)");
+        "Filter for image textures: " + texture::filter_names() +
+            " (default: the scene's; area is the exact mean over each sample's footprint)");
     render_cmd
         ->add_option("--cmam-miss", ra.cmam_miss, "CMAM, no matching sample: average or point")
         ->capture_default_str();
@@ -489,7 +507,7 @@ int main(int argc, char** argv) {
         ->add_option("--points", la.points,
                      "Footprint sample points U1,V1[,U2,V2[,U3,V3]], current first")
         ->excludes(axes_opt);
-    lookup_cmd->add_option("--filter", la.filter, "nearest, bilinear, trilinear, sat or ewa")
+    lookup_cmd->add_option("--filter", la.filter, texture::filter_names())
         ->capture_default_str();
     lookup_cmd->add_option("--wrap", la.wrap, "repeat, clamp, black or mirror")
         ->capture_default_str();

@@ -318,9 +318,8 @@ class Builder {
                 std::string f = e.params.get_string("filter", "");
                 auto k = texture::parse_filter(f);
                 if (!k)
-                    throw SceneError(fp->loc, "unknown filter " + q(f) +
-                                                  " (expected \"nearest\", \"bilinear\", "
-                                                  "\"trilinear\", \"sat\" or \"ewa\")");
+                    throw SceneError(fp->loc, "unknown filter " + q(f) + " (expected " +
+                                                  texture::filter_names("\"") + ")");
                 n.filter.kind = *k;
             }
             if (const auto* lp = e.params.find("lod")) {

@@ -70,6 +70,9 @@ struct Tracer {
     Rng& rng;
     texture::RayTag tag{};         // the camera ray's tag; the level follows the depth
     CmamRowState* cmam = nullptr;  // the row's CMAM caches
+    // From the camera sample to its stratum's centre, in stratum steps (x, y): the same screen
+    // offset at every hit of the path, mapped to uv by that hit's differentials.
+    float to_stratum_x = 0, to_stratum_y = 0;
 
     Rgb escaped() const {
         Rgb l{};
@@ -165,9 +168,12 @@ struct Tracer {
             HitDifferential hd;
             if (scene.needs_differentials) {
                 hd = transfer(ray.diff, ray.dir, h);
-                if (hd.valid)
+                if (hd.valid) {
                     ctx.footprint =
                         texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
+                    ctx.stratum_offset = {hd.dudx * to_stratum_x + hd.dudy * to_stratum_y,
+                                          hd.dvdx * to_stratum_x + hd.dvdy * to_stratum_y};
+                }
                 else if (counts && ray.diff.valid)
                     ++counts->dropped_differentials;
             }
@@ -302,12 +308,13 @@ struct CameraSample {
     Vec3 org, dir;
     RayDifferential diff;
     RayCone cone;
+    float to_stratum_x = 0, to_stratum_y = 0;  // to the stratum's centre, in stratum steps
 };
 
 Rgb trace_one(const Scene& scene, const CameraSample& cs, uint64_t seed, RayCounts* counts,
               texture::RayTag tag = {}, CmamRowState* cmam = nullptr, Aov* aov = nullptr) {
     Rng rng(seed);
-    Tracer t{scene, counts, rng, tag, cmam};
+    Tracer t{scene, counts, rng, tag, cmam, cs.to_stratum_x, cs.to_stratum_y};
     t.aov = aov;
     if (counts) ++counts->camera;
     return t.li({cs.org, cs.dir, cs.diff, cs.cone}, 0);
@@ -375,6 +382,8 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
             if (scene.needs_differentials)
                 cs.diff = camera_differential(scene.camera, fx, fy, footprint_scale);
             cs.cone = camera_spread;
+            cs.to_stratum_x = 0.5f - j[0];
+            cs.to_stratum_y = 0.5f - j[1];
             texture::RayTag tag;
             if (sub_rows) {
                 tag.id = static_cast<uint32_t>(py * ny + sy);

@@ -63,6 +63,11 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                     ctx.counts->non_finite += info.fallback;
                 }
             } else {
+                if (n.filter.kind == texture::FilterKind::Area && n.lod == Lod::Differentials &&
+                    ctx.footprint.kind == texture::Footprint::Kind::Axes) {
+                    s += n.su * ctx.stratum_offset.u;
+                    t += n.sv * ctx.stratum_offset.v;
+                }
                 x = lookup_image(*n.image, n.filter, s, t, node_footprint(n, ctx), ctx.tag,
                                  ctx.counts);
             }

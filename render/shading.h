@@ -35,6 +35,10 @@ class CmamRowState {
 struct TexContext {
     float u = 0, v = 0;               // surface (u,v) of the hit
     texture::Footprint footprint{};   // ray differentials' footprint (None: point sample)
+    // Ray differentials: from the hit to the centre of the sample's stratum (uv), the first-order
+    // image of the sample's jitter. The area filter integrates the stratum itself, centred there,
+    // so that a pixel's strata tile it (algorithms.md §5.2).
+    texture::Vec2d stratum_offset{};
     texture::Footprint cone{};        // isotropic ray cone footprint
     texture::Footprint cone_aniso{};  // anisotropic ray cone footprint
     texture::RayTag tag{};            // the ray's tag (ID, recursion level)

@@ -42,23 +42,6 @@ std::string_view to_string(CmamSatMiss m) {
     return m == CmamSatMiss::Average ? "average" : "paper-literal";
 }
 
-namespace {
-
-// Minimum extent per axis (algorithms.md §6.4): max(extent, 1 texel, other extent / maxAniso),
-// centred on the original box.
-void min_extent(double* r, double max_aniso) {
-    if (!(max_aniso >= 1)) max_aniso = 1;  // below 1 (or NaN) would widen without bound
-    double w = r[2] - r[0], h = r[3] - r[1];
-    double nw = std::max({w, 1.0, h / max_aniso}), nh = std::max({h, 1.0, w / max_aniso});
-    double cx = 0.5 * (r[0] + r[2]), cy = 0.5 * (r[1] + r[3]);
-    r[0] = cx - nw / 2;
-    r[2] = cx + nw / 2;
-    r[1] = cy - nh / 2;
-    r[3] = cy + nh / 2;
-}
-
-}  // namespace
-
 CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int matches,
                        const CmamOptions& o) {
     CmamRegion r;
@@ -95,7 +78,7 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
         r.rect[2] = x1;
         r.rect[3] = y1;
     }
-    min_extent(r.rect, o.max_aniso);
+    detail::sat_min_extent(r.rect, o.max_aniso);
     // EWA: a circle of radius |v1| (one match), or an ellipse from the two vectors.
     if (matches == 1) {
         r.a[0] = len1;
@@ -112,10 +95,12 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
     r.b[1] = minor[1];
     if (lmaj == 0) return r;
     const double ux = major[0] / lmaj, uy = major[1] / lmaj;
-    const double sin_theta =
-        lmin > 0 ? std::abs(major[0] * minor[1] - major[1] * minor[0]) / (lmaj * lmin) : 0;
+    const double cross = std::abs(major[0] * minor[1] - major[1] * minor[0]);
+    const double sin_theta = lmin > 0 ? cross / (lmaj * lmin) : 0;
+    r.triangle_area = cross / 2;
+    r.nearly_collinear = sin_theta < 0.2;
     CmamEllipse reading = o.ellipse;
-    if (sin_theta < 0.2) {  // nearly collinear: the conjugate ellipse would be a sliver
+    if (r.nearly_collinear) {  // nearly collinear: the conjugate ellipse would be a sliver
         reading = CmamEllipse::Orthogonal;
         r.orthogonal_fallback = o.ellipse != CmamEllipse::Orthogonal;
     }
@@ -154,7 +139,7 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
     r.rect[2] = s0 + hs;
     r.rect[1] = t0 - ht;
     r.rect[3] = t0 + ht;
-    min_extent(r.rect, o.max_aniso);
+    detail::sat_min_extent(r.rect, o.max_aniso);
     // EWA: the Jacobian columns are conjugate semi-diameters (algorithms.md §4.1).
     r.a[0] = a[0];
     r.a[1] = a[1];
@@ -295,46 +280,25 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         in.texels_read = 4;  // d = 0: point sample
         return bilinear(img, u, v);
     }
-    switch (o.filter) {
-        case FilterKind::Sat:
-            if (info) {
-                std::copy(r.rect, r.rect + 4, in.rect);
-                in.texels_read = 16;
-            }
-            return tex.sat().average(r.rect[0], r.rect[1], r.rect[2], r.rect[3]);
-        case FilterKind::Ewa: {
-            EwaResult e = ewa(tex.pyramid(), u, v, r.a[0] / W, r.a[1] / H, r.b[0] / W, r.b[1] / H,
-                              o.max_aniso);
-            if (info) {
-                in.lambda = e.lambda;
-                in.level_lo = static_cast<int>(std::floor(e.lambda));
-                in.level_hi = e.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-                in.texels_read = e.texels_read;
-                in.major = e.major;
-                in.minor = e.minor;
-            }
-            return e.value;
-        }
-        case FilterKind::Nearest:
-            in.texels_read = 1;
-            return nearest(img, u, v);
-        case FilterKind::Bilinear:
-            in.texels_read = 4;
-            return bilinear(img, u, v);
-        case FilterKind::Trilinear:
-        default: {
-            double lambda = 0;
-            Texel t = tex.pyramid().trilinear(u, v, r.width, &lambda);
-            if (info) {
-                in.width = r.width;
-                in.lambda = lambda;
-                in.level_lo = static_cast<int>(std::floor(lambda));
-                in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-                in.texels_read = in.level_lo == in.level_hi ? 4 : 8;
-            }
-            return t;
-        }
+    // One route into the filters: the 2-D CMAM's left and above neighbours are the Jacobian
+    // columns (an Axes footprint); the 1-D CMAM hands over its matching samples (a Points
+    // footprint, whose region the dispatcher builds with cmam_region(), as above).
+    FilterOptions fo;
+    fo.kind = o.filter;
+    fo.max_aniso = o.max_aniso;
+    fo.ellipse = o.ellipse;
+    fo.sat_box = o.sat_box;
+    Footprint fp;
+    if (above.valid) {
+        fp = Footprint::axes({r.a[0] / W, r.a[1] / H}, {r.b[0] / W, r.b[1] / H});
+    } else {
+        fp.kind = Footprint::Kind::Points;
+        fp.point_count = 1 + std::min(matches, 2);
+        fp.points[0] = {u, v};
+        for (int k = 0; k + 1 < fp.point_count; ++k)
+            fp.points[k + 1] = {cached[k].s / W, cached[k].t / H};
     }
+    return tex.lookup(u, v, fp, fo, info);
 }
 
 }  // namespace cmam::texture

@@ -1,3 +1,4 @@
+#include <cmam/texture/cmam.h>
 #include <cmam/texture/filter.h>
 #include <cmam/texture/filters.h>
 
@@ -14,6 +15,7 @@ std::optional<FilterKind> parse_filter(std::string_view n) {
     if (n == "trilinear") return FilterKind::Trilinear;
     if (n == "sat") return FilterKind::Sat;
     if (n == "ewa") return FilterKind::Ewa;
+    if (n == "area") return FilterKind::Area;
     return std::nullopt;
 }
 
@@ -29,8 +31,21 @@ std::string_view to_string(FilterKind k) {
             return "sat";
         case FilterKind::Ewa:
             return "ewa";
+        case FilterKind::Area:
+            return "area";
     }
     return "?";
+}
+
+std::string filter_names(std::string_view quote) {
+    std::string out;
+    for (int k = 0; k < kFilterKinds; ++k) {
+        if (k > 0) out += k + 1 == kFilterKinds ? " or " : ", ";
+        out += quote;
+        out += to_string(FilterKind(k));
+        out += quote;
+    }
+    return out;
 }
 
 FilteredTexture::FilteredTexture(Image level0) : m_image(std::move(level0)) {
@@ -39,6 +54,29 @@ FilteredTexture::FilteredTexture(Image level0) : m_image(std::move(level0)) {
     m_level_sats.resize(static_cast<std::size_t>(levels));
     m_level_ready =
         std::make_unique<std::atomic<SummedAreaTable*>[]>(static_cast<std::size_t>(levels));
+    m_row_prefix.resize(static_cast<std::size_t>(levels));
+    m_row_prefix_ready =
+        std::make_unique<std::atomic<RowPrefixTable*>[]>(static_cast<std::size_t>(levels));
+}
+
+const RowPrefixTable& FilteredTexture::row_prefix(int l) const {
+    l = std::clamp<int>(l, 0, static_cast<int>(m_row_prefix.size()) - 1);
+    if (RowPrefixTable* p = m_row_prefix_ready[l].load(std::memory_order_acquire)) return *p;
+    const Image& level = l > 0 ? pyramid().level(l) : m_image;
+    std::lock_guard<std::mutex> lock(m_build);
+    if (!m_row_prefix[l]) {
+        m_row_prefix[l] = std::make_unique<RowPrefixTable>(level);
+        m_row_prefix_ready[l].store(m_row_prefix[l].get(), std::memory_order_release);
+    }
+    return *m_row_prefix[l];
+}
+
+std::size_t FilteredTexture::row_prefix_bytes() const {
+    std::size_t n = 0;
+    for (std::size_t l = 0; l < m_row_prefix.size(); ++l)
+        if (RowPrefixTable* p = m_row_prefix_ready[l].load(std::memory_order_acquire))
+            n += p->memory_bytes();
+    return n;
 }
 
 const SummedAreaTable& FilteredTexture::level_sat(int l) const {
@@ -81,7 +119,7 @@ std::size_t FilteredTexture::memory_bytes() const {
     for (std::size_t l = 1; l < m_level_sats.size(); ++l)
         if (SummedAreaTable* p = m_level_ready[l].load(std::memory_order_acquire))
             n += p->memory_bytes();
-    return n;
+    return n + row_prefix_bytes();
 }
 
 namespace {
@@ -93,17 +131,6 @@ bool finite(const Footprint& fp, double u, double v) {
     for (int i = 0; i < fp.point_count; ++i)
         if (!std::isfinite(fp.points[i].u) || !std::isfinite(fp.points[i].v)) return false;
     return true;
-}
-// Bounding box of the footprint's points in level-0 texels: x0, y0, x1, y1.
-void points_box(const Footprint& fp, double W, double H, double* r) {
-    r[0] = r[2] = fp.points[0].u * W;
-    r[1] = r[3] = fp.points[0].v * H;
-    for (int i = 1; i < fp.point_count; ++i) {
-        r[0] = std::min(r[0], fp.points[i].u * W);
-        r[2] = std::max(r[2], fp.points[i].u * W);
-        r[1] = std::min(r[1], fp.points[i].v * H);
-        r[3] = std::max(r[3], fp.points[i].v * H);
-    }
 }
 }  // namespace
 
@@ -130,31 +157,18 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
         note(4);
         return bilinear(m_image, u, v);
     }
-    // Reduce the footprint to two axis vectors (uv units).
-    Vec2d a = fp.axis_a, b = fp.axis_b;
-    if (fp.kind ==
-        Footprint::Kind::Points) {  // vectors from the current sample (first) to the others
-        a = b = Vec2d{};
-        if (fp.point_count > 1)
-            a = {fp.points[1].u - fp.points[0].u, fp.points[1].v - fp.points[0].v};
-        if (fp.point_count > 2)
-            b = {fp.points[2].u - fp.points[0].u, fp.points[2].v - fp.points[0].v};
-    }
+    if (fp.kind == Footprint::Kind::Points) return lookup_points(u, v, fp, opts, info);
+    const Vec2d a = fp.axis_a, b = fp.axis_b;  // the Jacobian columns (uv units)
     switch (opts.kind) {
         case FilterKind::Trilinear: {
             double width2;
-            if (fp.kind == Footprint::Kind::Axes && opts.pbrt_trilinear_width) {
+            if (opts.pbrt_trilinear_width) {
                 double m = std::max({std::abs(a.u), std::abs(a.v), std::abs(b.u), std::abs(b.v)}) *
                            std::max(W, H);
                 width2 = m * m;
-            } else if (fp.kind == Footprint::Kind::Axes) {
+            } else {
                 width2 = std::max(a.u * a.u * W * W + a.v * a.v * H * H,
                                   b.u * b.u * W * W + b.v * b.v * H * H);
-            } else {  // diagonal of the points' bounding box
-                double rect[4];
-                points_box(fp, W, H, rect);
-                width2 = (rect[2] - rect[0]) * (rect[2] - rect[0]) +
-                         (rect[3] - rect[1]) * (rect[3] - rect[1]);
             }
             const MipPyramid& pyr = pyramid();
             double lambda = 0;
@@ -183,24 +197,19 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             return t;
         }
         case FilterKind::Sat: {
-            double r[4];
-            if (fp.kind == Footprint::Kind::Axes) {
-                // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box.
-                double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W,
-                       ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
-                r[0] = u * W - hs;
-                r[1] = v * H - ht;
-                r[2] = u * W + hs;
-                r[3] = v * H + ht;
-            } else {
-                points_box(fp, W, H, r);
-            }
+            // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box,
+            // at least one texel wide (a unit box is the bilinear value) with the anisotropy
+            // clamp (algorithms.md §6.4).
+            double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W,
+                   ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
+            double r[4] = {u * W - hs, v * H - ht, u * W + hs, v * H + ht};
             constexpr double kMax = detail::kMaxTexelCoord;
             if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) <
                   kMax)) {
                 note(1, true);
                 return m_image.mean();
             }
+            detail::sat_min_extent(r, opts.max_aniso);
             if (info) {
                 std::copy(r, r + 4, info->rect);
                 info->texels_read = 16;
@@ -219,11 +228,97 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             }
             return r.value;
         }
+        case FilterKind::Area: {
+            AreaResult r = area_parallelogram(*this, u, v, a, b);
+            if (info) {
+                info->lambda = r.level;
+                info->level_lo = info->level_hi = r.level;
+                info->texels_read = r.knots;
+                info->major = r.major;
+                info->minor = r.minor;
+                info->area = r.area;
+            }
+            return r.value;
+        }
         default:
             break;
     }
     note(4);
     return bilinear(m_image, u, v);
+}
+
+// A Points footprint: the paper's region for the current sample and the CMAM's matching cached
+// samples (cmam_region(), the same rules the CMAM applies), then the filter.
+Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
+                                     const FilterOptions& opts, LookupInfo* info) const {
+    const double W = m_image.width(), H = m_image.height();
+    const int matches = std::clamp(fp.point_count, 1, 3) - 1;
+    if (matches == 0) {  // one point: no region
+        if (info) info->texels_read = 4;
+        return bilinear(m_image, u, v);
+    }
+    const double s0 = fp.points[0].u * W, t0 = fp.points[0].v * H;
+    CmamCache::Entry cached[2];
+    for (int k = 0; k < matches; ++k) {
+        cached[k].s = fp.points[k + 1].u * W;
+        cached[k].t = fp.points[k + 1].v * H;
+        cached[k].valid = true;
+    }
+    CmamOptions o;
+    o.filter = opts.kind;
+    o.max_aniso = opts.max_aniso;
+    o.ellipse = opts.ellipse;
+    o.sat_box = opts.sat_box;
+    const CmamRegion r = cmam_region(s0, t0, cached, matches, o);
+    LookupInfo scratch;
+    LookupInfo& in = info ? *info : scratch;
+    switch (opts.kind) {
+        case FilterKind::Sat:
+            std::copy(r.rect, r.rect + 4, in.rect);
+            in.texels_read = 16;
+            return sat().average(r.rect[0], r.rect[1], r.rect[2], r.rect[3]);
+        case FilterKind::Ewa: {
+            EwaResult e =
+                ewa(pyramid(), u, v, r.a[0] / W, r.a[1] / H, r.b[0] / W, r.b[1] / H, opts.max_aniso);
+            in.lambda = e.lambda;
+            in.level_lo = static_cast<int>(std::floor(e.lambda));
+            in.level_hi = e.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
+            in.texels_read = e.texels_read;
+            in.major = e.major;
+            in.minor = e.minor;
+            return e.value;
+        }
+        case FilterKind::Area: {
+            // The triangle of three samples where it has area (not nearly collinear, at least a
+            // texel); otherwise the parallelogram of the EWA reading's two axes taken as
+            // Jacobian columns (one match: the square of side |p1 - p0|).
+            AreaResult a;
+            if (r.triangle_area >= 1 && !r.nearly_collinear) {
+                a = area_polygon(*this, fp.points.data(), 3);
+            } else {
+                a = area_parallelogram(*this, u, v, {r.a[0] / W, r.a[1] / H},
+                                       {r.b[0] / W, r.b[1] / H});
+                in.major = a.major;
+                in.minor = a.minor;
+            }
+            in.lambda = a.level;
+            in.level_lo = in.level_hi = a.level;
+            in.texels_read = a.knots;
+            in.area = a.area;
+            return a.value;
+        }
+        case FilterKind::Trilinear:
+        default: {
+            double lambda = 0;
+            Texel t = pyramid().trilinear(u, v, r.width, &lambda);
+            in.width = r.width;
+            in.lambda = lambda;
+            in.level_lo = static_cast<int>(std::floor(lambda));
+            in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
+            in.texels_read = in.level_lo == in.level_hi ? 4 : 8;
+            return t;
+        }
+    }
 }
 
 }  // namespace cmam::texture

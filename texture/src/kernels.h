@@ -9,6 +9,7 @@
 
 #include <cmam/texture/image.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <limits>
@@ -22,6 +23,19 @@ namespace cmam::texture::detail {
 /// Texel coordinates are used up to 2^30 in magnitude: beyond, every filter returns the mean, so
 /// no coordinate is ever converted to an integer out of range and no sum loses all precision.
 inline constexpr double kMaxTexelCoord = 1073741824.0;
+
+/// Minimum extent of a SAT rectangle r = {x0, y0, x1, y1} (level-0 texels) per axis
+/// (algorithms.md §6.4): max(extent, 1 texel, other extent / maxAniso), centred on the original.
+inline void sat_min_extent(double* r, double max_aniso) {
+    if (!(max_aniso >= 1)) max_aniso = 1;  // below 1 (or NaN) would widen without bound
+    const double w = r[2] - r[0], h = r[3] - r[1];
+    const double nw = std::max({w, 1.0, h / max_aniso}), nh = std::max({h, 1.0, w / max_aniso});
+    const double cx = 0.5 * (r[0] + r[2]), cy = 0.5 * (r[1] + r[3]);
+    r[0] = cx - nw / 2;
+    r[2] = cx + nw / 2;
+    r[1] = cy - nh / 2;
+    r[3] = cy + nh / 2;
+}
 
 /// floor(log2(x)) for x >= 1 (infinity included), exactly, from the binary exponent: a level
 /// chosen this way does not wait for a logarithm.

@@ -17,13 +17,8 @@ namespace cmam::texture {
 
 /// What a sample that matches no cached sample gets (paper §3.2.1 item 1).
 enum class CmamMiss : uint8_t { Average, Point };
-/// How EWA reads two non-orthogonal vectors (algorithms.md §6.2 item 3): R1, R2, R3.
-enum class CmamEllipse : uint8_t { Conjugate, Orthogonal, Orthogonalised };
 /// SAT on a miss: the whole-texture mean, or the paper's literal origin-to-(u,v) rectangle.
 enum class CmamSatMiss : uint8_t { Average, PaperLiteral };
-/// SAT region for one matching sample: the rectangle spanned by the two samples (paper), or a
-/// square of side |p1 - p0| centred on the current sample (algorithms.md §6.4 alternative).
-enum class CmamSatBox : uint8_t { Spanned, Square };
 
 std::optional<CmamMiss> parse_cmam_miss(std::string_view);
 std::optional<CmamEllipse> parse_cmam_ellipse(std::string_view);
@@ -90,6 +85,8 @@ struct CmamRegion {
     double rect[4] = {0, 0, 0, 0};  // SAT: x0, y0, x1, y1 (after the minimum-extent rule)
     double a[2] = {0, 0}, b[2] = {0, 0};  // EWA: the two axis vectors (texels)
     bool orthogonal_fallback = false;     // EWA: sin(theta) < 0.2 switched to the R2 reading
+    bool nearly_collinear = false;        // two matches with sin(theta) < 0.2
+    double triangle_area = 0;             // two matches: the three samples' triangle (texels^2)
     double hull_new_area = -1;            // hull weighting: area of the new pieces (-1: not used)
     bool used_above = false;              // 2-D CMAM: the sample above took part
 };

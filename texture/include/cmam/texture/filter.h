@@ -2,6 +2,7 @@
 // Owns the level-0 image and builds the MIP pyramid and the summed-area table on first use.
 #pragma once
 
+#include <cmam/texture/area.h>
 #include <cmam/texture/ewa.h>
 #include <cmam/texture/footprint.h>
 #include <cmam/texture/mip.h>
@@ -17,12 +18,18 @@
 
 namespace cmam::texture {
 
-enum class FilterKind : uint8_t { Nearest, Bilinear, Trilinear, Sat, Ewa };
-inline constexpr int kFilterKinds = 5;
+/// The filters. `Area` is the exact mean over the footprint's own region (area.h); the others
+/// approximate that region: trilinear by a square, the SAT by its bounding box, EWA by a
+/// Gaussian ellipse.
+enum class FilterKind : uint8_t { Nearest, Bilinear, Trilinear, Sat, Ewa, Area };
+inline constexpr int kFilterKinds = 6;
 
-/// Parses "nearest", "bilinear", "trilinear", "sat", "ewa"; nullopt otherwise.
+/// Parses "nearest", "bilinear", "trilinear", "sat", "ewa", "area"; nullopt otherwise.
 std::optional<FilterKind> parse_filter(std::string_view name);
 std::string_view to_string(FilterKind kind);
+/// Every filter's name, for messages: "nearest, bilinear, trilinear, sat, ewa or area", each
+/// between `quote` characters if given.
+std::string filter_names(std::string_view quote = "");
 
 struct FilterOptions {
     FilterKind kind = FilterKind::Ewa;
@@ -31,18 +38,22 @@ struct FilterOptions {
     /// algorithms.md §2.2), or pbrt-v3's largest absolute component of the two axes, measured in
     /// texels of the larger image dimension (what pbrt-v3 does after its PR #275).
     bool pbrt_trilinear_width = false;
+    /// How a `Points` footprint's region is read (the CMAM's options, algorithms.md §6.2).
+    CmamEllipse ellipse = CmamEllipse::Conjugate;
+    CmamSatBox sat_box = CmamSatBox::Spanned;
 };
 
 /// What a lookup did (for `cmam lookup`, statistics and tests).
 struct LookupInfo {
-    double lambda = 0;  // fractional MIP level (0 for level-0 filters)
+    double lambda = 0;  // fractional MIP level (0 for level-0 filters; area: the level used)
     int level_lo = 0, level_hi = 0;
     int texels_read = 0;
     bool fallback = false;  // non-finite input: the texture mean was returned
-    // The region filtered, in level-0 texels: a rectangle (SAT) or ellipse semi-axes (EWA),
-    // or the footprint width (trilinear).
+    // The region filtered, in level-0 texels: a rectangle (SAT), ellipse semi-axes (EWA),
+    // parallelogram sides (area; 0 for a CMAM triangle) or the footprint width (trilinear).
     double rect[4] = {0, 0, 0, 0};  // x0, y0, x1, y1
     double major = 0, minor = 0, width = 0;
+    double area = 0;  // area: the region's area in level-0 texels^2
 };
 
 class FilteredTexture {
@@ -55,6 +66,10 @@ class FilteredTexture {
     const SummedAreaTable& sat() const;
     /// Summed-area table of MIP level `l` (level 0 is sat()); built on first use.
     const SummedAreaTable& level_sat(int l) const;
+    /// Row prefix table of MIP level `l` for the area filter; built on first use.
+    const RowPrefixTable& row_prefix(int l) const;
+    /// Bytes of the row prefix tables built so far (part of memory_bytes()).
+    std::size_t row_prefix_bytes() const;
     std::size_t memory_bytes() const;  // level 0 + whatever has been built
     bool pyramid_built() const { return m_pyr_ready.load(std::memory_order_acquire) != nullptr; }
     bool sat_built() const { return m_sat_ready.load(std::memory_order_acquire) != nullptr; }
@@ -72,6 +87,11 @@ class FilteredTexture {
     mutable std::unique_ptr<SummedAreaTable> m_sat;
     mutable std::vector<std::unique_ptr<SummedAreaTable>> m_level_sats;  // guarded by m_build
     mutable std::unique_ptr<std::atomic<SummedAreaTable*>[]> m_level_ready;
+    mutable std::vector<std::unique_ptr<RowPrefixTable>> m_row_prefix;  // guarded by m_build
+    mutable std::unique_ptr<std::atomic<RowPrefixTable*>[]> m_row_prefix_ready;
+
+    Texel lookup_points(double u, double v, const Footprint& fp, const FilterOptions& opts,
+                        LookupInfo* info) const;
 };
 
 }  // namespace cmam::texture

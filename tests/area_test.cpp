@@ -1,0 +1,257 @@
+// The area filter (algorithms.md §5.2): exact integrals over parallelograms and triangles against
+// the cell-clipping oracle for every wrap mode, the level rule's error against level-0
+// integration, constants, ramps, strata that tile their pixel, and the reconstruction term.
+#include <cmam/texture/area.h>
+#include <cmam/texture/filter.h>
+#include <cmam/texture/polygon.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace cmam::texture;
+
+namespace {
+
+std::vector<float> noise(int w, int h, int c, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0, 1);
+    std::vector<float> px(std::size_t(w) * h * c);
+    for (float& x : px) x = unit(rng);
+    return px;
+}
+
+Polygon to_polygon(const Vec2d* v, int n) {
+    Polygon p;
+    for (int i = 0; i < n; ++i) p.push_back({v[i].u, v[i].v});
+    return p;
+}
+
+// A random parallelogram (centre, two sides) in texel space; sides from 0.05 to 20 texels.
+void random_parallelogram(std::mt19937& rng, double lo, double hi, Vec2d* p) {
+    std::uniform_real_distribution<double> pos(lo, hi), size(-3, 3.2), angle(0, 6.3);
+    const double cx = pos(rng), cy = pos(rng);
+    const double la = std::exp2(size(rng)), lb = std::exp2(size(rng));
+    const double ta = angle(rng), tb = angle(rng);
+    const Vec2d a{la * std::cos(ta), la * std::sin(ta)}, b{lb * std::cos(tb), lb * std::sin(tb)};
+    p[0] = {cx - 0.5 * (a.u + b.u), cy - 0.5 * (a.v + b.v)};
+    p[1] = {cx + 0.5 * (a.u - b.u), cy + 0.5 * (a.v - b.v)};
+    p[2] = {cx + 0.5 * (a.u + b.u), cy + 0.5 * (a.v + b.v)};
+    p[3] = {cx - 0.5 * (a.u - b.u), cy - 0.5 * (a.v - b.v)};
+}
+
+}  // namespace
+
+class AreaWrap : public ::testing::TestWithParam<WrapMode> {};
+
+TEST_P(AreaWrap, RowPrefixIntegralMatchesTheCellOracle) {
+    // Parallelograms and triangles inside, across and beyond the edges of a 13x7 three-channel
+    // texture: Green's theorem on the row prefixes equals clipping the polygon to every texel.
+    const WrapMode w = GetParam();
+    Image img(13, 7, 3, noise(13, 7, 3, 3), w, w);
+    RowPrefixTable table(img);
+    std::mt19937 rng(11);
+    for (int k = 0; k < 400; ++k) {
+        Vec2d p[4];
+        random_parallelogram(rng, -15, 28, p);
+        const int n = k % 4 == 3 ? 3 : 4;  // every fourth a triangle
+        const Texel got = table.integral(p, n);
+        const Texel want = polygon_integral_cells(img, to_polygon(p, n));
+        const double area = std::abs(signed_area(to_polygon(p, n)));
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(got[c], want[c], 1e-5 * std::max(1.0, area))
+                << to_string(w) << " polygon " << k << " channel " << c;
+        // Orientation does not matter.
+        const Vec2d r[4] = {p[3], p[2], p[1], p[0]};
+        const Vec2d* rp = n == 4 ? r : r + 1;
+        EXPECT_NEAR(table.integral(rp, n)[0], got[0], 1e-5 * std::max(1.0, area));
+    }
+}
+
+TEST_P(AreaWrap, ConstantTextureStaysConstant) {
+    const WrapMode w = GetParam();
+    std::vector<float> px(std::size_t(40) * 24 * 3);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = i % 3 == 0 ? 0.25f : (i % 3 == 1 ? 0.5f : 2);
+    FilteredTexture t(Image(40, 24, 3, px, w, w));
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> pos(0.1, 0.9), size(-9, 2), angle(0, 6.3);
+    for (int k = 0; k < 300; ++k) {
+        // Black darkens where the region leaves the texture: keep it inside there.
+        const double s = std::exp2(size(rng)) * (w == WrapMode::Black ? 0.05 : 1);
+        const double th = angle(rng);
+        const Footprint fp = Footprint::axes({s * std::cos(th), s * std::sin(th)},
+                                             {-0.3 * s * std::sin(th), 0.3 * s * std::cos(th)});
+        const Texel x = t.lookup(pos(rng), pos(rng), fp, {FilterKind::Area});
+        EXPECT_NEAR(x[0], 0.25, 1e-5) << s;
+        EXPECT_NEAR(x[1], 0.5, 1e-5) << s;
+        EXPECT_NEAR(x[2], 2.0, 1e-5) << s;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Wraps, AreaWrap,
+                         ::testing::Values(WrapMode::Repeat, WrapMode::Clamp, WrapMode::Black,
+                                           WrapMode::Mirror),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+TEST(Area, Tpoly1NumbersThroughTheRowPrefixes) {
+    // algorithms.md §12 T-POLY-1 on the 2x2 texture [1 2; 3 4].
+    Image img(2, 2, 1, {1, 2, 3, 4}, WrapMode::Repeat, WrapMode::Repeat);
+    RowPrefixTable table(img);
+    const Vec2d tri[3] = {{0, 0}, {2, 0}, {0, 2}};
+    EXPECT_NEAR(table.integral(tri, 3)[0], 3.5, 1e-6);
+    const Vec2d para[4] = {{0.5, 0.25}, {1.75, 0.75}, {1.25, 1.75}, {0, 1.25}};
+    EXPECT_NEAR(table.integral(para, 4)[0], 3.6, 1e-6);
+}
+
+TEST(Area, LevelRuleErrorAgainstLevelZeroIsBounded) {
+    // White noise is the worst case for integrating on a coarser level: every texel differs.
+    // Regions from 1 to 300 texels wide and anisotropy up to 16, integrated by the level rule
+    // and exactly on level 0; the difference is stated in algorithms.md §5.2.
+    const int n = 512;
+    FilteredTexture t(Image(n, n, 1, noise(n, n, 1, 9)));
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> pos(0, 1), size(0, 8.2), aniso(0, 4), angle(0, 6.3);
+    double sum2 = 0, worst = 0;
+    int coarse = 0, count = 0;
+    for (int k = 0; k < 400; ++k) {
+        const double minor = std::exp2(size(rng)) / n, major = minor * std::exp2(aniso(rng));
+        const double th = angle(rng), u = pos(rng), v = pos(rng);
+        const Vec2d a{major * std::cos(th), major * std::sin(th)},
+            b{-minor * std::sin(th), minor * std::cos(th)};
+        const AreaRegion g = area_region(t, u, v, a, b);
+        const double exact = t.row_prefix(0).integral(g.corners, 4)[0] / g.area;
+        const AreaResult r = area_parallelogram(t, u, v, a, b);
+        EXPECT_EQ(r.level, g.level);
+        const double e = r.value[0] - exact;
+        sum2 += e * e;
+        worst = std::max(worst, std::abs(e));
+        coarse += r.level > 0;
+        ++count;
+    }
+    const double rms = std::sqrt(sum2 / count);
+    RecordProperty("rms_error", std::to_string(rms));
+    RecordProperty("max_error", std::to_string(worst));
+    std::printf("level rule vs level 0 on white noise: rms %.5f, max %.5f, %d of %d coarser\n", rms,
+                worst, coarse, count);
+    EXPECT_GT(coarse, count / 2);  // the rule does pick coarser levels
+    EXPECT_LT(rms, 0.01);
+    EXPECT_LT(worst, 0.05);
+}
+
+TEST(Area, CostIsBoundedByThePerimeterRule) {
+    // However large or anisotropic the region, the boundary walk reads O(kAreaMaxPerimeter).
+    FilteredTexture t(Image(1024, 1024, 1, noise(1024, 1024, 1, 2)));
+    for (double s : {1e-4, 0.01, 0.1, 1.0, 30.0})
+        for (double aniso : {1.0, 8.0, 64.0, 1e4}) {
+            const AreaResult r = area_parallelogram(t, 0.3, 0.6, {s, 0}, {0, s / aniso});
+            EXPECT_LE(r.knots, 3 * kAreaMaxPerimeter) << s << " aniso " << aniso;
+        }
+}
+
+TEST(Area, SymmetricRegionOnALinearRampGivesTheCentre) {
+    std::vector<float> px(64 * 64);
+    for (int j = 0; j < 64; ++j)
+        for (int i = 0; i < 64; ++i) px[j * 64 + i] = float(i + 0.5);  // value = s at centres
+    FilteredTexture t(Image(64, 64, 1, px, WrapMode::Clamp, WrapMode::Clamp));
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> size(-8, -2.5), angle(0, 6.3);
+    for (int k = 0; k < 200; ++k) {
+        const double s = std::exp2(size(rng)), th = angle(rng);
+        const Footprint fp = Footprint::axes({s * std::cos(th), s * std::sin(th)},
+                                             {-0.5 * s * std::sin(th), 0.5 * s * std::cos(th)});
+        // The box-reconstructed ramp is a staircase: its mean over the region is the centre up
+        // to the part of one step the boundary cuts, a small fraction of the region's width.
+        const double tol = std::max(1e-4, 0.02 * s * 64);
+        EXPECT_NEAR(t.lookup(0.5, 0.5, fp, {FilterKind::Area})[0], 32.0, tol) << s;
+    }
+    // A sub-texel region is the bilinear reconstruction, which is the ramp itself.
+    EXPECT_NEAR(t.lookup(0.3 + 0.1 / 64, 0.5, Footprint::axes({1e-5, 0}, {0, 1e-5}),
+                         {FilterKind::Area})[0],
+                0.3 * 64 + 0.1, 1e-4);
+}
+
+TEST(Area, TinyAxisAlignedRegionIsTheBilinearValue) {
+    for (WrapMode w : {WrapMode::Repeat, WrapMode::Clamp, WrapMode::Black, WrapMode::Mirror}) {
+        FilteredTexture t(Image(9, 6, 3, noise(9, 6, 3, 8), w, w));
+        std::mt19937 rng(4);
+        std::uniform_real_distribution<double> pos(-0.2, 1.2);
+        for (int k = 0; k < 100; ++k) {
+            const double u = pos(rng), v = pos(rng);
+            const Texel a = t.lookup(u, v, Footprint::axes({0, 0}, {0, 0}), {FilterKind::Area});
+            const Texel b = t.lookup(u, v, Footprint::none(), {FilterKind::Bilinear});
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 2e-5) << to_string(w);
+        }
+    }
+}
+
+TEST(Area, StrataTileTheirPixel) {
+    // At n x n samples a pixel's strata are the parallelograms of its Jacobian columns / n, at
+    // the strata's centres: their exact integrals add up to the pixel's, and the filter's means
+    // (each on its own level, with the reconstruction term) average to the pixel's mean.
+    const int size = 256;
+    FilteredTexture t(Image(size, size, 1, noise(size, size, 1, 6)));
+    const RowPrefixTable& table = t.row_prefix(0);
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> pos(0, 1), side(8, 60), angle(0, 6.3);
+    for (int n : {2, 4}) {
+        for (int k = 0; k < 20; ++k) {
+            const double u = pos(rng), v = pos(rng), la = side(rng), lb = side(rng) * 0.5;
+            const double th = angle(rng), tb = th + 1.2;
+            const Vec2d a{la * std::cos(th) / size, la * std::sin(th) / size},
+                b{lb * std::cos(tb) / size, lb * std::sin(tb) / size};
+            auto corners = [&](double cu, double cv, Vec2d x, Vec2d y, Vec2d* p) {
+                const double cs = cu * size, ct = cv * size;
+                const Vec2d X{x.u * size, x.v * size}, Y{y.u * size, y.v * size};
+                p[0] = {cs - 0.5 * (X.u + Y.u), ct - 0.5 * (X.v + Y.v)};
+                p[1] = {cs + 0.5 * (X.u - Y.u), ct + 0.5 * (X.v - Y.v)};
+                p[2] = {cs + 0.5 * (X.u + Y.u), ct + 0.5 * (X.v + Y.v)};
+                p[3] = {cs - 0.5 * (X.u - Y.u), ct - 0.5 * (X.v - Y.v)};
+            };
+            Vec2d pix[4];
+            corners(u, v, a, b, pix);
+            const double whole = table.integral(pix, 4)[0];
+            const double pixel_mean = t.lookup(u, v, Footprint::axes(a, b), {FilterKind::Area})[0];
+            double parts = 0, strata_mean = 0;
+            const Vec2d sa{a.u / n, a.v / n}, sb{b.u / n, b.v / n};
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i) {
+                    const double fi = (i + 0.5) / n - 0.5, fj = (j + 0.5) / n - 0.5;
+                    const double cu = u + fi * a.u + fj * b.u, cv = v + fi * a.v + fj * b.v;
+                    Vec2d p[4];
+                    corners(cu, cv, sa, sb, p);
+                    parts += table.integral(p, 4)[0];
+                    strata_mean += t.lookup(cu, cv, Footprint::axes(sa, sb), {FilterKind::Area})[0];
+                }
+            EXPECT_NEAR(parts, whole, 1e-4 * std::abs(whole));
+            // Each mean is within the level rule's error of its level-0 integral (see above).
+            EXPECT_NEAR(strata_mean / (n * n), pixel_mean, 0.03) << n << " x " << n;
+        }
+    }
+}
+
+TEST(Area, CollinearAndNonFiniteFootprints) {
+    FilteredTexture t(Image(32, 32, 1, noise(32, 32, 1, 1)));
+    // Collinear axes: a strip one texel wide along the major axis, not a sliver of no area.
+    const AreaRegion g = area_region(t, 0.5, 0.5, {0.25, 0.125}, {-0.5, -0.25});
+    EXPECT_NEAR(g.minor, 1.0, 1e-9);
+    EXPECT_NEAR(g.major, std::sqrt(0.5 * 0.5 * 32 * 32 + 0.25 * 0.25 * 32 * 32 + 1), 1e-9);
+    const Texel x = t.lookup(0.5, 0.5, Footprint::axes({0.25, 0.125}, {-0.5, -0.25}),
+                             {FilterKind::Area});
+    EXPECT_TRUE(std::isfinite(x[0]));
+    LookupInfo info;
+    const Texel m = t.lookup(0.5, 0.5, Footprint::axes({NAN, 0}, {0, 0.1}), {FilterKind::Area},
+                             &info);
+    EXPECT_TRUE(info.fallback);
+    EXPECT_EQ(m[0], t.image().mean()[0]);
+    EXPECT_EQ(area_parallelogram(t, 0.5, INFINITY, {0.1, 0}, {0, 0.1}).value[0],
+              t.image().mean()[0]);
+}
+
+TEST(Area, TablesAreBuiltLazilyAndCounted) {
+    FilteredTexture t(Image(64, 32, 3, noise(64, 32, 3, 2)));
+    EXPECT_EQ(t.row_prefix_bytes(), 0u);
+    const std::size_t before = t.memory_bytes();
+    t.lookup(0.5, 0.5, Footprint::axes({0.001, 0}, {0, 0.001}), {FilterKind::Area});
+    EXPECT_EQ(t.row_prefix_bytes(), std::size_t(65) * 32 * 3 * sizeof(float));  // level 0 only
+    EXPECT_GE(t.memory_bytes(), before + t.row_prefix_bytes());
+}

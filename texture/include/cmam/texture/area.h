@@ -1,0 +1,98 @@
+// cmam::texture — exact area filtering: the mean of the texture over a footprint's own region
+// (the pixel's parallelogram c ± a/2 ± b/2, or a CMAM triangle), the quantity a box-filtered
+// pixel converges to. algorithms.md §5.2: Green's theorem on per-level row prefix tables turns
+// the area integral into a walk along the region's boundary; the level is the coarsest one on
+// which the region is still at least kAreaMinWidth texels wide, so the cost is bounded by the
+// perimeter there (O(1) per lookup) and the level's box average errs only along the boundary.
+#pragma once
+
+#include <cmam/texture/footprint.h>
+#include <cmam/texture/image.h>
+
+#include <vector>
+
+namespace cmam::texture {
+
+class FilteredTexture;
+
+/// Exclusive prefix sums along each row of one image, of (texel - image mean) so that float
+/// storage keeps its precision (4 B per channel per entry): D[j][i] = sum_{k<i} (T(k,j) - mean),
+/// 0 <= i <= width. The integral of the box-reconstructed texture from s = 0 to s = x along a row
+/// is piecewise linear in x between these knots: all Green's theorem needs.
+class RowPrefixTable {
+  public:
+    RowPrefixTable() = default;
+    explicit RowPrefixTable(const Image& image);
+
+    int width() const { return m_w; }
+    int height() const { return m_h; }
+    int channels() const { return m_c; }
+    const Texel& mean() const { return m_mean; }
+    std::size_t memory_bytes() const { return m_d.size() * sizeof(float); }
+
+    /// Exact integral of the box-reconstructed texture over the convex polygon `v` (n >= 3
+    /// vertices in either orientation, texel space of this image: texel (i,j) covers
+    /// [i,i+1)x[j,j+1)), with the image's wrap modes (Black: zero outside). The result is the
+    /// integral for the counter-clockwise polygon. Cost: O(rows + columns the boundary crosses).
+    /// A vertex beyond 2^30 texels or not a number gives the mean times the area.
+    Texel integral(const Vec2d* v, int n) const;
+
+  private:
+    int m_w = 0, m_h = 0, m_c = 0;
+    WrapMode m_wrap_s{}, m_wrap_t{};
+    Texel m_mean{};
+    std::vector<float> m_d;  // H rows of (W+1) * C floats
+
+    template <int NC>
+    void integrate(const Vec2d* v, int n, double* acc) const;
+    template <int NC>
+    void row_mean(int64_t j, double x0, double x1, double* out) const;
+    template <int NC>
+    void knot(const float* row, int64_t k, double* out) const;
+    template <int NC>
+    void outside_integral(const float* row, double a, double b, double* out) const;
+};
+
+/// The level rule (algorithms.md §5.2): integrate on the coarsest MIP level on which the region
+/// is still this many texels wide (its area over its longest side)...
+inline constexpr double kAreaMinWidth = 4;
+/// ...unless its perimeter there exceeds this many texels (very anisotropic regions): then the
+/// first coarser level where it does not. Bounds a lookup's cost.
+inline constexpr double kAreaMaxPerimeter = 64;
+
+struct AreaResult {
+    Texel value{};
+    int level = 0;           // MIP level integrated on
+    int knots = 0;           // row-prefix entries read (a cost measure)
+    double area = 0;         // the region's area, level-0 texels^2 (after the reconstruction
+                             // term)
+    double major = 0, minor = 0;  // parallelogram: side lengths in level-0 texels (after it)
+};
+
+/// The region area_parallelogram() integrates, in level-0 texels, and the level it picks.
+struct AreaRegion {
+    Vec2d corners[4];             // counter-clockwise or clockwise
+    double area = 0;              // level-0 texels^2
+    double major = 0, minor = 0;  // side lengths, level-0 texels
+    int level = 0;
+};
+
+/// The parallelogram (u,v) ± a/2 ± b/2 (a, b in uv units: the Jacobian columns, one pixel or
+/// stratum step each) with the bilinear reconstruction term: each side lengthened to
+/// sqrt(|side|^2 + 1) texels, so that the box integral of the texels over it has the second
+/// moments of the bilinear reconstruction's over the original (a region under one texel gives
+/// the bilinear value, exactly when axis-aligned; large ones are unchanged). Collinear or zero
+/// axes keep the major side with the perpendicular side of the area they span (about 0, then one
+/// texel); two zero axes give the axis-aligned unit square.
+AreaRegion area_region(const FilteredTexture& texture, double u, double v, Vec2d a, Vec2d b);
+
+/// Mean of the texture over area_region(texture, u, v, a, b), integrated on its level.
+AreaResult area_parallelogram(const FilteredTexture& texture, double u, double v, Vec2d a,
+                              Vec2d b);
+
+/// Mean of the box-reconstructed texture over a convex polygon given in uv units (the CMAM's
+/// triangle), on the level the same rule picks for it. Precondition: its area is at least one
+/// level-0 texel (smaller regions go to area_parallelogram's reconstruction term).
+AreaResult area_polygon(const FilteredTexture& texture, const Vec2d* uv, int n);
+
+}  // namespace cmam::texture
