@@ -45,6 +45,7 @@ struct Fixture {
         ours = std::make_unique<FilteredTexture>(Image(kRes, kRes, 3, px));
         ours->pyramid();
         ours->sat();
+        for (int l = 0; l < ours->pyramid().levels(); ++l) ours->row_prefix(l);
         std::string path = (std::filesystem::temp_directory_path() /
                             ("cmam_bench_" + std::to_string(::getpid()) + ".exr"))
                                .string();
@@ -146,9 +147,9 @@ struct Case {
     }
 };
 
-void BM_Ours(benchmark::State& state, FilterKind kind) {
+void BM_Ours(benchmark::State& state, FilterKind kind, bool spread = false) {
     Fixture& f = fixture();
-    const Case c(state, kind, false);
+    const Case c(state, kind, false, spread);
     for (auto _ : state) c.run_ours(f);
     record(state);
 }
@@ -199,11 +200,15 @@ void register_benchmarks() {
             add("BM_Versus/ewa", BM_Versus, FilterKind::Ewa, false);
             add("BM_VersusSpread/trilinear", BM_Versus, FilterKind::Trilinear, true);
             add("BM_VersusSpread/ewa", BM_Versus, FilterKind::Ewa, true);
-            add("BM_Ours/sat", BM_Ours, FilterKind::Sat);
+            add("BM_Ours/sat", BM_Ours, FilterKind::Sat, false);
+            // The exact area filter beside EWA and trilinear, ours alone, at spread sizes.
+            add("BM_OursSpread/trilinear", BM_Ours, FilterKind::Trilinear, true);
+            add("BM_OursSpread/ewa", BM_Ours, FilterKind::Ewa, true);
+            add("BM_OursSpread/area", BM_Ours, FilterKind::Area, true);
             // Nearest and bilinear ignore the footprint: one size and anisotropy is enough.
             if (size == 1 && aniso == 1) {
-                add("BM_Ours/nearest", BM_Ours, FilterKind::Nearest);
-                add("BM_Ours/bilinear", BM_Ours, FilterKind::Bilinear);
+                add("BM_Ours/nearest", BM_Ours, FilterKind::Nearest, false);
+                add("BM_Ours/bilinear", BM_Ours, FilterKind::Bilinear, false);
             }
         }
 }

@@ -1,5 +1,6 @@
 #include <cmam/texture/area.h>
 #include <cmam/texture/filter.h>
+#include <cmam/texture/filters.h>
 
 #include <algorithm>
 #include <cmath>
@@ -104,68 +105,96 @@ void RowPrefixTable::outside_integral(const float* row, double a, double b, doub
     }
 }
 
-// The mean of R_j over [x0,x1] (either order): R_j is linear within each texel, so a piece
-// within one texel is its midpoint value, and a longer one sums its texels' exact trapezoids.
+// The integral over a boundary piece within row j, from (x0, y0) to (x1, y1) with h = y1 - y0:
+// x is linear in y, so it is h times the mean of R_j over [x0,x1]. R_j is linear within each
+// texel: a piece within one texel takes its midpoint value; a longer one sums its texels' exact
+// trapezoids, times h / (x1 - x0) (`h_per_x`, the same along the edge).
 template <int NC>
-void RowPrefixTable::row_mean(int64_t j, double x0, double x1, double* out) const {
-    const int64_t jj = wrap_index(j, m_h, m_wrap_t);
+void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double h_per_x,
+                               double* acc) const {
+    const int64_t jj = j >= 0 && j < m_h ? j : wrap_index(j, m_h, m_wrap_t);
     if (jj < 0) {  // Black rows: zero texels, R(x) = -mean x
-        for (int c = 0; c < NC; ++c) out[c] = -m_mean[c] * 0.5 * (x0 + x1);
+        for (int c = 0; c < NC; ++c) acc[c] -= h * m_mean[c] * 0.5 * (x0 + x1);
         return;
     }
     const float* row = &m_d[static_cast<std::size_t>(jj) * (m_w + 1) * NC];
     if (x0 > x1) std::swap(x0, x1);
     const int64_t k0 = floor_to_int(x0);
     double ra[NC], rb[NC];
-    if (x1 <= double(k0 + 1)) {  // within one texel: R is linear, its mean is its midpoint value
+    if (x1 <= double(k0 + 1)) {  // within one texel: R is linear, its mean the midpoint value
+        const double f = 0.5 * (x0 + x1) - double(k0);
+        if (k0 >= 0 && k0 < m_w) {
+            const float* d = row + k0 * NC;
+            for (int c = 0; c < NC; ++c) acc[c] += h * (d[c] + f * (d[NC + c] - d[c]));
+            return;
+        }
         knot<NC>(row, k0, ra);
         knot<NC>(row, k0 + 1, rb);
-        const double f = 0.5 * (x0 + x1) - double(k0);
-        for (int c = 0; c < NC; ++c) out[c] = ra[c] + f * (rb[c] - ra[c]);
+        for (int c = 0; c < NC; ++c) acc[c] += h * (ra[c] + f * (rb[c] - ra[c]));
         return;
     }
-    double acc[NC];
-    for (int c = 0; c < NC; ++c) acc[c] = 0;
+    double sum[NC];
+    for (int c = 0; c < NC; ++c) sum[c] = 0;
     double lo = x0, hi = x1;
     if (m_wrap_s == WrapMode::Clamp || m_wrap_s == WrapMode::Black) {
-        if (lo < 0 || hi > m_w) outside_integral<NC>(row, lo, hi, acc);
+        if (lo < 0 || hi > m_w) outside_integral<NC>(row, lo, hi, sum);
         lo = std::max(lo, 0.0);
         hi = std::min(hi, double(m_w));
     }
     if (lo < hi) {
         int64_t k = floor_to_int(lo);
-        knot<NC>(row, k, ra);
-        if (m_wrap_s == WrapMode::Repeat) {
-            // Consecutive knots: R(q W + r) = q D[W] + D[r], stepping r without dividing.
+        const int64_t kend = floor_to_int(hi);  // the last texel is [kend, hi] (may be empty)
+        // First and last texels are partial; those between are whole: (R(k) + R(k+1)) / 2.
+        auto partial = [&](int64_t kk, double a, double b, const double* r0, const double* r1) {
+            const double f = 0.5 * (a + b) - double(kk);
+            for (int c = 0; c < NC; ++c) sum[c] += (b - a) * (r0[c] + f * (r1[c] - r0[c]));
+        };
+        if (k >= 0 && kend < m_w) {  // inside the table: direct reads
+            const float* d = row + k * NC;
+            for (int c = 0; c < NC; ++c) {
+                ra[c] = d[c];
+                rb[c] = d[NC + c];
+            }
+            partial(k, lo, double(k + 1), ra, rb);
+            double mid[NC];
+            for (int c = 0; c < NC; ++c) mid[c] = 0;
+            for (++k; k < kend; ++k) {
+                d = row + k * NC;
+                for (int c = 0; c < NC; ++c) mid[c] += double(d[c]) + d[NC + c];
+            }
+            for (int c = 0; c < NC; ++c) sum[c] += 0.5 * mid[c];
+            if (hi > double(kend)) {
+                d = row + kend * NC;
+                for (int c = 0; c < NC; ++c) {
+                    ra[c] = d[c];
+                    rb[c] = d[NC + c];
+                }
+                partial(kend, double(kend), hi, ra, rb);
+            }
+        } else if (m_wrap_s == WrapMode::Repeat) {
+            // Across a period: R(q W + r) = q D[W] + D[r], stepping r without dividing.
             const int64_t W = m_w;
             int64_t q = floor_div(k, W), r = k - q * W;
+            for (int c = 0; c < NC; ++c) ra[c] = double(q) * row[W * NC + c] + row[r * NC + c];
             for (; double(k) < hi; ++k) {
                 if (++r > W) {
                     r = 1;
                     ++q;
                 }
                 for (int c = 0; c < NC; ++c) rb[c] = double(q) * row[W * NC + c] + row[r * NC + c];
-                const double a = std::max(lo, double(k)), b = std::min(hi, double(k + 1));
-                const double f = 0.5 * (a + b) - double(k);
-                for (int c = 0; c < NC; ++c) {
-                    acc[c] += (b - a) * (ra[c] + f * (rb[c] - ra[c]));
-                    ra[c] = rb[c];
-                }
+                partial(k, std::max(lo, double(k)), std::min(hi, double(k + 1)), ra, rb);
+                for (int c = 0; c < NC; ++c) ra[c] = rb[c];
             }
-        } else {
+        } else {  // mirror across a period, or an edge: knots with the extension
+            knot<NC>(row, k, ra);
             for (; double(k) < hi; ++k) {
                 knot<NC>(row, k + 1, rb);
-                const double a = std::max(lo, double(k)), b = std::min(hi, double(k + 1));
-                const double f = 0.5 * (a + b) - double(k);
-                for (int c = 0; c < NC; ++c) {
-                    acc[c] += (b - a) * (ra[c] + f * (rb[c] - ra[c]));
-                    ra[c] = rb[c];
-                }
+                partial(k, std::max(lo, double(k)), std::min(hi, double(k + 1)), ra, rb);
+                for (int c = 0; c < NC; ++c) ra[c] = rb[c];
             }
         }
     }
-    const double inv = 1 / (x1 - x0);
-    for (int c = 0; c < NC; ++c) out[c] = acc[c] * inv;
+    for (int c = 0; c < NC; ++c) acc[c] += h_per_x * sum[c];
 }
 
 // Green's theorem: the area integral of T is the boundary integral of R(x,y) dy, where R is the
@@ -184,7 +213,48 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
             sign = -1;
         }
         const double dxdy = (q.u - p.u) / (q.v - p.v);
-        double y = p.v;
+        const double h_per_x = q.u != p.u ? sign * std::abs((q.v - p.v) / (q.u - p.u)) : 0;
+        double y = p.v, x = p.u;
+        if (p.v >= 0 && q.v <= m_h && std::min(p.u, q.u) >= 0 && std::max(p.u, q.u) < m_w) {
+            // The common case, the edge within the table: rows and knots read directly.
+            const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
+            int64_t j = floor_to_int(y);
+            const float* row = &m_d[static_cast<std::size_t>(j) * stride];
+            while (y < q.v) {
+                const double ynext = std::min(double(j + 1), q.v);
+                const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
+                const double h = sign * (ynext - y);
+                const double x0 = std::min(x, xnext), x1 = std::max(x, xnext);
+                const int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
+                const float* d = row + k0 * NC;
+                if (x1 <= double(k0 + 1)) {  // within one texel: the midpoint value
+                    const double f = 0.5 * (x0 + x1) - double(k0);
+                    for (int c = 0; c < NC; ++c) acc[c] += h * (d[c] + f * (d[NC + c] - d[c]));
+                } else {  // partial first and last texels, whole ones between
+                    const int64_t kend = static_cast<int64_t>(x1);
+                    double sum[NC];
+                    const double f0 = 0.5 * (x0 + double(k0 + 1)) - double(k0),
+                                 w0 = double(k0 + 1) - x0;
+                    for (int c = 0; c < NC; ++c) sum[c] = w0 * (d[c] + f0 * (d[NC + c] - d[c]));
+                    double mid[NC];
+                    for (int c = 0; c < NC; ++c) mid[c] = 0;
+                    for (int64_t k = k0 + 1; k < kend; ++k) {
+                        const float* e = row + k * NC;
+                        for (int c = 0; c < NC; ++c) mid[c] += double(e[c]) + e[NC + c];
+                    }
+                    const double w1 = x1 - double(kend), f1 = 0.5 * w1;
+                    const float* e = row + kend * NC;
+                    for (int c = 0; c < NC; ++c)
+                        acc[c] += h_per_x * (sum[c] + 0.5 * mid[c] +
+                                             w1 * (e[c] + f1 * (e[NC + c] - e[c])));
+                }
+                y = ynext;
+                x = xnext;
+                ++j;
+                row += stride;
+            }
+            continue;
+        }
         while (y < q.v) {
             const int64_t j = floor_to_int(y);
             double ynext;
@@ -194,12 +264,10 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
                 ynext = q.v;
             else
                 ynext = std::min(double(j + 1), q.v);
-            const double xa = p.u + (y - p.v) * dxdy, xb = p.u + (ynext - p.v) * dxdy;
-            double m[NC];
-            row_mean<NC>(j, xa, xb, m);
-            const double h = sign * (ynext - y);
-            for (int c = 0; c < NC; ++c) acc[c] += h * m[c];
+            const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
+            row_piece<NC>(j, x, xnext, sign * (ynext - y), h_per_x, acc);
             y = ynext;
+            x = xnext;
         }
     }
 }
@@ -257,7 +325,7 @@ Texel RowPrefixTable::integral(const Vec2d* v0, int n) const {
 namespace {
 
 double length(Vec2d a) {
-    return std::hypot(a.u, a.v);
+    return std::sqrt(a.u * a.u + a.v * a.v);
 }
 
 // The level rule (algorithms.md §5.2) for a region of area `area` (level-0 texels^2) whose
@@ -272,7 +340,10 @@ int area_level(const FilteredTexture& tex, double width, const Vec2d* sides, int
     for (; l < top; ++l) {
         const double kx = pyr.level(l).width() / W, ky = pyr.level(l).height() / H;
         double perimeter = 0;
-        for (int i = 0; i < n; ++i) perimeter += std::hypot(sides[i].u * kx, sides[i].v * ky);
+        for (int i = 0; i < n; ++i) {
+            const double x = sides[i].u * kx, y = sides[i].v * ky;
+            perimeter += std::sqrt(x * x + y * y);
+        }
         if (perimeter <= kAreaMaxPerimeter) break;
     }
     return l;
@@ -303,7 +374,8 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
         double perimeter = 0;
         for (int i = 0; i < n; ++i) {
             const Vec2d a = p[i], b = p[(i + 1) % n];
-            perimeter += std::hypot((b.u - a.u) * kx, (b.v - a.v) * ky);
+            const double x = (b.u - a.u) * kx, y = (b.v - a.v) * ky;
+            perimeter += std::sqrt(x * x + y * y);
         }
         if ((lev.width() == 1 && lev.height() == 1 && periodic) ||
             (periodic && perimeter > kAreaMaxPerimeter)) {
@@ -388,6 +460,35 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
         r.knots = 1;
         return r;
     }
+    // Magnification: the mean of the bilinear reconstruction over the parallelogram by the
+    // 2x2-point Gauss rule (exact while it stays within one bilinear patch); from kAreaBlendLo to
+    // kAreaBlendHi texels (the longer side) it is blended into the region's integral, beyond it
+    // is the integral alone. algorithms.md §5.2.
+    const double W = tex.image().width(), H = tex.image().height();
+    const double la2 = (a.u * a.u) * (W * W) + (a.v * a.v) * (H * H),
+                 lb2 = (b.u * b.u) * (W * W) + (b.v * b.v) * (H * H);
+    const double major = std::sqrt(std::max(la2, lb2));
+    Texel gauss{};
+    double w_gauss = 0;
+    if (major < kAreaBlendHi) {
+        constexpr double g = 0.28867513459481287;  // 1 / (2 sqrt 3)
+        const Image& img = tex.image();
+        for (int k = 0; k < 4; ++k) {
+            const double fa = (k & 1) ? g : -g, fb = (k & 2) ? g : -g;
+            const Texel x = bilinear(img, u + fa * a.u + fb * b.u, v + fa * a.v + fb * b.v);
+            for (int c = 0; c < 4; ++c) gauss[c] += 0.25f * x[c];
+        }
+        w_gauss = std::clamp((kAreaBlendHi - major) / (kAreaBlendHi - kAreaBlendLo), 0.0, 1.0);
+        if (w_gauss == 1) {
+            AreaResult r;
+            r.value = gauss;
+            r.knots = 16;
+            r.major = std::sqrt(std::max(la2, lb2));
+            r.minor = std::sqrt(std::min(la2, lb2));
+            r.area = std::abs(a.u * b.v - a.v * b.u) * W * H;
+            return r;
+        }
+    }
     const AreaRegion g = area_region(tex, u, v, a, b);
     if (!within_range(g.corners, 4, g.area)) {
         AreaResult r;  // beyond 2^30 texels no sum keeps any precision: the mean, as every filter
@@ -398,6 +499,11 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
     AreaResult r = integrate_on(tex, g.level, g.corners, 4, g.area);
     r.major = g.major;
     r.minor = g.minor;
+    if (w_gauss > 0) {
+        for (int c = 0; c < 4; ++c)
+            r.value[c] = static_cast<float>(w_gauss * gauss[c] + (1 - w_gauss) * r.value[c]);
+        r.knots += 16;
+    }
     return r;
 }
 

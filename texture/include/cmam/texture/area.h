@@ -46,7 +46,7 @@ class RowPrefixTable {
     template <int NC>
     void integrate(const Vec2d* v, int n, double* acc) const;
     template <int NC>
-    void row_mean(int64_t j, double x0, double x1, double* out) const;
+    void row_piece(int64_t j, double x0, double x1, double h, double h_per_x, double* acc) const;
     template <int NC>
     void knot(const float* row, int64_t k, double* out) const;
     template <int NC>
@@ -55,10 +55,16 @@ class RowPrefixTable {
 
 /// The level rule (algorithms.md §5.2): integrate on the coarsest MIP level on which the region
 /// is still this many texels wide (its area over its longest side)...
-inline constexpr double kAreaMinWidth = 4;
+inline constexpr double kAreaMinWidth = 2;
 /// ...unless its perimeter there exceeds this many texels (very anisotropic regions): then the
 /// first coarser level where it does not. Bounds a lookup's cost.
 inline constexpr double kAreaMaxPerimeter = 64;
+
+/// Magnification (algorithms.md §5.2): a parallelogram whose longer side is under kAreaBlendLo
+/// level-0 texels takes the mean of the bilinear reconstruction over it by the 2x2-point Gauss
+/// rule; up to kAreaBlendHi that is blended linearly into the region integral.
+inline constexpr double kAreaBlendLo = 1;
+inline constexpr double kAreaBlendHi = 2;
 
 struct AreaResult {
     Texel value{};
@@ -86,7 +92,8 @@ struct AreaRegion {
 /// texel); two zero axes give the axis-aligned unit square.
 AreaRegion area_region(const FilteredTexture& texture, double u, double v, Vec2d a, Vec2d b);
 
-/// Mean of the texture over area_region(texture, u, v, a, b), integrated on its level.
+/// Mean of the texture over the parallelogram (u,v) ± a/2 ± b/2: area_region() integrated on
+/// its level, or for magnified footprints the Gauss rule on the bilinear reconstruction (above).
 AreaResult area_parallelogram(const FilteredTexture& texture, double u, double v, Vec2d a,
                               Vec2d b);
 
