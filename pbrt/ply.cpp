@@ -320,6 +320,16 @@ PlyMesh read_ply(const std::string& path) {
     }
     if (!have_vertices) throw PlyError(path + ": PLY file has no vertex element");
     std::size_t nv = mesh.positions.size() / 3;
+    // Several vertex elements may each have normals or texture coordinates or not: the mesh
+    // needs them for every vertex or for none.
+    auto per_vertex = [&](const std::vector<float>& a, std::size_t k, const char* what) {
+        if (!a.empty() && a.size() != k * nv)
+            throw PlyError(path + ": " + what + " given for " + std::to_string(a.size() / k) +
+                           " of " + std::to_string(nv) +
+                           " vertices (give them for every vertex or none)");
+    };
+    per_vertex(mesh.normals, 3, "normals (nx ny nz)");
+    per_vertex(mesh.uvs, 2, "texture coordinates (u v)");
     for (int idx : mesh.indices)
         if (idx < 0 || static_cast<std::size_t>(idx) >= nv)
             throw PlyError(path + ": face index " + std::to_string(idx) + " out of range (" +
