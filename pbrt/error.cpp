@@ -1,5 +1,8 @@
 #include "pbrt/error.h"
 
+#include <iomanip>
+#include <sstream>
+
 namespace cmam::pbrt {
 
 std::string FileLoc::to_string() const {
@@ -23,6 +26,12 @@ SceneError::SceneError(const std::string& message)
 
 std::string format_warning(const FileLoc& loc, const std::string& message) {
     return located(loc, "warning", message);
+}
+
+std::string number_text(double v) {
+    std::ostringstream os;
+    os << std::setprecision(15) << v;
+    return os.str();
 }
 
 }  // namespace cmam::pbrt

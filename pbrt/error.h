@@ -38,4 +38,7 @@ using WarningSink = std::function<void(const std::string&)>;
 /// Formats a warning the same way errors are formatted.
 std::string format_warning(const FileLoc& loc, const std::string& message);
 
+/// A number as messages show it: up to 15 significant digits, "nan", "inf" ("1e+10", "0.5").
+std::string number_text(double v);
+
 }  // namespace cmam::pbrt

@@ -6,9 +6,10 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <iomanip>
 #include <limits>
 #include <sstream>
+
+#include "pbrt/error.h"
 
 namespace cmam::pbrt {
 
@@ -155,11 +156,7 @@ class Reader {
                  number(v) + ", not a finite single-precision number");
         return static_cast<float>(v);
     }
-    static std::string number(double v) {
-        std::ostringstream os;
-        os << std::setprecision(15) << v;
-        return os.str();
-    }
+    static std::string number(double v) { return number_text(v); }
     [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
 
   private:

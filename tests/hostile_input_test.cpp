@@ -1,0 +1,49 @@
+// Hostile and careless scenes: each is a located error or a located warning naming what is
+// wrong and the value, never a crash, an out-of-range read or conversion, or unbounded work.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "pbrt/parser.h"
+#include "render/scene.h"
+
+using namespace cmam;
+
+namespace {
+const char* kCamera = "Camera \"perspective\"\n";
+
+// Parses `text` as the file t.pbrt and builds it: the error message, or "no error".
+std::string error_of(const std::string& text, std::vector<std::string>* warnings = nullptr) {
+    auto sink = [&](const std::string& w) {
+        if (warnings) warnings->push_back(w);
+    };
+    try {
+        render::build_scene(pbrt::parse_string(text, "t.pbrt", sink), {}, sink);
+    } catch (const pbrt::SceneError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+}  // namespace
+
+// A sampled spectrum is interpolated between its samples: a NaN wavelength once sent the
+// lookup before the start of the list.
+TEST(HostileInput, SpectrumSamplesMustBeFiniteWithIncreasingWavelengths) {
+    auto matte = [](const std::string& kd) {
+        return std::string(kCamera) + "WorldBegin\nMaterial \"matte\" \"spectrum Kd\" [" + kd +
+               "]\nShape \"sphere\"\nWorldEnd\n";
+    };
+    EXPECT_EQ(error_of(matte("nan 1 500 1")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must be finite numbers, got nan");
+    EXPECT_EQ(error_of(matte("400 1 inf 1")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must be finite numbers, got inf");
+    EXPECT_EQ(error_of(matte("400 1 500 nan")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" values must be finite numbers, got nan at "
+              "500 nm");
+    EXPECT_EQ(error_of(matte("600 1 500 1")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must increase, got 500 after 600");
+    EXPECT_EQ(error_of(matte("400 1 400 0.5")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must increase, got 400 after 400");
+    EXPECT_EQ(error_of(matte("400 0.5 500 0.5 700 0.5")), "no error");
+}
