@@ -214,7 +214,13 @@ class Builder {
         }
         if (e.type != "whitted")
             warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
-        if (e.params.find("maxdepth")) m_scene->max_depth = e.params.get_int("maxdepth", 5);
+        if (const auto* p = e.params.find("maxdepth")) {
+            const int depth = e.params.get_int("maxdepth", 5);
+            m_scene->max_depth = std::min(depth, kMaxDepthLimit);
+            if (depth > kMaxDepthLimit)
+                warn(p->loc, "maxdepth " + std::to_string(depth) + " is above cmam's limit of " +
+                                 std::to_string(kMaxDepthLimit) + ", which is used instead");
+        }
         e.params.check_unused(
             "Integrator " + q(e.type), m_warn,
             e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));

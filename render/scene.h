@@ -134,6 +134,10 @@ struct SurfaceHit {
 
 struct RenderStats;
 
+/// The deepest specular recursion a scene may ask for ("integer maxdepth"): the integrator
+/// recurses on the stack, so a larger maxdepth is used at this limit, with a warning.
+constexpr int kMaxDepthLimit = 100;
+
 class Scene {
   public:
     Scene();
@@ -144,7 +148,7 @@ class Scene {
     Camera camera;
     FilmSettings film;
     SamplerSettings sampler;
-    int max_depth = 5;
+    int max_depth = 5;  // at most kMaxDepthLimit
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;

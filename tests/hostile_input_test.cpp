@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pbrt/parser.h"
+#include "render/integrator.h"
 #include "render/scene.h"
 
 using namespace cmam;
@@ -46,4 +47,28 @@ TEST(HostileInput, SpectrumSamplesMustBeFiniteWithIncreasingWavelengths) {
     EXPECT_EQ(error_of(matte("400 1 400 0.5")),
               "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must increase, got 400 after 400");
     EXPECT_EQ(error_of(matte("400 0.5 500 0.5 700 0.5")), "no error");
+}
+
+// Specular recursion is on the stack: inside a closed mirror sphere a huge maxdepth once
+// overflowed it. The depth is capped with a located warning and the render completes.
+TEST(HostileInput, MaxDepthAboveTheLimitIsCappedWithALocatedWarning) {
+    const std::string text =
+        "Integrator \"whitted\" \"integer maxdepth\" 1000000000\n"
+        "Film \"image\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+        "Camera \"perspective\"\nWorldBegin\nLightSource \"point\"\n"
+        "Material \"mirror\" \"rgb Kr\" [1 1 1]\nShape \"sphere\" \"float radius\" 10\nWorldEnd\n";
+    std::vector<std::string> warnings;
+    auto sink = [&](const std::string& w) { warnings.push_back(w); };
+    auto scene = render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, sink);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0],
+              "t.pbrt:1:22: warning: maxdepth 1000000000 is above cmam's limit of 100, which is "
+              "used instead");
+    EXPECT_EQ(scene->max_depth, render::kMaxDepthLimit);
+    render::RenderStats stats;
+    render::BuildOptions one_spp;
+    one_spp.spp_override = 1;
+    scene = render::build_scene(pbrt::parse_string(text, "t.pbrt"), one_spp, {});
+    render::render(*scene, {}, &stats);
+    EXPECT_EQ(stats.secondary_rays, 16u * (render::kMaxDepthLimit - 1));
 }
