@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace cmam::pbrt {
 
@@ -82,8 +83,7 @@ void check_spectrum_samples(const Param& p) {
         if (!std::isfinite(v[i + 1]))
             throw SceneError(p.loc, "spectrum " + q(p.name) +
                                         " values must be finite numbers, got " +
-                                        number_text(v[i + 1]) + " at " + number_text(v[i]) +
-                                        " nm");
+                                        number_text(v[i + 1]) + " at " + number_text(v[i]) + " nm");
         if (i > 0 && !(v[i] > v[i - 2]))
             throw SceneError(p.loc, "spectrum " + q(p.name) + " wavelengths must increase, got " +
                                         number_text(v[i]) + " after " + number_text(v[i - 2]));
@@ -110,11 +110,15 @@ void ParamSet::add(Param p) {
                                     " needs a multiple of " + std::to_string(k) + " values, got " +
                                     std::to_string(p.numbers.size()));
     }
+    // Integers are read as doubles: each must convert to int exactly (NaN, infinities, 2.5 and
+    // 1e10 do not).
     if (p.type == ParamType::Integer)
         for (double x : p.numbers)
-            if (x != std::floor(x))
+            if (!(x >= std::numeric_limits<int>::min() && x <= std::numeric_limits<int>::max() &&
+                  x == std::floor(x)))
                 throw SceneError(p.loc, "integer parameter " + q(p.name) +
-                                            " has a non-integer value " + std::to_string(x));
+                                            " must be a whole number in int's range, got " +
+                                            number_text(x));
     m_params.push_back(std::move(p));
 }
 

@@ -90,7 +90,13 @@ class Builder {
         if (auto c = e.params.get_floats("cropwindow")) {
             if (c->size() != 4)
                 throw SceneError(e.params.find("cropwindow")->loc, "cropwindow needs 4 values");
-            for (int i = 0; i < 4; ++i) cw[i] = std::clamp((*c)[i], 0.0, 1.0);
+            for (int i = 0; i < 4; ++i) {
+                if (!std::isfinite((*c)[i]))
+                    throw SceneError(e.params.find("cropwindow")->loc,
+                                     "cropwindow values must be finite numbers, got " +
+                                         pbrt::number_text((*c)[i]));
+                cw[i] = std::clamp((*c)[i], 0.0, 1.0);
+            }
         }
         f.x0 = static_cast<int>(std::ceil(f.xres * std::min(cw[0], cw[1])));
         f.x1 = static_cast<int>(std::ceil(f.xres * std::max(cw[0], cw[1])));

@@ -72,3 +72,27 @@ TEST(HostileInput, MaxDepthAboveTheLimitIsCappedWithALocatedWarning) {
     render::render(*scene, {}, &stats);
     EXPECT_EQ(stats.secondary_rays, 16u * (render::kMaxDepthLimit - 1));
 }
+
+// Integers are read as numbers and must convert to int exactly; a crop window must be finite
+// before it is scaled to pixels. Each was a float-to-int conversion out of range.
+TEST(HostileInput, NumbersThatDoNotFitAnIntAreLocatedErrors) {
+    const std::string not_int = "must be a whole number in int's range, got ";
+    const std::pair<std::string, std::string> film_cases[] = {
+        {"\"integer xresolution\" 1e10",
+         "integer parameter \"xresolution\" " + not_int + "10000000000"},
+        {"\"integer yresolution\" [-inf]", "integer parameter \"yresolution\" " + not_int + "-inf"},
+        {"\"integer xresolution\" 2.5", "integer parameter \"xresolution\" " + not_int + "2.5"},
+        {"\"float cropwindow\" [0 1 nan 1]", "cropwindow values must be finite numbers, got nan"},
+        {"\"float cropwindow\" [0 inf 0 1]", "cropwindow values must be finite numbers, got inf"},
+        {"\"integer xresolution\" 2147483647 \"float cropwindow\" [0 0.5 0 1]",
+         "film resolution must be between 1 and 65536"},
+    };
+    for (const auto& [params, why] : film_cases)
+        EXPECT_EQ(error_of("Film \"image\" " + params + "\n" + kCamera + "WorldBegin\nWorldEnd\n"),
+                  "t.pbrt:1:14: error: " + why)
+            << params;
+    EXPECT_EQ(error_of(std::string(kCamera) +
+                       "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
+                       "\"integer indices\" [0 1 1e10]\nWorldEnd\n"),
+              "t.pbrt:3:53: error: integer parameter \"indices\" " + not_int + "10000000000");
+}

@@ -162,7 +162,8 @@ TEST(Ply, AttributesGivenForSomeVertexElementsOnlyAreErrors) {
     const Case cases[] = {
         {"uv_first.ply",
          "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz +
-             "property float u\nproperty float v\n" + plain + end + "0 0 0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+             "property float u\nproperty float v\n" + plain + end +
+             "0 0 0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
          "texture coordinates (u v) given for 1 of 3 vertices (give them for every vertex or "
          "none)"},
         {"n_second.ply",
