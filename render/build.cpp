@@ -68,6 +68,11 @@ class Builder {
     void warn(const pbrt::FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(pbrt::format_warning(loc, msg));
     }
+    // Where a parameter was written, or the directive's location when it was not.
+    static const pbrt::FileLoc& loc_of(const Entity& e, const std::string& name) {
+        const pbrt::Param* p = e.params.find(name);
+        return p ? p->loc : e.loc;
+    }
     static std::vector<std::string> names_of(const Entity& e) {
         std::vector<std::string> n;
         for (const auto& p : e.params.params()) n.push_back(p.name);
@@ -79,12 +84,23 @@ class Builder {
         FilmSettings& f = m_scene->film;
         if (e.given && e.type != "image")
             throw SceneError(e.loc, "unsupported Film " + q(e.type) + " (supported: \"image\")");
-        f.xres = e.params.get_int("xresolution", 640);
-        f.yres = e.params.get_int("yresolution", 480);
-        if (f.xres <= 0 || f.yres <= 0 || f.xres > 65536 || f.yres > 65536)
-            throw SceneError(
-                e.params.find("xresolution") ? e.params.find("xresolution")->loc : e.loc,
-                "film resolution must be between 1 and 65536");
+        auto side = [&](const char* name, int def) {
+            const int n = e.params.get_int(name, def);
+            if (n < 1 || n > kMaxFilmSide)
+                throw SceneError(loc_of(e, name), std::string(name) + " must be between 1 and " +
+                                                      std::to_string(kMaxFilmSide) + ", got " +
+                                                      std::to_string(n));
+            return n;
+        };
+        f.xres = side("xresolution", 640);
+        f.yres = side("yresolution", 480);
+        const long long pixels = static_cast<long long>(f.xres) * f.yres;
+        if (pixels > kMaxFilmPixels)
+            throw SceneError(loc_of(e, "xresolution"), "a film of " + std::to_string(f.xres) + "x" +
+                                                           std::to_string(f.yres) + " = " +
+                                                           std::to_string(pixels) +
+                                                           " pixels is above cmam's limit of " +
+                                                           std::to_string(kMaxFilmPixels));
         f.filename = e.params.get_string("filename", "pbrt.exr");
         double cw[4] = {0, 1, 0, 1};
         if (auto c = e.params.get_floats("cropwindow")) {
@@ -139,8 +155,7 @@ class Builder {
         double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
         if (halffov > 0) fov = 2 * halffov;
         if (!(fov > 0 && fov < 180))
-            throw SceneError(e.params.find("fov") ? e.params.find("fov")->loc : e.loc,
-                             "fov must be in (0, 180) degrees");
+            throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
         c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
         if (e.params.get_float("lensradius", 0) != 0)
             warn(e.params.find("lensradius")->loc,
@@ -168,11 +183,23 @@ class Builder {
             s.jitter = e.params.get_bool("jitter", true);
             if (s.xsamples <= 0 || s.ysamples <= 0)
                 throw SceneError(e.loc, "xsamples and ysamples must be positive");
+            const long long spp = static_cast<long long>(s.xsamples) * s.ysamples;
+            if (spp > kMaxSamplesPerPixel)
+                throw SceneError(loc_of(e, "xsamples"),
+                                 "xsamples x ysamples = " + std::to_string(s.xsamples) + "x" +
+                                     std::to_string(s.ysamples) + " = " + std::to_string(spp) +
+                                     " samples per pixel is above cmam's limit of " +
+                                     std::to_string(kMaxSamplesPerPixel));
             e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions"});
         } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" ||
                    e.type == "02sequence" || e.type == "lowdiscrepancy" || e.type == "maxmindist") {
             int n = e.params.get_int("pixelsamples", 16);
             if (n <= 0) throw SceneError(e.loc, "pixelsamples must be positive");
+            if (n > kMaxSamplesPerPixel)
+                throw SceneError(loc_of(e, "pixelsamples"),
+                                 "pixelsamples " + std::to_string(n) +
+                                     " is above cmam's limit of " +
+                                     std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
             int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
             s.xsamples = s.ysamples = k;
             warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " +
@@ -182,12 +209,26 @@ class Builder {
         } else {
             throw SceneError(e.loc, "unknown Sampler " + q(e.type));
         }
+        if (m_opts.spp_override > kMaxSamplesPerPixel)
+            throw SceneError("--spp " + std::to_string(m_opts.spp_override) +
+                             " is above cmam's limit of " + std::to_string(kMaxSamplesPerPixel));
         if (m_opts.spp_override > 0) {
             int k =
                 std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
             s.xsamples = s.ysamples = k;
             s.jitter = k > 1;
         }
+        // A row of the film holds every sample of its pixels at once (and sample numbers along a
+        // row or column are ints), so the samples along the film's larger side are bounded too.
+        const FilmSettings& f = m_scene->film;
+        const long long side = std::max(f.xres, f.yres);
+        const long long per_row = side * s.spp();
+        if (per_row > kMaxSamplesPerRow)
+            throw SceneError(
+                m_opts.spp_override > 0 ? pbrt::FileLoc{} : e.loc,
+                std::to_string(s.spp()) + " samples per pixel along " + std::to_string(side) +
+                    " pixels (the film's larger side) = " + std::to_string(per_row) +
+                    " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
     }
 
     void filter() {

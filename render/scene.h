@@ -45,6 +45,13 @@ enum class TagPolicy : uint8_t { Scanline, Pixel };
 std::optional<TagPolicy> parse_tag_policy(std::string_view name);
 std::string_view to_string(TagPolicy p);
 
+/// Limits on the film and the samples a scene (or --spp) may ask for, checked in 64 bits before
+/// anything is allocated; beyond them building the scene is an error naming the values.
+constexpr int kMaxFilmSide = 65536;              // xresolution, yresolution
+constexpr long long kMaxFilmPixels = 1LL << 28;  // xresolution x yresolution (16384^2)
+constexpr long long kMaxSamplesPerPixel = 1LL << 20;
+constexpr long long kMaxSamplesPerRow = 1LL << 26;  // samples per pixel x the film's larger side
+
 struct FilmSettings {
     int xres = 640, yres = 480;
     int x0 = 0, y0 = 0, x1 = 640, y1 = 480;  // cropped pixel bounds [x0,x1) x [y0,y1)

@@ -85,7 +85,7 @@ TEST(HostileInput, NumbersThatDoNotFitAnIntAreLocatedErrors) {
         {"\"float cropwindow\" [0 1 nan 1]", "cropwindow values must be finite numbers, got nan"},
         {"\"float cropwindow\" [0 inf 0 1]", "cropwindow values must be finite numbers, got inf"},
         {"\"integer xresolution\" 2147483647 \"float cropwindow\" [0 0.5 0 1]",
-         "film resolution must be between 1 and 65536"},
+         "xresolution must be between 1 and 65536, got 2147483647"},
     };
     for (const auto& [params, why] : film_cases)
         EXPECT_EQ(error_of("Film \"image\" " + params + "\n" + kCamera + "WorldBegin\nWorldEnd\n"),
@@ -95,4 +95,41 @@ TEST(HostileInput, NumbersThatDoNotFitAnIntAreLocatedErrors) {
                        "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
                        "\"integer indices\" [0 1 1e10]\nWorldEnd\n"),
               "t.pbrt:3:53: error: integer parameter \"indices\" " + not_int + "10000000000");
+}
+
+// Sizes are products computed in 64 bits and bounded before anything is allocated: 65536 x
+// 65536 samples per pixel once wrapped to 0 in an int, and 2^31 - 1 pixelsamples asked for a
+// vector longer than any.
+TEST(HostileInput, FilmAndSampleCountsAboveTheLimitsAreLocatedErrors) {
+    const std::pair<std::string, std::string> cases[] = {
+        {"Sampler \"stratified\" \"integer xsamples\" 65536 \"integer ysamples\" 65536",
+         "t.pbrt:1:22: error: xsamples x ysamples = 65536x65536 = 4294967296 samples per pixel "
+         "is above cmam's limit of 1048576"},
+        {"Sampler \"halton\" \"integer pixelsamples\" 2147483647",
+         "t.pbrt:1:18: error: pixelsamples 2147483647 is above cmam's limit of 1048576 samples "
+         "per pixel"},
+        {"Film \"image\" \"integer xresolution\" 30000 \"integer yresolution\" 30000",
+         "t.pbrt:1:14: error: a film of 30000x30000 = 900000000 pixels is above cmam's limit of "
+         "268435456"},
+        {"Film \"image\" \"integer yresolution\" 65537",
+         "t.pbrt:1:14: error: yresolution must be between 1 and 65536, got 65537"},
+        {"Sampler \"stratified\" \"integer xsamples\" 1024 \"integer ysamples\" 1024",
+         "t.pbrt:1:1: error: 1048576 samples per pixel along 640 pixels (the film's larger side) "
+         "= 671088640 samples, above cmam's limit of 67108864"},
+        {"Film \"image\" \"integer xresolution\" 16384 \"integer yresolution\" 16384\n"
+         "Sampler \"stratified\" \"integer xsamples\" 64 \"integer ysamples\" 64",
+         "no error"},
+    };
+    for (const auto& [options, expected] : cases)
+        EXPECT_EQ(error_of(options + "\n" + kCamera + "WorldBegin\nWorldEnd\n"), expected)
+            << options;
+    render::BuildOptions spp;
+    spp.spp_override = 1 << 21;
+    try {
+        render::build_scene(pbrt::parse_string(std::string(kCamera) + "WorldBegin\nWorldEnd\n"),
+                            spp, {});
+        ADD_FAILURE() << "no error";
+    } catch (const pbrt::SceneError& e) {
+        EXPECT_STREQ(e.what(), "error: --spp 2097152 is above cmam's limit of 1048576");
+    }
 }
