@@ -7,6 +7,7 @@ namespace cmam::pbrt {
 
 std::string FileLoc::to_string() const {
     if (!file) return {};
+    if (line == 0) return *file;  // the file as a whole
     return *file + ":" + std::to_string(line) + ":" + std::to_string(col);
 }
 

@@ -15,7 +15,7 @@ struct FileLoc {
     int line = 0;
     int col = 0;
 
-    std::string to_string() const;  // "file:line:col", or "" when unknown
+    std::string to_string() const;  // "file:line:col", "file" when line is 0, "" when unknown
 };
 
 /// The one exception type of the scene parser and the scene builder. `what()` is the complete,

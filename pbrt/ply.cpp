@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "pbrt/error.h"
+#include "pbrt/input_file.h"
 
 namespace cmam::pbrt {
 
@@ -168,6 +169,8 @@ class Reader {
 }  // namespace
 
 PlyMesh read_ply(const std::string& path) {
+    if (std::string why = not_a_regular_file(path); !why.empty())
+        throw PlyError(path + ": cannot read PLY file: " + why);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw PlyError(path + ": cannot open PLY file: " + std::strerror(errno));
     std::string line;

@@ -1,15 +1,20 @@
 // Hostile and careless scenes: each is a located error or a located warning naming what is
 // wrong and the value, never a crash, an out-of-range read or conversion, or unbounded work.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
+#include "pbrt/input_file.h"
 #include "pbrt/parser.h"
 #include "render/integrator.h"
 #include "render/scene.h"
 
 using namespace cmam;
+namespace fs = std::filesystem;
 
 namespace {
 const char* kCamera = "Camera \"perspective\"\n";
@@ -131,5 +136,61 @@ TEST(HostileInput, FilmAndSampleCountsAboveTheLimitsAreLocatedErrors) {
         ADD_FAILURE() << "no error";
     } catch (const pbrt::SceneError& e) {
         EXPECT_STREQ(e.what(), "error: --spp 2097152 is above cmam's limit of 1048576");
+    }
+}
+
+namespace {
+// A directory of this process's own, removed with everything in it at the end of the test.
+struct TempDir {
+    fs::path path = fs::temp_directory_path() / ("cmam_hostile_" + std::to_string(::getpid()));
+    TempDir() { fs::create_directories(path); }
+    ~TempDir() { fs::remove_all(path); }
+    std::string write(const std::string& name, const std::string& text) const {
+        std::ofstream(path / name, std::ios::binary) << text;
+        return (path / name).string();
+    }
+};
+
+std::string file_error_of(const std::string& path) {
+    try {
+        render::build_scene(pbrt::parse_file(path), {}, {});
+    } catch (const pbrt::SceneError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+}  // namespace
+
+// A directory once read as an empty scene, and Include "/dev/zero" grew without end: scene files
+// and PLY files are read only when they are regular files, and scene files within 1 GiB.
+TEST(HostileInput, OnlyRegularFilesWithinTheSizeLimitAreRead) {
+    TempDir dir;
+    const std::string d = dir.path.string();
+    EXPECT_EQ(file_error_of(d), d + ": error: cannot read scene file: it is a directory");
+    EXPECT_EQ(file_error_of("/dev/zero"),
+              "/dev/zero: error: cannot read scene file: it is not a regular file");
+    EXPECT_EQ(file_error_of(d + "/none.pbrt"),
+              d + "/none.pbrt: error: cannot open scene file: No such file or directory");
+    // Larger than the limit: sparse, so nothing is written to the disk.
+    const std::string big = dir.write("big.pbrt", "");
+    fs::resize_file(big, pbrt::kMaxSceneFileBytes + 1);
+    const std::pair<std::string, std::string> includes[] = {
+        {d, "cannot read scene file \"" + d + "\": it is a directory"},
+        {"/dev/zero", "cannot read scene file \"/dev/zero\": it is not a regular file"},
+        {big, "scene file \"" + big + "\" is 1073741825 bytes, above cmam's limit of 1073741824"},
+    };
+    for (const auto& [name, why] : includes) {
+        const std::string scene =
+            dir.write("inc.pbrt", std::string(kCamera) + "Include \"" + name + "\"\n");
+        EXPECT_EQ(file_error_of(scene), scene + ":2:1: error: " + why) << name;
+    }
+    for (const std::string& ply : {d, std::string("/dev/zero")}) {
+        const std::string scene =
+            dir.write("ply.pbrt", std::string(kCamera) +
+                                      "WorldBegin\nShape \"plymesh\" \"string filename\" \"" + ply +
+                                      "\"\nWorldEnd\n");
+        EXPECT_EQ(file_error_of(scene),
+                  scene + ":3:17: error: " + ply + ": cannot read PLY file: " +
+                      (ply == d ? "it is a directory" : "it is not a regular file"));
     }
 }
