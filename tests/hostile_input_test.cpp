@@ -194,3 +194,27 @@ TEST(HostileInput, OnlyRegularFilesWithinTheSizeLimitAreRead) {
                       (ply == d ? "it is a directory" : "it is not a regular file"));
     }
 }
+
+// ObjectEnd closes the ObjectBegin it belongs to, whatever the lines: it was matched by line
+// number, so on the ObjectBegin's line it closed an AttributeBegin opened inside the object.
+TEST(HostileInput, ObjectEndMatchesItsObjectBeginNotALine) {
+    const std::pair<std::string, std::string> cases[] = {
+        {"ObjectBegin \"a\" AttributeBegin ObjectEnd AttributeEnd",
+         "t.pbrt:3:32: error: ObjectEnd does not match AttributeBegin at t.pbrt:3:17 inside "
+         "object \"a\""},
+        {"ObjectBegin \"a\"\nTransformBegin\nObjectEnd\nTransformEnd",
+         "t.pbrt:5:1: error: ObjectEnd does not match TransformBegin at t.pbrt:4:1 inside object "
+         "\"a\""},
+        {"ObjectBegin \"a\" AttributeEnd ObjectEnd",
+         "t.pbrt:3:17: error: AttributeEnd does not match ObjectBegin at t.pbrt:3:1"},
+        {"ObjectBegin \"a\" Shape \"sphere\"",
+         "t.pbrt:3:1: error: ObjectBegin is not closed before WorldEnd"},
+        {"ObjectBegin \"a\" AttributeBegin Shape \"sphere\" AttributeEnd ObjectEnd "
+         "ObjectInstance \"a\"",
+         "no error"},
+    };
+    for (const auto& [world, expected] : cases)
+        EXPECT_EQ(error_of(std::string(kCamera) + "WorldBegin\n" + world + "\nWorldEnd\n"),
+                  expected)
+            << world;
+}
