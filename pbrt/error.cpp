@@ -29,9 +29,9 @@ std::string format_warning(const FileLoc& loc, const std::string& message) {
     return located(loc, "warning", message);
 }
 
-std::string number_text(double v) {
+std::string number_text(double v, int digits) {
     std::ostringstream os;
-    os << std::setprecision(15) << v;
+    os << std::setprecision(digits) << v;
     return os.str();
 }
 

@@ -38,7 +38,8 @@ using WarningSink = std::function<void(const std::string&)>;
 /// Formats a warning the same way errors are formatted.
 std::string format_warning(const FileLoc& loc, const std::string& message);
 
-/// A number as messages show it: up to 15 significant digits, "nan", "inf" ("1e+10", "0.5").
-std::string number_text(double v);
+/// A number as messages show it: up to `digits` significant digits (7 suit a float), "nan",
+/// "inf" ("1e+10", "0.5").
+std::string number_text(double v, int digits = 15);
 
 }  // namespace cmam::pbrt

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "pbrt/parser.h"
@@ -135,6 +136,10 @@ class Builder {
         c.xres = m_scene->film.xres;
         c.yres = m_scene->film.yres;
         double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
+        if (!(frame > 0 && std::isfinite(frame)))
+            throw SceneError(loc_of(e, "frameaspectratio"),
+                             "frameaspectratio must be a positive finite number, got " +
+                                 pbrt::number_text(frame));
         if (frame > 1) {
             c.screen[0] = float(-frame);
             c.screen[1] = float(frame);
@@ -149,7 +154,13 @@ class Builder {
         if (auto sw = e.params.get_floats("screenwindow")) {
             if (sw->size() != 4)
                 throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
-            for (int i = 0; i < 4; ++i) c.screen[i] = float((*sw)[i]);
+            for (int i = 0; i < 4; ++i) {
+                if (!(std::abs((*sw)[i]) <= std::numeric_limits<float>::max()))
+                    throw SceneError(e.params.find("screenwindow")->loc,
+                                     "screenwindow values must be finite numbers, got " +
+                                         pbrt::number_text((*sw)[i]));
+                c.screen[i] = float((*sw)[i]);
+            }
         }
         double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
         double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
@@ -168,8 +179,38 @@ class Builder {
         }
         auto m = to34(wc);
         for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
+        check_camera_rays(c, e.loc);
         e.params.check_unused("Camera \"perspective\"", m_warn,
                               {"focaldistance", "shutteropen", "shutterclose"});
+    }
+
+    // Embree takes rays whose origin and direction are finite and within kMaxRayCoordinate.
+    // Camera rays are checked through the film's corners: the origin (orthographic) and the
+    // direction before normalisation are affine in the raster position, so the corners bound
+    // every other pixel's.
+    static void check_camera_rays(const Camera& c, const pbrt::FileLoc& loc) {
+        auto text = [](const Vec3& v) {
+            return "(" + pbrt::number_text(v.x, 7) + ", " + pbrt::number_text(v.y, 7) + ", " +
+                   pbrt::number_text(v.z, 7) + ")";
+        };
+        for (int corner = 0; corner < 4; ++corner) {
+            const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
+            Vec3 org, dir;
+            c.generate_ray(px, py, &org, &dir);
+            const std::string at = " at raster position (" + pbrt::number_text(px) + ", " +
+                                   pbrt::number_text(py) + ")";
+            for (float x : {org.x, org.y, org.z})
+                if (!(std::abs(x) <= kMaxRayCoordinate))
+                    throw SceneError(
+                        loc, "camera rays start at " + text(org) + at +
+                                 ", beyond cmam's limit of " +
+                                 pbrt::number_text(kMaxRayCoordinate, 7) +
+                                 " on coordinates (check the camera transform and screenwindow)");
+            if (!(std::abs(length(dir) - 1) < 1e-3f))
+                throw SceneError(loc, "camera rays have direction " + text(dir) + at +
+                                          ", not a finite unit vector (check the camera "
+                                          "transform, screenwindow and frameaspectratio)");
+        }
     }
 
     void sampler() {
@@ -467,8 +508,12 @@ class Builder {
             m.type = Material::Type::Glass;
             m.kr = spectrum_input(e, s, "Kr", Rgb(1));
             m.kt = spectrum_input(e, s, "Kt", Rgb(1));
-            m.eta = e.params.find("eta") ? float_input(e, s, "eta", 1.5f)
-                                         : float_input(e, s, "index", 1.5f);
+            const char* eta = e.params.find("eta") ? "eta" : "index";
+            m.eta = float_input(e, s, eta, 1.5f);
+            if (m.eta.node < 0 && !(m.eta.value.r > 0 && std::isfinite(m.eta.value.r)))
+                throw SceneError(loc_of(e, eta), std::string(eta) +
+                                                     " must be a positive finite number, got " +
+                                                     pbrt::number_text(m.eta.value.r));
             for (const char* r : {"uroughness", "vroughness"}) {
                 TexInput rough = float_input(e, s, r, 0);
                 if (rough.node >= 0 || rough.value.r != 0)

@@ -52,6 +52,9 @@ constexpr long long kMaxFilmPixels = 1LL << 28;  // xresolution x yresolution (1
 constexpr long long kMaxSamplesPerPixel = 1LL << 20;
 constexpr long long kMaxSamplesPerRow = 1LL << 26;  // samples per pixel x the film's larger side
 
+/// Largest coordinate of a camera ray's origin (Embree's limit on ray coordinates is 1.8e18).
+constexpr float kMaxRayCoordinate = 1e18f;
+
 struct FilmSettings {
     int xres = 640, yres = 480;
     int x0 = 0, y0 = 0, x1 = 640, y1 = 480;  // cropped pixel bounds [x0,x1) x [y0,y1)

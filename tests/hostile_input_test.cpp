@@ -218,3 +218,52 @@ TEST(HostileInput, ObjectEndMatchesItsObjectBeginNotALine) {
                   expected)
             << world;
 }
+
+// Rays that are not finite, or start beyond Embree's range, once reached Embree and aborted in
+// its assertions: the camera (its transform, frame and screen window) is checked where the scene
+// is built, and so is a constant glass index.
+TEST(HostileInput, CameraAndGlassParametersThatGiveNonFiniteRaysAreLocatedErrors) {
+    const std::string world = "WorldBegin\nLightSource \"point\"\nShape \"sphere\"\nWorldEnd\n";
+    const std::string corner_hint = " at raster position (0, 0), ";
+    const std::pair<std::string, std::string> cameras[] = {
+        {"Translate 1e30 0 0\nCamera \"perspective\"",
+         "t.pbrt:2:1: error: camera rays start at (-1e+30, 0, 0)" + corner_hint +
+             "beyond cmam's limit of 1e+18 on coordinates (check the camera transform and "
+             "screenwindow)"},
+        {"Translate nan 0 0\nCamera \"perspective\"",
+         "t.pbrt:2:1: error: camera rays start at (nan, nan, nan)" + corner_hint +
+             "beyond cmam's limit of 1e+18 on coordinates (check the camera transform and "
+             "screenwindow)"},
+        {"Scale 1e30 1e30 1e30\nCamera \"perspective\"",
+         "t.pbrt:2:1: error: camera rays have direction (-inf, inf, inf)" + corner_hint +
+             "not a finite unit vector (check the camera transform, screenwindow and "
+             "frameaspectratio)"},
+        {"Camera \"orthographic\" \"float screenwindow\" [-1e30 1e30 -1 1]",
+         "t.pbrt:1:1: error: camera rays start at (-1e+30, 1, 0)" + corner_hint +
+             "beyond cmam's limit of 1e+18 on coordinates (check the camera transform and "
+             "screenwindow)"},
+        {"Camera \"perspective\" \"float frameaspectratio\" 0",
+         "t.pbrt:1:22: error: frameaspectratio must be a positive finite number, got 0"},
+        {"Camera \"perspective\" \"float frameaspectratio\" nan",
+         "t.pbrt:1:22: error: frameaspectratio must be a positive finite number, got nan"},
+        {"Camera \"perspective\" \"float screenwindow\" [-1 1 nan 1]",
+         "t.pbrt:1:22: error: screenwindow values must be finite numbers, got nan"},
+        {"Camera \"perspective\" \"float screenwindow\" [-1 1e300 -1 1]",
+         "t.pbrt:1:22: error: screenwindow values must be finite numbers, got 1e+300"},
+        {"Translate 0 0 1e17\nCamera \"perspective\"", "no error"},
+    };
+    for (const auto& [camera, expected] : cameras)
+        EXPECT_EQ(error_of(camera + "\n" + world), expected) << camera;
+    const std::pair<std::string, std::string> glasses[] = {
+        {"\"float index\" nan",
+         "t.pbrt:3:18: error: index must be a positive finite number, got nan"},
+        {"\"float eta\" inf", "t.pbrt:3:18: error: eta must be a positive finite number, got inf"},
+        {"\"float index\" 0", "t.pbrt:3:18: error: index must be a positive finite number, got 0"},
+        {"\"float index\" 1.33", "no error"},
+    };
+    for (const auto& [eta, expected] : glasses)
+        EXPECT_EQ(error_of(std::string(kCamera) + "WorldBegin\nMaterial \"glass\" " + eta +
+                           "\nShape \"sphere\"\nWorldEnd\n"),
+                  expected)
+            << eta;
+}
