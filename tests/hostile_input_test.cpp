@@ -20,12 +20,9 @@ namespace {
 const char* kCamera = "Camera \"perspective\"\n";
 
 // Parses `text` as the file t.pbrt and builds it: the error message, or "no error".
-std::string error_of(const std::string& text, std::vector<std::string>* warnings = nullptr) {
-    auto sink = [&](const std::string& w) {
-        if (warnings) warnings->push_back(w);
-    };
+std::string error_of(const std::string& text) {
     try {
-        render::build_scene(pbrt::parse_string(text, "t.pbrt", sink), {}, sink);
+        render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
     } catch (const pbrt::SceneError& e) {
         return e.what();
     }

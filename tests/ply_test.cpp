@@ -7,15 +7,25 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 using namespace cmam::pbrt;
 namespace fs = std::filesystem;
 
 namespace {
+// Every file the tests write, removed when the test program ends.
+struct Written {
+    std::vector<fs::path> paths;
+    ~Written() {
+        for (const fs::path& p : paths) fs::remove(p);
+    }
+} g_written;
+
 std::string write_temp(const std::string& name, const std::string& bytes) {
     fs::path p =
         fs::temp_directory_path() / ("cmam_ply_" + std::to_string(::getpid()) + "_" + name);
     std::ofstream(p, std::ios::binary) << bytes;
+    g_written.paths.push_back(p);
     return p.string();
 }
 }  // namespace
@@ -180,7 +190,6 @@ TEST(Ply, AttributesGivenForSomeVertexElementsOnlyAreErrors) {
         } catch (const PlyError& e) {
             error = e.what();
         }
-        fs::remove(path);
         EXPECT_EQ(error, path + ": " + c.expected) << c.name;
     }
 }
