@@ -1,9 +1,13 @@
 #include "pbrt/error.h"
 
+#include <iomanip>
+#include <sstream>
+
 namespace cmam::pbrt {
 
 std::string FileLoc::to_string() const {
     if (!file) return {};
+    if (line == 0) return *file;  // the file as a whole
     return *file + ":" + std::to_string(line) + ":" + std::to_string(col);
 }
 
@@ -23,6 +27,12 @@ SceneError::SceneError(const std::string& message)
 
 std::string format_warning(const FileLoc& loc, const std::string& message) {
     return located(loc, "warning", message);
+}
+
+std::string number_text(double v, int digits) {
+    std::ostringstream os;
+    os << std::setprecision(digits) << v;
+    return os.str();
 }
 
 }  // namespace cmam::pbrt

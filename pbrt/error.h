@@ -15,7 +15,7 @@ struct FileLoc {
     int line = 0;
     int col = 0;
 
-    std::string to_string() const;  // "file:line:col", or "" when unknown
+    std::string to_string() const;  // "file:line:col", "file" when line is 0, "" when unknown
 };
 
 /// The one exception type of the scene parser and the scene builder. `what()` is the complete,
@@ -37,5 +37,9 @@ using WarningSink = std::function<void(const std::string&)>;
 
 /// Formats a warning the same way errors are formatted.
 std::string format_warning(const FileLoc& loc, const std::string& message);
+
+/// A number as messages show it: up to `digits` significant digits (7 suit a float), "nan",
+/// "inf" ("1e+10", "0.5").
+std::string number_text(double v, int digits = 15);
 
 }  // namespace cmam::pbrt

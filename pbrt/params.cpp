@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace cmam::pbrt {
 
@@ -69,6 +70,25 @@ std::size_t arity(ParamType t) {
 std::string q(const std::string& s) {
     return "\"" + s + "\"";
 }
+
+// Sampled spectra are (wavelength, value) pairs with finite numbers and increasing wavelengths,
+// which is what spectrum_to_rgb interpolates.
+void check_spectrum_samples(const Param& p) {
+    const std::vector<double>& v = p.numbers;
+    for (std::size_t i = 0; i + 1 < v.size(); i += 2) {
+        if (!std::isfinite(v[i]))
+            throw SceneError(p.loc, "spectrum " + q(p.name) +
+                                        " wavelengths must be finite numbers, got " +
+                                        number_text(v[i]));
+        if (!std::isfinite(v[i + 1]))
+            throw SceneError(p.loc, "spectrum " + q(p.name) +
+                                        " values must be finite numbers, got " +
+                                        number_text(v[i + 1]) + " at " + number_text(v[i]) + " nm");
+        if (i > 0 && !(v[i] > v[i - 2]))
+            throw SceneError(p.loc, "spectrum " + q(p.name) + " wavelengths must increase, got " +
+                                        number_text(v[i]) + " after " + number_text(v[i - 2]));
+    }
+}
 }  // namespace
 
 void ParamSet::add(Param p) {
@@ -84,16 +104,21 @@ void ParamSet::add(Param p) {
             throw SceneError(p.loc, "spectrum " + q(p.name) +
                                         " needs (wavelength, value) pairs, got " +
                                         std::to_string(p.numbers.size()) + " numbers");
+        check_spectrum_samples(p);
     } else if (p.numbers.size() % k != 0) {
         throw SceneError(p.loc, std::string(to_string(p.type)) + " parameter " + q(p.name) +
                                     " needs a multiple of " + std::to_string(k) + " values, got " +
                                     std::to_string(p.numbers.size()));
     }
+    // Integers are read as doubles: each must convert to int exactly (NaN, infinities, 2.5 and
+    // 1e10 do not).
     if (p.type == ParamType::Integer)
         for (double x : p.numbers)
-            if (x != std::floor(x))
+            if (!(x >= std::numeric_limits<int>::min() && x <= std::numeric_limits<int>::max() &&
+                  x == std::floor(x)))
                 throw SceneError(p.loc, "integer parameter " + q(p.name) +
-                                            " has a non-integer value " + std::to_string(x));
+                                            " must be a whole number in int's range, got " +
+                                            number_text(x));
     m_params.push_back(std::move(p));
 }
 
@@ -263,7 +288,6 @@ double interpolate(const std::vector<std::pair<double, double>>& s, double l) {
 Rgb spectrum_to_rgb(const std::vector<double>& pairs) {
     std::vector<std::pair<double, double>> s;
     for (std::size_t i = 0; i + 1 < pairs.size(); i += 2) s.emplace_back(pairs[i], pairs[i + 1]);
-    std::sort(s.begin(), s.end());
     double x = 0, y = 0, z = 0, yint = 0;
     for (double l = 360; l <= 830; l += 1) {
         double v = interpolate(s, l);

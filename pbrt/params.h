@@ -87,6 +87,7 @@ class ParamSet {
 
 /// Converts a sampled spectrum (wavelength, value pairs in nm) to linear sRGB, via CIE XYZ
 /// (analytic fit of the CIE 1931 2-degree observer), normalised so a constant 1 has Y = 1.
+/// The pairs are as ParamSet::add accepts them: at least one, finite, wavelengths increasing.
 Rgb spectrum_to_rgb(const std::vector<double>& lambda_value_pairs);
 
 }  // namespace cmam::pbrt

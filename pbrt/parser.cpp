@@ -30,10 +30,19 @@ struct GraphicsState {
     std::map<std::string, int> named_materials;
 };
 
+// A block that restores the graphics state: AttributeBegin, TransformBegin, or ObjectBegin
+// (which implies AttributeBegin, as in pbrt-v3).
 struct StackEntry {
-    bool attribute = false;  // AttributeBegin (true) or TransformBegin (false)
+    enum class Kind { Attribute, Transform, Object };
+    Kind kind = Kind::Attribute;
     FileLoc loc;
     GraphicsState saved;
+
+    const char* begin() const {
+        return kind == Kind::Attribute   ? "AttributeBegin"
+               : kind == Kind::Transform ? "TransformBegin"
+                                         : "ObjectBegin";
+    }
 };
 
 const char* kSupportedDirectives =
@@ -53,8 +62,7 @@ class Parser {
         while (auto tok = next()) directive(*tok);
         if (!m_stack.empty()) {
             const StackEntry& e = m_stack.back();
-            throw SceneError(e.loc, std::string(e.attribute ? "AttributeBegin" : "TransformBegin") +
-                                        " is never closed");
+            throw SceneError(e.loc, std::string(e.begin()) + " is never closed");
         }
         if (m_in_object) throw SceneError(m_object_loc, "ObjectBegin is never closed");
         if (!m_world_begun && m_last_loc.file)
@@ -296,23 +304,22 @@ class Parser {
         } else if (d == "WorldEnd") {
             need_world(dir, true);
             if (!m_stack.empty())
-                throw SceneError(
-                    m_stack.back().loc,
-                    std::string(m_stack.back().attribute ? "AttributeBegin" : "TransformBegin") +
-                        " is not closed before WorldEnd");
+                throw SceneError(m_stack.back().loc, std::string(m_stack.back().begin()) +
+                                                         " is not closed before WorldEnd");
             m_world_ended = true;
         } else if (d == "AttributeBegin" || d == "TransformBegin") {
-            m_stack.push_back({d == "AttributeBegin", dir.loc, m_gs});
+            m_stack.push_back(
+                {d == "AttributeBegin" ? StackEntry::Kind::Attribute : StackEntry::Kind::Transform,
+                 dir.loc, m_gs});
         } else if (d == "AttributeEnd" || d == "TransformEnd") {
             bool attr = d == "AttributeEnd";
             if (m_stack.empty())
                 throw SceneError(dir.loc, d + " without matching " +
                                               (attr ? "AttributeBegin" : "TransformBegin"));
-            if (m_stack.back().attribute != attr)
-                throw SceneError(
-                    dir.loc, d + " does not match " +
-                                 (m_stack.back().attribute ? "AttributeBegin" : "TransformBegin") +
-                                 " at " + m_stack.back().loc.to_string());
+            if (m_stack.back().kind !=
+                (attr ? StackEntry::Kind::Attribute : StackEntry::Kind::Transform))
+                throw SceneError(dir.loc, d + " does not match " + m_stack.back().begin() + " at " +
+                                              m_stack.back().loc.to_string());
             if (attr)
                 m_gs = m_stack.back().saved;
             else
@@ -432,15 +439,16 @@ class Parser {
             m_instances[m_object_name].clear();
             m_in_object = true;
             m_object_loc = dir.loc;
-            m_stack.push_back(
-                {true, dir.loc, m_gs});  // pbrt-v3: ObjectBegin implies AttributeBegin
+            m_stack.push_back({StackEntry::Kind::Object, dir.loc, m_gs});
         } else if (d == "ObjectEnd") {
             if (!m_in_object) throw SceneError(dir.loc, "ObjectEnd without ObjectBegin");
-            if (m_stack.empty() || m_stack.back().loc.line != m_object_loc.line ||
-                m_stack.back().loc.file != m_object_loc.file)
-                throw SceneError(
-                    dir.loc, "ObjectEnd does not match the attribute blocks opened inside object " +
-                                 q(m_object_name));
+            // Blocks opened inside the object are closed first (the object's own entry is the
+            // innermost ObjectBegin: objects do not nest).
+            if (m_stack.back().kind != StackEntry::Kind::Object)
+                throw SceneError(dir.loc, "ObjectEnd does not match " +
+                                              std::string(m_stack.back().begin()) + " at " +
+                                              m_stack.back().loc.to_string() + " inside object " +
+                                              q(m_object_name));
             m_gs = m_stack.back().saved;
             m_stack.pop_back();
             m_in_object = false;

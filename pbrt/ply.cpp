@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <iomanip>
 #include <limits>
 #include <sstream>
+
+#include "pbrt/error.h"
+#include "pbrt/input_file.h"
 
 namespace cmam::pbrt {
 
@@ -155,11 +157,7 @@ class Reader {
                  number(v) + ", not a finite single-precision number");
         return static_cast<float>(v);
     }
-    static std::string number(double v) {
-        std::ostringstream os;
-        os << std::setprecision(15) << v;
-        return os.str();
-    }
+    static std::string number(double v) { return number_text(v); }
     [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
 
   private:
@@ -171,6 +169,8 @@ class Reader {
 }  // namespace
 
 PlyMesh read_ply(const std::string& path) {
+    if (std::string why = not_a_regular_file(path); !why.empty())
+        throw PlyError(path + ": cannot read PLY file: " + why);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw PlyError(path + ": cannot open PLY file: " + std::strerror(errno));
     std::string line;
@@ -320,6 +320,16 @@ PlyMesh read_ply(const std::string& path) {
     }
     if (!have_vertices) throw PlyError(path + ": PLY file has no vertex element");
     std::size_t nv = mesh.positions.size() / 3;
+    // Several vertex elements may each have normals or texture coordinates or not: the mesh
+    // needs them for every vertex or for none.
+    auto per_vertex = [&](const std::vector<float>& a, std::size_t k, const char* what) {
+        if (!a.empty() && a.size() != k * nv)
+            throw PlyError(path + ": " + what + " given for " + std::to_string(a.size() / k) +
+                           " of " + std::to_string(nv) +
+                           " vertices (give them for every vertex or none)");
+    };
+    per_vertex(mesh.normals, 3, "normals (nx ny nz)");
+    per_vertex(mesh.uvs, 2, "texture coordinates (u v)");
     for (int idx : mesh.indices)
         if (idx < 0 || static_cast<std::size_t>(idx) >= nv)
             throw PlyError(path + ": face index " + std::to_string(idx) + " out of range (" +

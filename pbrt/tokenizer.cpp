@@ -3,8 +3,10 @@
 #include <cctype>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
+
+#include "pbrt/input_file.h"
 
 namespace cmam::pbrt {
 
@@ -13,14 +15,29 @@ Tokenizer::Tokenizer(std::string filename, std::string contents)
       m_text(std::move(contents)) {}
 
 Tokenizer Tokenizer::from_file(const std::string& path, const FileLoc& included_from) {
+    // An Include's problems are located at the Include, the main file's at its name.
+    const bool included = included_from.file != nullptr;
+    const FileLoc where =
+        included ? included_from : FileLoc{std::make_shared<const std::string>(path)};
+    const std::string what = included ? "scene file \"" + path + "\"" : "scene file";
+    if (std::string why = not_a_regular_file(path); !why.empty())
+        throw SceneError(where, "cannot read " + what + ": " + why);
     std::ifstream in(path, std::ios::binary);
     if (!in) {
         std::string why = std::strerror(errno);
-        throw SceneError(included_from, "cannot open scene file \"" + path + "\": " + why);
+        throw SceneError(where, "cannot open " + what + ": " + why);
     }
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return Tokenizer(path, ss.str());
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > kMaxSceneFileBytes)
+        throw SceneError(where, what + " is " + std::to_string(size) +
+                                    " bytes, above cmam's limit of " +
+                                    std::to_string(kMaxSceneFileBytes));
+    // At most the size seen above, should the file grow while it is read.
+    std::string text(ec ? 0 : size, '\0');
+    in.read(text.data(), static_cast<std::streamsize>(text.size()));
+    text.resize(static_cast<std::size_t>(in.gcount()));
+    return Tokenizer(path, std::move(text));
 }
 
 char Tokenizer::advance() {

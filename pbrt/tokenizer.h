@@ -23,7 +23,8 @@ class Tokenizer {
   public:
     /// Tokenizes `contents`, reporting locations against `filename`.
     Tokenizer(std::string filename, std::string contents);
-    /// Reads a whole file; throws SceneError located at `included_from` when it cannot.
+    /// Reads a whole file (a regular file of at most kMaxSceneFileBytes); throws SceneError
+    /// located at `included_from` when it cannot, or at `path` itself for the main file.
     static Tokenizer from_file(const std::string& path, const FileLoc& included_from);
 
     /// Next token, or nullopt at the end of the input. Throws SceneError on malformed input.

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "pbrt/parser.h"
@@ -68,6 +69,11 @@ class Builder {
     void warn(const pbrt::FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(pbrt::format_warning(loc, msg));
     }
+    // Where a parameter was written, or the directive's location when it was not.
+    static const pbrt::FileLoc& loc_of(const Entity& e, const std::string& name) {
+        const pbrt::Param* p = e.params.find(name);
+        return p ? p->loc : e.loc;
+    }
     static std::vector<std::string> names_of(const Entity& e) {
         std::vector<std::string> n;
         for (const auto& p : e.params.params()) n.push_back(p.name);
@@ -79,18 +85,35 @@ class Builder {
         FilmSettings& f = m_scene->film;
         if (e.given && e.type != "image")
             throw SceneError(e.loc, "unsupported Film " + q(e.type) + " (supported: \"image\")");
-        f.xres = e.params.get_int("xresolution", 640);
-        f.yres = e.params.get_int("yresolution", 480);
-        if (f.xres <= 0 || f.yres <= 0 || f.xres > 65536 || f.yres > 65536)
-            throw SceneError(
-                e.params.find("xresolution") ? e.params.find("xresolution")->loc : e.loc,
-                "film resolution must be between 1 and 65536");
+        auto side = [&](const char* name, int def) {
+            const int n = e.params.get_int(name, def);
+            if (n < 1 || n > kMaxFilmSide)
+                throw SceneError(loc_of(e, name), std::string(name) + " must be between 1 and " +
+                                                      std::to_string(kMaxFilmSide) + ", got " +
+                                                      std::to_string(n));
+            return n;
+        };
+        f.xres = side("xresolution", 640);
+        f.yres = side("yresolution", 480);
+        const long long pixels = static_cast<long long>(f.xres) * f.yres;
+        if (pixels > kMaxFilmPixels)
+            throw SceneError(loc_of(e, "xresolution"), "a film of " + std::to_string(f.xres) + "x" +
+                                                           std::to_string(f.yres) + " = " +
+                                                           std::to_string(pixels) +
+                                                           " pixels is above cmam's limit of " +
+                                                           std::to_string(kMaxFilmPixels));
         f.filename = e.params.get_string("filename", "pbrt.exr");
         double cw[4] = {0, 1, 0, 1};
         if (auto c = e.params.get_floats("cropwindow")) {
             if (c->size() != 4)
                 throw SceneError(e.params.find("cropwindow")->loc, "cropwindow needs 4 values");
-            for (int i = 0; i < 4; ++i) cw[i] = std::clamp((*c)[i], 0.0, 1.0);
+            for (int i = 0; i < 4; ++i) {
+                if (!std::isfinite((*c)[i]))
+                    throw SceneError(e.params.find("cropwindow")->loc,
+                                     "cropwindow values must be finite numbers, got " +
+                                         pbrt::number_text((*c)[i]));
+                cw[i] = std::clamp((*c)[i], 0.0, 1.0);
+            }
         }
         f.x0 = static_cast<int>(std::ceil(f.xres * std::min(cw[0], cw[1])));
         f.x1 = static_cast<int>(std::ceil(f.xres * std::max(cw[0], cw[1])));
@@ -113,6 +136,10 @@ class Builder {
         c.xres = m_scene->film.xres;
         c.yres = m_scene->film.yres;
         double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
+        if (!(frame > 0 && std::isfinite(frame)))
+            throw SceneError(loc_of(e, "frameaspectratio"),
+                             "frameaspectratio must be a positive finite number, got " +
+                                 pbrt::number_text(frame));
         if (frame > 1) {
             c.screen[0] = float(-frame);
             c.screen[1] = float(frame);
@@ -127,14 +154,19 @@ class Builder {
         if (auto sw = e.params.get_floats("screenwindow")) {
             if (sw->size() != 4)
                 throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
-            for (int i = 0; i < 4; ++i) c.screen[i] = float((*sw)[i]);
+            for (int i = 0; i < 4; ++i) {
+                if (!(std::abs((*sw)[i]) <= std::numeric_limits<float>::max()))
+                    throw SceneError(e.params.find("screenwindow")->loc,
+                                     "screenwindow values must be finite numbers, got " +
+                                         pbrt::number_text((*sw)[i]));
+                c.screen[i] = float((*sw)[i]);
+            }
         }
         double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
         double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
         if (halffov > 0) fov = 2 * halffov;
         if (!(fov > 0 && fov < 180))
-            throw SceneError(e.params.find("fov") ? e.params.find("fov")->loc : e.loc,
-                             "fov must be in (0, 180) degrees");
+            throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
         c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
         if (e.params.get_float("lensradius", 0) != 0)
             warn(e.params.find("lensradius")->loc,
@@ -147,8 +179,38 @@ class Builder {
         }
         auto m = to34(wc);
         for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
+        check_camera_rays(c, e.loc);
         e.params.check_unused("Camera \"perspective\"", m_warn,
                               {"focaldistance", "shutteropen", "shutterclose"});
+    }
+
+    // Embree takes rays whose origin and direction are finite and within kMaxRayCoordinate.
+    // Camera rays are checked through the film's corners: the origin (orthographic) and the
+    // direction before normalisation are affine in the raster position, so the corners bound
+    // every other pixel's.
+    static void check_camera_rays(const Camera& c, const pbrt::FileLoc& loc) {
+        auto text = [](const Vec3& v) {
+            return "(" + pbrt::number_text(v.x, 7) + ", " + pbrt::number_text(v.y, 7) + ", " +
+                   pbrt::number_text(v.z, 7) + ")";
+        };
+        for (int corner = 0; corner < 4; ++corner) {
+            const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
+            Vec3 org, dir;
+            c.generate_ray(px, py, &org, &dir);
+            const std::string at = " at raster position (" + pbrt::number_text(px) + ", " +
+                                   pbrt::number_text(py) + ")";
+            for (float x : {org.x, org.y, org.z})
+                if (!(std::abs(x) <= kMaxRayCoordinate))
+                    throw SceneError(
+                        loc, "camera rays start at " + text(org) + at +
+                                 ", beyond cmam's limit of " +
+                                 pbrt::number_text(kMaxRayCoordinate, 7) +
+                                 " on coordinates (check the camera transform and screenwindow)");
+            if (!(std::abs(length(dir) - 1) < 1e-3f))
+                throw SceneError(loc, "camera rays have direction " + text(dir) + at +
+                                          ", not a finite unit vector (check the camera "
+                                          "transform, screenwindow and frameaspectratio)");
+        }
     }
 
     void sampler() {
@@ -162,11 +224,23 @@ class Builder {
             s.jitter = e.params.get_bool("jitter", true);
             if (s.xsamples <= 0 || s.ysamples <= 0)
                 throw SceneError(e.loc, "xsamples and ysamples must be positive");
+            const long long spp = static_cast<long long>(s.xsamples) * s.ysamples;
+            if (spp > kMaxSamplesPerPixel)
+                throw SceneError(loc_of(e, "xsamples"),
+                                 "xsamples x ysamples = " + std::to_string(s.xsamples) + "x" +
+                                     std::to_string(s.ysamples) + " = " + std::to_string(spp) +
+                                     " samples per pixel is above cmam's limit of " +
+                                     std::to_string(kMaxSamplesPerPixel));
             e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions"});
         } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" ||
                    e.type == "02sequence" || e.type == "lowdiscrepancy" || e.type == "maxmindist") {
             int n = e.params.get_int("pixelsamples", 16);
             if (n <= 0) throw SceneError(e.loc, "pixelsamples must be positive");
+            if (n > kMaxSamplesPerPixel)
+                throw SceneError(loc_of(e, "pixelsamples"),
+                                 "pixelsamples " + std::to_string(n) +
+                                     " is above cmam's limit of " +
+                                     std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
             int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
             s.xsamples = s.ysamples = k;
             warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " +
@@ -176,12 +250,26 @@ class Builder {
         } else {
             throw SceneError(e.loc, "unknown Sampler " + q(e.type));
         }
+        if (m_opts.spp_override > kMaxSamplesPerPixel)
+            throw SceneError("--spp " + std::to_string(m_opts.spp_override) +
+                             " is above cmam's limit of " + std::to_string(kMaxSamplesPerPixel));
         if (m_opts.spp_override > 0) {
             int k =
                 std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
             s.xsamples = s.ysamples = k;
             s.jitter = k > 1;
         }
+        // A row of the film holds every sample of its pixels at once (and sample numbers along a
+        // row or column are ints), so the samples along the film's larger side are bounded too.
+        const FilmSettings& f = m_scene->film;
+        const long long side = std::max(f.xres, f.yres);
+        const long long per_row = side * s.spp();
+        if (per_row > kMaxSamplesPerRow)
+            throw SceneError(
+                m_opts.spp_override > 0 ? pbrt::FileLoc{} : e.loc,
+                std::to_string(s.spp()) + " samples per pixel along " + std::to_string(side) +
+                    " pixels (the film's larger side) = " + std::to_string(per_row) +
+                    " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
     }
 
     void filter() {
@@ -214,7 +302,13 @@ class Builder {
         }
         if (e.type != "whitted")
             warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
-        if (e.params.find("maxdepth")) m_scene->max_depth = e.params.get_int("maxdepth", 5);
+        if (const auto* p = e.params.find("maxdepth")) {
+            const int depth = e.params.get_int("maxdepth", 5);
+            m_scene->max_depth = std::min(depth, kMaxDepthLimit);
+            if (depth > kMaxDepthLimit)
+                warn(p->loc, "maxdepth " + std::to_string(depth) + " is above cmam's limit of " +
+                                 std::to_string(kMaxDepthLimit) + ", which is used instead");
+        }
         e.params.check_unused(
             "Integrator " + q(e.type), m_warn,
             e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));
@@ -413,8 +507,12 @@ class Builder {
             m.type = Material::Type::Glass;
             m.kr = spectrum_input(e, s, "Kr", Rgb(1));
             m.kt = spectrum_input(e, s, "Kt", Rgb(1));
-            m.eta = e.params.find("eta") ? float_input(e, s, "eta", 1.5f)
-                                         : float_input(e, s, "index", 1.5f);
+            const char* eta = e.params.find("eta") ? "eta" : "index";
+            m.eta = float_input(e, s, eta, 1.5f);
+            if (m.eta.node < 0 && !(m.eta.value.r > 0 && std::isfinite(m.eta.value.r)))
+                throw SceneError(loc_of(e, eta), std::string(eta) +
+                                                     " must be a positive finite number, got " +
+                                                     pbrt::number_text(m.eta.value.r));
             for (const char* r : {"uroughness", "vroughness"}) {
                 TexInput rough = float_input(e, s, r, 0);
                 if (rough.node >= 0 || rough.value.r != 0)

@@ -45,6 +45,16 @@ enum class TagPolicy : uint8_t { Scanline, Pixel };
 std::optional<TagPolicy> parse_tag_policy(std::string_view name);
 std::string_view to_string(TagPolicy p);
 
+/// Limits on the film and the samples a scene (or --spp) may ask for, checked in 64 bits before
+/// anything is allocated; beyond them building the scene is an error naming the values.
+constexpr int kMaxFilmSide = 65536;              // xresolution, yresolution
+constexpr long long kMaxFilmPixels = 1LL << 28;  // xresolution x yresolution (16384^2)
+constexpr long long kMaxSamplesPerPixel = 1LL << 20;
+constexpr long long kMaxSamplesPerRow = 1LL << 26;  // samples per pixel x the film's larger side
+
+/// Largest coordinate of a camera ray's origin (Embree's limit on ray coordinates is 1.8e18).
+constexpr float kMaxRayCoordinate = 1e18f;
+
 struct FilmSettings {
     int xres = 640, yres = 480;
     int x0 = 0, y0 = 0, x1 = 640, y1 = 480;  // cropped pixel bounds [x0,x1) x [y0,y1)
@@ -134,6 +144,10 @@ struct SurfaceHit {
 
 struct RenderStats;
 
+/// The deepest specular recursion a scene may ask for ("integer maxdepth"): the integrator
+/// recurses on the stack, so a larger maxdepth is used at this limit, with a warning.
+constexpr int kMaxDepthLimit = 100;
+
 class Scene {
   public:
     Scene();
@@ -144,7 +158,7 @@ class Scene {
     Camera camera;
     FilmSettings film;
     SamplerSettings sampler;
-    int max_depth = 5;
+    int max_depth = 5;  // at most kMaxDepthLimit
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;

@@ -7,15 +7,25 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 using namespace cmam::pbrt;
 namespace fs = std::filesystem;
 
 namespace {
+// Every file the tests write, removed when the test program ends.
+struct Written {
+    std::vector<fs::path> paths;
+    ~Written() {
+        for (const fs::path& p : paths) fs::remove(p);
+    }
+} g_written;
+
 std::string write_temp(const std::string& name, const std::string& bytes) {
     fs::path p =
         fs::temp_directory_path() / ("cmam_ply_" + std::to_string(::getpid()) + "_" + name);
     std::ofstream(p, std::ios::binary) << bytes;
+    g_written.paths.push_back(p);
     return p.string();
 }
 }  // namespace
@@ -146,4 +156,40 @@ TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
         write_temp("m.ply", head + "element face 9223372036854775807\nend_header\n" + verts));
     EXPECT_EQ(m.positions.size(), 9u);
     EXPECT_TRUE(m.indices.empty());
+}
+
+// Two vertex elements, only one with normals or texture coordinates: the mesh would have fewer
+// of them than vertices (and the scene builder read past their end), so the file is an error.
+TEST(Ply, AttributesGivenForSomeVertexElementsOnlyAreErrors) {
+    const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+    const std::string plain = "element vertex 2\n" + xyz;
+    const std::string end = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    struct Case {
+        const char* name;
+        std::string text;
+        std::string expected;
+    };
+    const Case cases[] = {
+        {"uv_first.ply",
+         "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz +
+             "property float u\nproperty float v\n" + plain + end +
+             "0 0 0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+         "texture coordinates (u v) given for 1 of 3 vertices (give them for every vertex or "
+         "none)"},
+        {"n_second.ply",
+         "ply\nformat ascii 1.0\n" + plain + "element vertex 1\n" + xyz +
+             "property float nx\nproperty float ny\nproperty float nz\n" + end +
+             "0 0 0\n1 0 0\n0 1 0 0 0 1\n3 0 1 2\n",
+         "normals (nx ny nz) given for 1 of 3 vertices (give them for every vertex or none)"},
+    };
+    for (const Case& c : cases) {
+        const std::string path = write_temp(c.name, c.text);
+        std::string error = "no error";
+        try {
+            read_ply(path);
+        } catch (const PlyError& e) {
+            error = e.what();
+        }
+        EXPECT_EQ(error, path + ": " + c.expected) << c.name;
+    }
 }

@@ -1,0 +1,266 @@
+// Hostile and careless scenes: each is a located error or a located warning naming what is
+// wrong and the value, never a crash, an out-of-range read or conversion, or unbounded work.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "pbrt/input_file.h"
+#include "pbrt/parser.h"
+#include "render/integrator.h"
+#include "render/scene.h"
+
+using namespace cmam;
+namespace fs = std::filesystem;
+
+namespace {
+const char* kCamera = "Camera \"perspective\"\n";
+
+// Parses `text` as the file t.pbrt and builds it: the error message, or "no error".
+std::string error_of(const std::string& text) {
+    try {
+        render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
+    } catch (const pbrt::SceneError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+}  // namespace
+
+// A sampled spectrum is interpolated between its samples: a NaN wavelength once sent the
+// lookup before the start of the list.
+TEST(HostileInput, SpectrumSamplesMustBeFiniteWithIncreasingWavelengths) {
+    auto matte = [](const std::string& kd) {
+        return std::string(kCamera) + "WorldBegin\nMaterial \"matte\" \"spectrum Kd\" [" + kd +
+               "]\nShape \"sphere\"\nWorldEnd\n";
+    };
+    EXPECT_EQ(error_of(matte("nan 1 500 1")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must be finite numbers, got nan");
+    EXPECT_EQ(error_of(matte("400 1 inf 1")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must be finite numbers, got inf");
+    EXPECT_EQ(error_of(matte("400 1 500 nan")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" values must be finite numbers, got nan at "
+              "500 nm");
+    EXPECT_EQ(error_of(matte("600 1 500 1")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must increase, got 500 after 600");
+    EXPECT_EQ(error_of(matte("400 1 400 0.5")),
+              "t.pbrt:3:18: error: spectrum \"Kd\" wavelengths must increase, got 400 after 400");
+    EXPECT_EQ(error_of(matte("400 0.5 500 0.5 700 0.5")), "no error");
+}
+
+// Specular recursion is on the stack: inside a closed mirror sphere a huge maxdepth once
+// overflowed it. The depth is capped with a located warning and the render completes.
+TEST(HostileInput, MaxDepthAboveTheLimitIsCappedWithALocatedWarning) {
+    const std::string text =
+        "Integrator \"whitted\" \"integer maxdepth\" 1000000000\n"
+        "Film \"image\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+        "Camera \"perspective\"\nWorldBegin\nLightSource \"point\"\n"
+        "Material \"mirror\" \"rgb Kr\" [1 1 1]\nShape \"sphere\" \"float radius\" 10\nWorldEnd\n";
+    std::vector<std::string> warnings;
+    auto sink = [&](const std::string& w) { warnings.push_back(w); };
+    auto scene = render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, sink);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0],
+              "t.pbrt:1:22: warning: maxdepth 1000000000 is above cmam's limit of 100, which is "
+              "used instead");
+    EXPECT_EQ(scene->max_depth, render::kMaxDepthLimit);
+    render::RenderStats stats;
+    render::BuildOptions one_spp;
+    one_spp.spp_override = 1;
+    scene = render::build_scene(pbrt::parse_string(text, "t.pbrt"), one_spp, {});
+    render::render(*scene, {}, &stats);
+    EXPECT_EQ(stats.secondary_rays, 16u * (render::kMaxDepthLimit - 1));
+}
+
+// Integers are read as numbers and must convert to int exactly; a crop window must be finite
+// before it is scaled to pixels. Each was a float-to-int conversion out of range.
+TEST(HostileInput, NumbersThatDoNotFitAnIntAreLocatedErrors) {
+    const std::string not_int = "must be a whole number in int's range, got ";
+    const std::pair<std::string, std::string> film_cases[] = {
+        {"\"integer xresolution\" 1e10",
+         "integer parameter \"xresolution\" " + not_int + "10000000000"},
+        {"\"integer yresolution\" [-inf]", "integer parameter \"yresolution\" " + not_int + "-inf"},
+        {"\"integer xresolution\" 2.5", "integer parameter \"xresolution\" " + not_int + "2.5"},
+        {"\"float cropwindow\" [0 1 nan 1]", "cropwindow values must be finite numbers, got nan"},
+        {"\"float cropwindow\" [0 inf 0 1]", "cropwindow values must be finite numbers, got inf"},
+        {"\"integer xresolution\" 2147483647 \"float cropwindow\" [0 0.5 0 1]",
+         "xresolution must be between 1 and 65536, got 2147483647"},
+    };
+    for (const auto& [params, why] : film_cases)
+        EXPECT_EQ(error_of("Film \"image\" " + params + "\n" + kCamera + "WorldBegin\nWorldEnd\n"),
+                  "t.pbrt:1:14: error: " + why)
+            << params;
+    EXPECT_EQ(error_of(std::string(kCamera) +
+                       "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
+                       "\"integer indices\" [0 1 1e10]\nWorldEnd\n"),
+              "t.pbrt:3:53: error: integer parameter \"indices\" " + not_int + "10000000000");
+}
+
+// Sizes are products computed in 64 bits and bounded before anything is allocated: 65536 x
+// 65536 samples per pixel once wrapped to 0 in an int, and 2^31 - 1 pixelsamples asked for a
+// vector longer than any.
+TEST(HostileInput, FilmAndSampleCountsAboveTheLimitsAreLocatedErrors) {
+    const std::pair<std::string, std::string> cases[] = {
+        {"Sampler \"stratified\" \"integer xsamples\" 65536 \"integer ysamples\" 65536",
+         "t.pbrt:1:22: error: xsamples x ysamples = 65536x65536 = 4294967296 samples per pixel "
+         "is above cmam's limit of 1048576"},
+        {"Sampler \"halton\" \"integer pixelsamples\" 2147483647",
+         "t.pbrt:1:18: error: pixelsamples 2147483647 is above cmam's limit of 1048576 samples "
+         "per pixel"},
+        {"Film \"image\" \"integer xresolution\" 30000 \"integer yresolution\" 30000",
+         "t.pbrt:1:14: error: a film of 30000x30000 = 900000000 pixels is above cmam's limit of "
+         "268435456"},
+        {"Film \"image\" \"integer yresolution\" 65537",
+         "t.pbrt:1:14: error: yresolution must be between 1 and 65536, got 65537"},
+        {"Sampler \"stratified\" \"integer xsamples\" 1024 \"integer ysamples\" 1024",
+         "t.pbrt:1:1: error: 1048576 samples per pixel along 640 pixels (the film's larger side) "
+         "= 671088640 samples, above cmam's limit of 67108864"},
+        {"Film \"image\" \"integer xresolution\" 16384 \"integer yresolution\" 16384\n"
+         "Sampler \"stratified\" \"integer xsamples\" 64 \"integer ysamples\" 64",
+         "no error"},
+    };
+    for (const auto& [options, expected] : cases)
+        EXPECT_EQ(error_of(options + "\n" + kCamera + "WorldBegin\nWorldEnd\n"), expected)
+            << options;
+    render::BuildOptions spp;
+    spp.spp_override = 1 << 21;
+    try {
+        render::build_scene(pbrt::parse_string(std::string(kCamera) + "WorldBegin\nWorldEnd\n"),
+                            spp, {});
+        ADD_FAILURE() << "no error";
+    } catch (const pbrt::SceneError& e) {
+        EXPECT_STREQ(e.what(), "error: --spp 2097152 is above cmam's limit of 1048576");
+    }
+}
+
+namespace {
+// A directory of this process's own, removed with everything in it at the end of the test.
+struct TempDir {
+    fs::path path = fs::temp_directory_path() / ("cmam_hostile_" + std::to_string(::getpid()));
+    TempDir() { fs::create_directories(path); }
+    ~TempDir() { fs::remove_all(path); }
+    std::string write(const std::string& name, const std::string& text) const {
+        std::ofstream(path / name, std::ios::binary) << text;
+        return (path / name).string();
+    }
+};
+
+std::string file_error_of(const std::string& path) {
+    try {
+        render::build_scene(pbrt::parse_file(path), {}, {});
+    } catch (const pbrt::SceneError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+}  // namespace
+
+// A directory once read as an empty scene, and Include "/dev/zero" grew without end: scene files
+// and PLY files are read only when they are regular files, and scene files within 1 GiB.
+TEST(HostileInput, OnlyRegularFilesWithinTheSizeLimitAreRead) {
+    TempDir dir;
+    const std::string d = dir.path.string();
+    EXPECT_EQ(file_error_of(d), d + ": error: cannot read scene file: it is a directory");
+    EXPECT_EQ(file_error_of("/dev/zero"),
+              "/dev/zero: error: cannot read scene file: it is not a regular file");
+    EXPECT_EQ(file_error_of(d + "/none.pbrt"),
+              d + "/none.pbrt: error: cannot open scene file: No such file or directory");
+    // Larger than the limit: sparse, so nothing is written to the disk.
+    const std::string big = dir.write("big.pbrt", "");
+    fs::resize_file(big, pbrt::kMaxSceneFileBytes + 1);
+    const std::pair<std::string, std::string> includes[] = {
+        {d, "cannot read scene file \"" + d + "\": it is a directory"},
+        {"/dev/zero", "cannot read scene file \"/dev/zero\": it is not a regular file"},
+        {big, "scene file \"" + big + "\" is 1073741825 bytes, above cmam's limit of 1073741824"},
+    };
+    for (const auto& [name, why] : includes) {
+        const std::string scene =
+            dir.write("inc.pbrt", std::string(kCamera) + "Include \"" + name + "\"\n");
+        EXPECT_EQ(file_error_of(scene), scene + ":2:1: error: " + why) << name;
+    }
+    for (const std::string& ply : {d, std::string("/dev/zero")}) {
+        const std::string scene =
+            dir.write("ply.pbrt", std::string(kCamera) +
+                                      "WorldBegin\nShape \"plymesh\" \"string filename\" \"" + ply +
+                                      "\"\nWorldEnd\n");
+        EXPECT_EQ(file_error_of(scene),
+                  scene + ":3:17: error: " + ply + ": cannot read PLY file: " +
+                      (ply == d ? "it is a directory" : "it is not a regular file"));
+    }
+}
+
+// ObjectEnd closes the ObjectBegin it belongs to, whatever the lines: it was matched by line
+// number, so on the ObjectBegin's line it closed an AttributeBegin opened inside the object.
+TEST(HostileInput, ObjectEndMatchesItsObjectBeginNotALine) {
+    const std::pair<std::string, std::string> cases[] = {
+        {"ObjectBegin \"a\" AttributeBegin ObjectEnd AttributeEnd",
+         "t.pbrt:3:32: error: ObjectEnd does not match AttributeBegin at t.pbrt:3:17 inside "
+         "object \"a\""},
+        {"ObjectBegin \"a\"\nTransformBegin\nObjectEnd\nTransformEnd",
+         "t.pbrt:5:1: error: ObjectEnd does not match TransformBegin at t.pbrt:4:1 inside object "
+         "\"a\""},
+        {"ObjectBegin \"a\" AttributeEnd ObjectEnd",
+         "t.pbrt:3:17: error: AttributeEnd does not match ObjectBegin at t.pbrt:3:1"},
+        {"ObjectBegin \"a\" Shape \"sphere\"",
+         "t.pbrt:3:1: error: ObjectBegin is not closed before WorldEnd"},
+        {"ObjectBegin \"a\" AttributeBegin Shape \"sphere\" AttributeEnd ObjectEnd "
+         "ObjectInstance \"a\"",
+         "no error"},
+    };
+    for (const auto& [world, expected] : cases)
+        EXPECT_EQ(error_of(std::string(kCamera) + "WorldBegin\n" + world + "\nWorldEnd\n"),
+                  expected)
+            << world;
+}
+
+// Rays that are not finite, or start beyond Embree's range, once reached Embree and aborted in
+// its assertions: the camera (its transform, frame and screen window) is checked where the scene
+// is built, and so is a constant glass index.
+TEST(HostileInput, CameraAndGlassParametersThatGiveNonFiniteRaysAreLocatedErrors) {
+    const std::string world = "WorldBegin\nLightSource \"point\"\nShape \"sphere\"\nWorldEnd\n";
+    const std::string corner_hint = " at raster position (0, 0), ";
+    const std::pair<std::string, std::string> cameras[] = {
+        {"Translate 1e30 0 0\nCamera \"perspective\"",
+         "t.pbrt:2:1: error: camera rays start at (-1e+30, 0, 0)" + corner_hint +
+             "beyond cmam's limit of 1e+18 on coordinates (check the camera transform and "
+             "screenwindow)"},
+        {"Translate nan 0 0\nCamera \"perspective\"",
+         "t.pbrt:2:1: error: camera rays start at (nan, nan, nan)" + corner_hint +
+             "beyond cmam's limit of 1e+18 on coordinates (check the camera transform and "
+             "screenwindow)"},
+        {"Scale 1e30 1e30 1e30\nCamera \"perspective\"",
+         "t.pbrt:2:1: error: camera rays have direction (-inf, inf, inf)" + corner_hint +
+             "not a finite unit vector (check the camera transform, screenwindow and "
+             "frameaspectratio)"},
+        {"Camera \"orthographic\" \"float screenwindow\" [-1e30 1e30 -1 1]",
+         "t.pbrt:1:1: error: camera rays start at (-1e+30, 1, 0)" + corner_hint +
+             "beyond cmam's limit of 1e+18 on coordinates (check the camera transform and "
+             "screenwindow)"},
+        {"Camera \"perspective\" \"float frameaspectratio\" 0",
+         "t.pbrt:1:22: error: frameaspectratio must be a positive finite number, got 0"},
+        {"Camera \"perspective\" \"float frameaspectratio\" nan",
+         "t.pbrt:1:22: error: frameaspectratio must be a positive finite number, got nan"},
+        {"Camera \"perspective\" \"float screenwindow\" [-1 1 nan 1]",
+         "t.pbrt:1:22: error: screenwindow values must be finite numbers, got nan"},
+        {"Camera \"perspective\" \"float screenwindow\" [-1 1e300 -1 1]",
+         "t.pbrt:1:22: error: screenwindow values must be finite numbers, got 1e+300"},
+        {"Translate 0 0 1e17\nCamera \"perspective\"", "no error"},
+    };
+    for (const auto& [camera, expected] : cameras)
+        EXPECT_EQ(error_of(camera + "\n" + world), expected) << camera;
+    const std::pair<std::string, std::string> glasses[] = {
+        {"\"float index\" nan",
+         "t.pbrt:3:18: error: index must be a positive finite number, got nan"},
+        {"\"float eta\" inf", "t.pbrt:3:18: error: eta must be a positive finite number, got inf"},
+        {"\"float index\" 0", "t.pbrt:3:18: error: index must be a positive finite number, got 0"},
+        {"\"float index\" 1.33", "no error"},
+    };
+    for (const auto& [eta, expected] : glasses)
+        EXPECT_EQ(error_of(std::string(kCamera) + "WorldBegin\nMaterial \"glass\" " + eta +
+                           "\nShape \"sphere\"\nWorldEnd\n"),
+                  expected)
+            << eta;
+}
