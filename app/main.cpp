@@ -110,6 +110,9 @@ void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
     if (stats.lookups_non_finite)
         std::fprintf(stderr, "lookups with a non-finite uv or footprint (texture mean): %llu\n",
                      (unsigned long long)stats.lookups_non_finite);
+    if (stats.cmam_2d_without_above)
+        std::fprintf(stderr, "2-D CMAM lookups without a sample above: %llu\n",
+                     (unsigned long long)stats.cmam_2d_without_above);
     if (stats.dropped_differentials)
         std::fprintf(stderr, "ray differentials dropped (grazing or non-finite): %llu\n",
                      (unsigned long long)stats.dropped_differentials);

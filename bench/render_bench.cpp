@@ -1,6 +1,7 @@
 // Whole-render throughput of the demo scene beside a bare Embree loop that casts the same
 // camera and shadow rays (rtcIntersect1 / rtcOccluded1, no shading), and their ratio; and each
-// footprint method's render time against --lod none, separately and paired.
+// footprint method's render time against --lod none, separately and paired; and the area filter's
+// against EWA, paired.
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -35,6 +36,8 @@ std::unique_ptr<render::Scene> lod_scene(render::Lod lod, texture::FilterKind fi
     for (auto& [k, tex] : scene->images) {
         tex->pyramid();
         tex->sat();
+        if (filter == texture::FilterKind::Area)
+            for (int l = 0; l < tex->pyramid().levels(); ++l) tex->row_prefix(l);
     }
     return scene;
 }
@@ -52,9 +55,10 @@ void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind 
 // first alternates too), each timed on its own: on a shared machine whose speed drifts by tens
 // of percent between runs, separate benchmarks read the drift as overhead. Counter "overhead":
 // the method's total render time over none's, minus one, in percent.
-void BM_RenderLodVsNone(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
-    const auto scene = lod_scene(lod, filter),
-               none = lod_scene(render::Lod::None, texture::FilterKind::Bilinear);
+// Two renders alternately (which goes first alternates too), each timed on its own; the
+// counter `name` is the first's total render time over the second's, minus one, in percent.
+void paired(benchmark::State& state, const render::Scene& first, const render::Scene& second,
+            const char* name) {
     using Clock = std::chrono::steady_clock;
     Clock::duration with{}, without{};
     auto timed = [](const render::Scene& sc, Clock::duration& total) {
@@ -66,17 +70,31 @@ void BM_RenderLodVsNone(benchmark::State& state, render::Lod lod, texture::Filte
     bool method_first = true;
     for (auto _ : state) {
         if (method_first) {
-            timed(*scene, with);
-            timed(*none, without);
+            timed(first, with);
+            timed(second, without);
         } else {
-            timed(*none, without);
-            timed(*scene, with);
+            timed(second, without);
+            timed(first, with);
         }
         method_first = !method_first;
     }
-    state.counters["overhead"] = 100.0 * (std::chrono::duration<double>(with).count() /
-                                              std::chrono::duration<double>(without).count() -
-                                          1);
+    state.counters[name] = 100.0 * (std::chrono::duration<double>(with).count() /
+                                        std::chrono::duration<double>(without).count() -
+                                    1);
+}
+
+void BM_RenderLodVsNone(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+    const auto scene = lod_scene(lod, filter),
+               none = lod_scene(render::Lod::None, texture::FilterKind::Bilinear);
+    paired(state, *scene, *none, "overhead");
+}
+
+// The exact area filter against EWA with ray differentials (pbrt-v3's default), paired.
+// Counter "area_vs_ewa": area's render time over EWA's, minus one, in percent.
+void BM_RenderAreaVsEwa(benchmark::State& state) {
+    const auto area = lod_scene(render::Lod::Differentials, texture::FilterKind::Area),
+               ewa = lod_scene(render::Lod::Differentials, texture::FilterKind::Ewa);
+    paired(state, *area, *ewa, "area_vs_ewa");
 }
 
 double g_render_rate = 0, g_bare_rate = 0;
@@ -177,8 +195,10 @@ constexpr Method kMethods[] = {
     {"cmam_ewa", render::Lod::Cmam, texture::FilterKind::Ewa},
     {"differentials_ewa", render::Lod::Differentials, texture::FilterKind::Ewa},
     {"differentials_trilinear", render::Lod::Differentials, texture::FilterKind::Trilinear},
+    {"differentials_area", render::Lod::Differentials, texture::FilterKind::Area},
     {"cones_trilinear", render::Lod::Cones, texture::FilterKind::Trilinear},
-    {"cones_aniso_ewa", render::Lod::ConesAniso, texture::FilterKind::Ewa}};
+    {"cones_aniso_ewa", render::Lod::ConesAniso, texture::FilterKind::Ewa},
+    {"cones_aniso_area", render::Lod::ConesAniso, texture::FilterKind::Area}};
 
 // Each method alone (BM_RenderLod, after --lod none), then each against --lod none alternately.
 void register_methods() {
@@ -194,6 +214,10 @@ void register_methods() {
     for (const Method& m : kMethods)
         add(std::string("BM_RenderLodVsNone/") + m.name, BM_RenderLodVsNone, m.lod, m.filter)
             ->Iterations(8);
+    benchmark::RegisterBenchmark("BM_RenderAreaVsEwa", BM_RenderAreaVsEwa)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->Iterations(8);
 }
 
 // Prints the ratio of the two rays/s figures after the runs.
@@ -211,6 +235,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
                 if (o != r.counters.end())
                     m_paired[r.benchmark_name().substr(19, r.benchmark_name().find('/', 19) - 19)] =
                         o->second;
+            }
+            if (usable && r.benchmark_name().find("BM_RenderAreaVsEwa") != std::string::npos) {
+                auto o = r.counters.find("area_vs_ewa");
+                if (o != r.counters.end()) m_area_vs_ewa = o->second;
             }
             auto it = r.counters.find("rays/s");
             if (it == r.counters.end()) continue;
@@ -234,10 +262,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
                         paired ? " (paired)" : "",
                         k == "cmam_trilinear" ? "  (target <= +10%)" : "");
         }
+        if (m_area_vs_ewa != 0)
+            std::printf("differentials: --filter area vs --filter ewa: %+.1f%% render time "
+                        "(paired; target <= 0%%)\n",
+                        m_area_vs_ewa);
     }
 
   private:
-    double m_render = 0, m_bare = 0;
+    double m_render = 0, m_bare = 0, m_area_vs_ewa = 0;
     std::map<std::string, double> m_lod, m_paired;
 };
 

@@ -62,8 +62,10 @@ std::vector<std::string> default_methods() {
     return {"none",
             "differentials+trilinear",
             "differentials+ewa",
+            "differentials+area",
             "cones+trilinear",
             "cones-aniso+ewa",
+            "cones-aniso+area",
             "cmam+trilinear",
             "cmam+sat",
             "cmam+ewa",
@@ -72,7 +74,8 @@ std::vector<std::string> default_methods() {
             "cmam-pixel-hull+trilinear",
             "cmam2d+trilinear",
             "cmam2d+sat",
-            "cmam2d+ewa"};
+            "cmam2d+ewa",
+            "cmam2d+area"};
 }
 
 namespace {

@@ -486,6 +486,7 @@ class Builder {
             if (n.lod == Lod::Differentials) m_scene->needs_differentials = true;
             if (n.lod == Lod::Cones || n.lod == Lod::ConesAniso) m_scene->needs_cones = true;
             if (n.lod == Lod::ConesAniso) m_scene->needs_cones_aniso = true;
+            if (n.lod == Lod::Cmam) m_scene->uses_cmam = true;
         }
         m_scene->textures.push_back(n);
     }

@@ -53,6 +53,7 @@ struct RayCounts {
             stats->lookups_by_filter[k] += lookups.by_filter[k];
         stats->lookups_point_sampled += lookups.point_sampled;
         stats->lookups_non_finite += lookups.non_finite;
+        stats->cmam_2d_without_above += lookups.cmam_2d_without_above;
         stats->dropped_differentials += dropped_differentials;
     }
 };
@@ -147,6 +148,7 @@ struct Tracer {
         Vec3 org, dir;
         RayDifferential diff;
         RayCone cone;
+        uint64_t path = 1;  // which specular bounces led here (TexContext::path)
     };
 
     Rgb li(Ray ray, int depth) {
@@ -165,6 +167,7 @@ struct Tracer {
             ctx.counts = counts ? &counts->lookups : nullptr;
             ctx.object = h.prim->id;
             ctx.cmam = cmam;
+            ctx.path = ray.path;
             HitDifferential hd;
             if (scene.needs_differentials) {
                 hd = transfer(ray.diff, ray.dir, h);
@@ -224,7 +227,7 @@ struct Tracer {
         if (dot(wi, n) == 0) return {};
         float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
         if (fr == 0) return {};
-        Ray next{{}, wi, {}, {}};
+        Ray next{{}, wi, {}, {}, ray.path * 2};
         if (scene.needs_differentials) next.diff = render::reflect(ray.diff, hd, ray.dir, h);
         if (scene.needs_cones) next.cone = reflect_cone(ray.cone, ray.dir, h);
         return b.kr * fr * spawn(h, next, depth);
@@ -242,7 +245,7 @@ struct Tracer {
         float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};
-        Ray next{{}, wt, {}, {}};
+        Ray next{{}, wt, {}, {}, ray.path * 2 + 1};
         if (scene.needs_differentials)
             next.diff = render::refract(ray.diff, hd, ray.dir, h, eta_i / eta_t);
         if (scene.needs_cones) next.cone = refract_cone(ray.cone, ray.dir, h, eta_i / eta_t);
@@ -357,25 +360,28 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     // the same position and seed and each pixel sums its samples in the same order, so only the
     // CMAM sees the difference.
     const bool sub_rows = scene.tags == TagPolicy::Scanline;
-    auto render_row = [&](int row, CmamRowState& cmam) {
+    // Traces pixels [x_begin, x_end) of one row, after `prime` pixels to their left whose samples
+    // only feed the CMAM's caches (their radiance is dropped): they are what a row traced whole
+    // would have put there.
+    auto render_span = [&](int row, int x_begin, int x_end, int prime, CmamRowState& cmam) {
         const int py = film.y0 + row;
-        const int width = fb.width;
+        const int c0 = x_begin - prime, n = x_end - c0;
         RayCounts counts;
         // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
-        std::vector<float> jitter(static_cast<std::size_t>(width) * spp * 2, 0.5f);
-        std::vector<uint64_t> seeds(static_cast<std::size_t>(width));
-        for (int col = 0; col < width; ++col) {
-            const int px = film.x0 + col;
-            seeds[col] = mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
+        std::vector<float> jitter(static_cast<std::size_t>(n) * spp * 2, 0.5f);
+        std::vector<uint64_t> seeds(static_cast<std::size_t>(n));
+        for (int i = 0; i < n; ++i) {
+            const int px = film.x0 + c0 + i;
+            seeds[i] = mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
             if (!smp.jitter) continue;
-            Rng rng(seeds[col]);
+            Rng rng(seeds[i]);
             for (int k = 0; k < 2 * spp; ++k)
-                jitter[static_cast<std::size_t>(col) * spp * 2 + k] = rng.next_float();
+                jitter[static_cast<std::size_t>(i) * spp * 2 + k] = rng.next_float();
         }
-        std::vector<double> sum(static_cast<std::size_t>(width) * 3, 0.0);
-        auto trace_sample = [&](int col, int sx, int sy) {
-            const int px = film.x0 + col, sample = sy * nx + sx;
-            const float* j = &jitter[(static_cast<std::size_t>(col) * spp + sample) * 2];
+        std::vector<double> sum(static_cast<std::size_t>(n) * 3, 0.0);
+        auto trace_sample = [&](int i, int sx, int sy) {
+            const int col = c0 + i, px = film.x0 + col, sample = sy * nx + sx;
+            const float* j = &jitter[(static_cast<std::size_t>(i) * spp + sample) * 2];
             const float fx = px + (sx + j[0]) / nx, fy = py + (sy + j[1]) / ny;
             CameraSample cs;
             scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
@@ -388,46 +394,76 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
             if (sub_rows) {
                 tag.id = static_cast<uint32_t>(py * ny + sy);
                 tag.seq = static_cast<uint32_t>(col * nx + sx);
+                tag.positioned = true;  // in strata: the 2-D CMAM's Jacobian and centre
+                tag.x = float(col * nx + sx) + j[0];
+                tag.y = float(py * ny + sy) + j[1];
             } else {
                 tag.id = static_cast<uint32_t>(py * film.xres + px);
                 tag.seq = static_cast<uint32_t>(sample);
             }
             Aov aov{options.aov};
-            Rgb L = trace_one(scene, cs, mix_seed(seeds[col], uint64_t(sample) + 1), &counts, tag,
-                              &cmam, options.aov == AovKind::None ? nullptr : &aov);
+            Rgb L = trace_one(scene, cs, mix_seed(seeds[i], uint64_t(sample) + 1),
+                              i < prime ? nullptr : &counts, tag, &cmam,
+                              options.aov == AovKind::None ? nullptr : &aov);
             if (options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
             if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
-            double* acc = &sum[static_cast<std::size_t>(col) * 3];
+            double* acc = &sum[static_cast<std::size_t>(i) * 3];
             acc[0] += L.r;
             acc[1] += L.g;
             acc[2] += L.b;
         };
         if (sub_rows) {
             for (int sy = 0; sy < ny; ++sy)
-                for (int col = 0; col < width; ++col)
-                    for (int sx = 0; sx < nx; ++sx) trace_sample(col, sx, sy);
+                for (int i = 0; i < n; ++i)
+                    for (int sx = 0; sx < nx; ++sx) trace_sample(i, sx, sy);
         } else {
-            for (int col = 0; col < width; ++col)
+            for (int i = 0; i < n; ++i)
                 for (int sy = 0; sy < ny; ++sy)
-                    for (int sx = 0; sx < nx; ++sx) trace_sample(col, sx, sy);
+                    for (int sx = 0; sx < nx; ++sx) trace_sample(i, sx, sy);
         }
-        float* out = &fb.rgb[static_cast<std::size_t>(row) * width * 3];
-        for (std::size_t i = 0; i < sum.size(); ++i) out[i] = static_cast<float>(sum[i] / spp);
+        float* out = &fb.rgb[(static_cast<std::size_t>(row) * fb.width + x_begin) * 3];
+        for (std::size_t k = static_cast<std::size_t>(prime) * 3; k < sum.size(); ++k)
+            out[k - static_cast<std::size_t>(prime) * 3] = static_cast<float>(sum[k] / spp);
         counts.add_to(stats);
-        int done = ++rows_done;
-        if (options.progress) options.progress(done, fb.height);
     };
 
-    // Rows go in fixed blocks, each block top to bottom and each row left to right, with CMAM
-    // caches that live for one block: the image is the same for any thread count, and the
-    // 2-D CMAM finds the row above inside the block.
-    constexpr int kBlockRows = 8;
-    const int blocks = (fb.height + kBlockRows - 1) / kBlockRows;
-    tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int b = r.begin(); b < r.end(); ++b) {
+    if (!scene.uses_cmam) {
+        // Rows go in fixed blocks of 8, each row whole: the image is the same for any thread
+        // count.
+        constexpr int kBlockRows = 8;
+        const int blocks = (fb.height + kBlockRows - 1) / kBlockRows;
+        tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1),
+                          [&](const tbb::blocked_range<int>& r) {
+                              CmamRowState cmam;
+                              for (int b = r.begin(); b < r.end(); ++b)
+                                  for (int row = b * kBlockRows;
+                                       row < std::min(fb.height, (b + 1) * kBlockRows); ++row) {
+                                      render_span(row, 0, fb.width, 0, cmam);
+                                      int done = ++rows_done;
+                                      if (options.progress) options.progress(done, fb.height);
+                                  }
+                          });
+        return fb;
+    }
+    // With the CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top to
+    // bottom with caches of its own, each row left to right: every row but the image's first has
+    // the row above in the caches (the 2-D CMAM's Jacobian column), and each strip row starts
+    // with the pixels to its left primed (the 1-D CMAM's neighbours; two at one sample per pixel,
+    // where the region needs the two previous samples). Samples reach the caches exactly as in a
+    // whole-row scan, and the image is the same for any thread count (algorithms.md §6.3.1).
+    const int strips = (fb.width + kCmamStripWidth - 1) / kCmamStripWidth;
+    const int prime_pixels = sub_rows ? (nx >= 2 ? 1 : 2) : 0;
+    std::atomic<int> spans_done{0};
+    tbb::parallel_for(tbb::blocked_range<int>(0, strips, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int k = r.begin(); k < r.end(); ++k) {
             CmamRowState cmam;
-            for (int row = b * kBlockRows; row < std::min(fb.height, (b + 1) * kBlockRows); ++row)
-                render_row(row, cmam);
+            const int x0 = k * kCmamStripWidth, x1 = std::min(fb.width, x0 + kCmamStripWidth);
+            const int prime = std::min(x0, prime_pixels);
+            for (int row = 0; row < fb.height; ++row) {
+                render_span(row, x0, x1, prime, cmam);
+                int done = ++spans_done;
+                if (options.progress) options.progress(done, strips * fb.height);
+            }
         }
     });
     return fb;

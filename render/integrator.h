@@ -19,16 +19,23 @@ struct RenderStats {
     std::atomic<uint64_t> lookups_point_sampled{0};                       // without one
     std::atomic<uint64_t> lookups_non_finite{0};     // non-finite uv or footprint: texture mean
     std::atomic<uint64_t> dropped_differentials{0};  // grazing or non-finite: point sampled
+    // 2-D CMAM lookups without a sample above on the same object and path (the image's first
+    // row, or where the object or path was not hit above)
+    std::atomic<uint64_t> cmam_2d_without_above{0};
     uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
 };
 
 /// Arbitrary output variables: what `cmam render --aov` writes instead of radiance.
 enum class AovKind : uint8_t { None, Footprint, Texture };
 
+/// With the CMAM the image is traced in strips this many pixels wide, each top to bottom.
+inline constexpr int kCmamStripWidth = 64;
+
 struct RenderOptions {
     int threads = 0;  // 0: all cores
     AovKind aov = AovKind::None;
-    /// Called after each finished row with (rows done, rows total); may be empty.
+    /// Called after each finished row, or row of a strip with the CMAM, with (done, total); may
+    /// be empty.
     std::function<void(int, int)> progress;
 };
 

@@ -55,12 +55,15 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 o.filter = n.filter.kind;
                 o.max_aniso = n.filter.max_aniso;
                 texture::LookupInfo info;
+                texture::CmamRegion region;
                 x = texture::cmam_lookup(
-                    *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node)), ctx.tag,
-                    s, t, o, ctx.counts ? &info : nullptr);
+                    *n.image,
+                    ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node), ctx.path), ctx.tag,
+                    s, t, o, ctx.counts ? &info : nullptr, ctx.counts ? &region : nullptr);
                 if (ctx.counts) {
                     ++ctx.counts->by_filter[static_cast<int>(o.filter)];
                     ctx.counts->non_finite += info.fallback;
+                    ctx.counts->cmam_2d_without_above += o.two_d && !region.used_above;
                 }
             } else {
                 if (n.filter.kind == texture::FilterKind::Area && n.lod == Lod::Differentials &&

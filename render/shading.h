@@ -12,23 +12,31 @@ struct LookupCounts {
     uint64_t by_filter[texture::kFilterKinds] = {};
     uint64_t point_sampled = 0;  // no footprint: bilinear at level 0 whatever the filter
     uint64_t non_finite = 0;     // non-finite uv or footprint: the texture mean was returned
+    uint64_t cmam_2d_without_above = 0;  // 2-D CMAM lookups that had no sample above
 };
 
-/// The CMAM caches of one block of rows: one per (textured object, texture). Rows are rendered
-/// whole, left to right and top to bottom within a block (with scanline tags, one row of sample
-/// strata at a time), so samples reach the caches in scan order.
+/// The CMAM caches of one strip of the image: one per (textured object, texture, ray path).
+/// A strip is traced top to bottom, each row left to right (with scanline tags, one row of
+/// sample strata at a time), so samples reach the caches in scan order. The path (which
+/// specular bounces led to the hit) keeps neighbours of different paths apart: a glass's
+/// reflected and refracted rays, both at level 1, or a row that crosses from a direct view of an
+/// object to its mirror image, would otherwise break each other's neighbourhoods.
 class CmamRowState {
   public:
-    texture::CmamCache& cache(uint32_t object, uint32_t texture_node) {
-        uint64_t key = (uint64_t(object) << 32) | texture_node;
-        for (auto& [k, c] : m_caches)
-            if (k == key) return c;
-        return m_caches.emplace_back(key, texture::CmamCache{}).second;
+    texture::CmamCache& cache(uint32_t object, uint32_t texture_node, uint64_t path) {
+        const uint64_t key = (uint64_t(object) << 32) | texture_node;
+        for (auto& e : m_caches)
+            if (e.key == key && e.path == path) return e.cache;
+        return m_caches.push_back({key, path, texture::CmamCache{}}), m_caches.back().cache;
     }
     void clear() { m_caches.clear(); }
 
   private:
-    std::vector<std::pair<uint64_t, texture::CmamCache>> m_caches;
+    struct Entry {
+        uint64_t key, path;
+        texture::CmamCache cache;
+    };
+    std::vector<Entry> m_caches;
 };
 
 /// What a texture lookup knows about the shading point.
@@ -44,6 +52,9 @@ struct TexContext {
     texture::RayTag tag{};            // the ray's tag (ID, recursion level)
     LookupCounts* counts = nullptr;   // optional statistics
     uint32_t object = 0;              // the primitive hit (the CMAM's textured object)
+    // The ray's path: 1 for camera rays, then 2p for the reflected and 2p + 1 for the refracted
+    // child of path p (the CMAM keeps a cache per path).
+    uint64_t path = 1;
     CmamRowState* cmam = nullptr;     // the row's CMAM caches (null: no CMAM)
 };
 

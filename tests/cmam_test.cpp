@@ -288,3 +288,63 @@ TEST(Cmam, FarOrNonNumericSamplesGiveTheMeanAndAreNotCached) {
             EXPECT_LE(near[0], 7.0f);
         }
 }
+
+TEST(Cmam, PointsFootprintIsTheRenderersRouteForEveryFilter) {
+    // `cmam lookup --points` hands the filters a Points footprint; the renderer's CMAM hands
+    // them its matching cached samples. Both go through FilteredTexture::lookup and
+    // cmam_region(): the same value, bit for bit, for every filter, with one and two matches.
+    std::vector<float> px(37 * 23 * 3);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 7919) % 101) / 100;
+    FilteredTexture t(Image(37, 23, 3, px));
+    const Vec2d pts[][3] = {{{0.4, 0.5}, {0.39, 0.5}, {0.38, 0.501}},   // a row: nearly collinear
+                            {{0.4, 0.5}, {0.37, 0.49}, {0.41, 0.45}},   // a triangle with area
+                            {{0.1, 0.9}, {0.05, 0.93}, {0.0, 0.96}}};  // collinear
+    for (FilterKind kind : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
+                            FilterKind::Area})
+        for (const auto& p : pts)
+            for (int n : {2, 3}) {
+                Footprint fp;
+                fp.kind = Footprint::Kind::Points;
+                fp.point_count = n;
+                for (int k = 0; k < n; ++k) fp.points[k] = p[k];
+                const Texel direct = t.lookup(p[0].u, p[0].v, fp, {kind, 8});
+                CmamCache cache;
+                CmamOptions o;
+                o.filter = kind;
+                for (int k = n - 1; k >= 1; --k)  // oldest first, adjacent sequence numbers
+                    cmam_lookup(t, cache, RayTag{0, 0, uint32_t(n - 1 - k)}, p[k].u, p[k].v, o);
+                const Texel via_cmam =
+                    cmam_lookup(t, cache, RayTag{0, 0, uint32_t(n - 1)}, p[0].u, p[0].v, o);
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_EQ(direct[c], via_cmam[c]) << to_string(kind) << " " << n << " points";
+            }
+}
+
+TEST(Cmam2d, PositionedTagsSolveTheJacobianWhateverTheJitter) {
+    // An affine mapping s = 3x + y + 5, t = -x + 2y + 7 (texels per stratum), samples jittered
+    // within their strata: the solved axes are the Jacobian columns and the region is centred on
+    // the stratum's centre.
+    auto map = [](double x, double y) { return std::pair{3 * x + y + 5, -x + 2 * y + 7}; };
+    auto entry = [&](double x, double y) {
+        auto [s, t] = map(x, y);
+        CmamCache::Entry e{RayTag{}, s, t, true};
+        e.tag.positioned = true;
+        e.tag.x = float(x);
+        e.tag.y = float(y);
+        return e;
+    };
+    const CmamCache::Entry cur = entry(10.8, 20.15), left = entry(9.1, 20.7),
+                           above = entry(10.35, 19.9);
+    const CmamRegion r = cmam_region_2d(cur.s, cur.t, &left, above, CmamOptions{}, cur.tag);
+    EXPECT_NEAR(r.a[0], 3, 1e-5);
+    EXPECT_NEAR(r.a[1], -1, 1e-5);
+    EXPECT_NEAR(r.b[0], 1, 1e-5);
+    EXPECT_NEAR(r.b[1], 2, 1e-5);
+    auto [cs, ct] = map(10.5, 20.5);  // the stratum's centre
+    EXPECT_NEAR(cur.s + r.offset[0], cs, 1e-5);
+    EXPECT_NEAR(cur.t + r.offset[1], ct, 1e-5);
+    // Without positions: the plain neighbour vectors, no move.
+    const CmamRegion plain = cmam_region_2d(cur.s, cur.t, &left, above, CmamOptions{});
+    EXPECT_NEAR(plain.a[0], left.s - cur.s, 1e-12);
+    EXPECT_EQ(plain.offset[0], 0);
+}

@@ -143,6 +143,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
     }
     if (lo < hi) {
         int64_t k = floor_to_int(lo);
+        const int64_t kfirst = k;
         const int64_t kend = floor_to_int(hi);  // the last texel is [kend, hi] (may be empty)
         // First and last texels are partial; those between are whole: (R(k) + R(k+1)) / 2.
         auto partial = [&](int64_t kk, double a, double b, const double* r0, const double* r1) {
@@ -155,7 +156,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
                 ra[c] = d[c];
                 rb[c] = d[NC + c];
             }
-            partial(k, lo, double(k + 1), ra, rb);
+            partial(k, lo, std::min(hi, double(k + 1)), ra, rb);  // clipped: may be all of it
             double mid[NC];
             for (int c = 0; c < NC; ++c) mid[c] = 0;
             for (++k; k < kend; ++k) {
@@ -163,7 +164,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
                 for (int c = 0; c < NC; ++c) mid[c] += double(d[c]) + d[NC + c];
             }
             for (int c = 0; c < NC; ++c) sum[c] += 0.5 * mid[c];
-            if (hi > double(kend)) {
+            if (kend > kfirst && hi > double(kend)) {
                 d = row + kend * NC;
                 for (int c = 0; c < NC; ++c) {
                     ra[c] = d[c];

@@ -116,7 +116,8 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
 }
 
 CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
-                          const CmamCache::Entry& above, const CmamOptions& o) {
+                          const CmamCache::Entry& above, const CmamOptions& o,
+                          const RayTag& cur) {
     CmamRegion r;
     r.used_above = true;
     double b[2] = {above.s - s0, above.t - t0};
@@ -128,6 +129,29 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
     } else {  // no left neighbour: a circle whose radius is the step to the sample above
         a[0] = b[1];
         a[1] = -b[0];
+    }
+    if (left && cur.positioned && left->tag.positioned && above.tag.positioned) {
+        // [a b] = J [dl da] with dl, da the neighbours' image-plane offsets (strata): solve for
+        // J, whose columns are the steps of one stratum across and down, and move the centre
+        // to the stratum's. Nearly coincident samples (|det| < 1/4) keep the plain vectors.
+        const double lx = double(left->tag.x) - cur.x, ly = double(left->tag.y) - cur.y;
+        const double ax = double(above.tag.x) - cur.x, ay = double(above.tag.y) - cur.y;
+        const double det = lx * ay - ax * ly;
+        if (std::abs(det) >= 0.25) {
+            // inverse of [[lx ax] [ly ay]] = [[ay -ax] [-ly lx]] / det
+            const double jx[2] = {(a[0] * ay - b[0] * ly) / det, (a[1] * ay - b[1] * ly) / det};
+            const double jy[2] = {(b[0] * lx - a[0] * ax) / det, (b[1] * lx - a[1] * ax) / det};
+            const double cx = std::floor(double(cur.x)) + 0.5 - cur.x,
+                         cy = std::floor(double(cur.y)) + 0.5 - cur.y;
+            r.offset[0] = jx[0] * cx + jy[0] * cy;
+            r.offset[1] = jx[1] * cx + jy[1] * cy;
+            a[0] = jx[0];
+            a[1] = jx[1];
+            b[0] = jy[0];
+            b[1] = jy[1];
+            s0 += r.offset[0];
+            t0 += r.offset[1];
+        }
     }
     const double la = std::sqrt(a[0] * a[0] + a[1] * a[1]),
                  lb = std::sqrt(b[0] * b[0] + b[1] * b[1]);
@@ -197,7 +221,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         return img.mean();
     }
     CmamRegion r = above.valid
-                       ? cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, above, o)
+                       ? cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, above, o, tag)
                        : cmam_region(s0, t0, cached, matches, o);
     if (above.valid) matches = std::max(matches, 1);  // a region exists: no miss
     if (o.hull && matches == 2 && !above.valid) {
@@ -291,6 +315,8 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     Footprint fp;
     if (above.valid) {
         fp = Footprint::axes({r.a[0] / W, r.a[1] / H}, {r.b[0] / W, r.b[1] / H});
+        u += r.offset[0] / W;  // the stratum's centre (positioned tags), else no move
+        v += r.offset[1] / H;
     } else {
         fp.kind = Footprint::Kind::Points;
         fp.point_count = 1 + std::min(matches, 2);

@@ -89,12 +89,19 @@ struct CmamRegion {
     double triangle_area = 0;             // two matches: the three samples' triangle (texels^2)
     double hull_new_area = -1;            // hull weighting: area of the new pieces (-1: not used)
     bool used_above = false;              // 2-D CMAM: the sample above took part
+    // 2-D CMAM with positioned tags: from the current sample to its stratum's centre (texels),
+    // where the footprint is centred; a and b are then the Jacobian columns solved for.
+    double offset[2] = {0, 0};
 };
 
 /// The 2-D CMAM's region from the current sample p0, its left neighbour (may be null) and the
-/// sample above (level-0 texels): the two vectors as Jacobian columns.
+/// sample above (level-0 texels): the two vectors as Jacobian columns. When the three tags carry
+/// positions (RayTag::positioned), the Jacobian is solved from the vectors and the samples'
+/// image-plane offsets (exact for an affine mapping, whatever the jitter) and the region is
+/// centred on the current sample's stratum.
 CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
-                          const CmamCache::Entry& above, const CmamOptions& options);
+                          const CmamCache::Entry& above, const CmamOptions& options,
+                          const RayTag& current = {});
 
 /// Region for the current sample p0 and the `matches` cached samples that match it
 /// (cached[0] is the most recent). Pure geometry, no texture access.
