@@ -34,8 +34,13 @@ texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
             return {};
     }
     if (fp.kind == texture::Footprint::Kind::Axes) {
-        fp.axis_a = {fp.axis_a.u * n.su, fp.axis_a.v * n.sv};
-        fp.axis_b = {fp.axis_b.u * n.su, fp.axis_b.v * n.sv};
+        // The area filter integrates a parallelogram: a cone's cross-section (a disc or an
+        // ellipse of diameters a, b) becomes the one with equal second moments, sides
+        // (sqrt 3 / 2) a and (sqrt 3 / 2) b (algorithms.md §5.2; measured best at 1 spp).
+        const bool cone = n.lod == Lod::Cones || n.lod == Lod::ConesAniso;
+        const double k = cone && n.filter.kind == texture::FilterKind::Area ? kConeToArea : 1.0;
+        fp.axis_a = {fp.axis_a.u * n.su * k, fp.axis_a.v * n.sv * k};
+        fp.axis_b = {fp.axis_b.u * n.su * k, fp.axis_b.v * n.sv * k};
     }
     return fp;
 }

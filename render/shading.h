@@ -65,6 +65,10 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
                             const texture::Footprint& footprint, texture::RayTag tag,
                             LookupCounts* counts);
 
+/// A ray cone's elliptical cross-section with diameters a, b has the second moments of the
+/// parallelogram with sides (sqrt 3 / 2) a, (sqrt 3 / 2) b: what the area filter integrates.
+inline constexpr double kConeToArea = 0.86602540378443865;
+
 /// The footprint `n` asks for (its lod: differentials, cones or anisotropic cones), scaled by
 /// the node's uv mapping like the lookup point; None for point sampling and the CMAM.
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx);
