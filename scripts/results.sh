@@ -34,7 +34,10 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
   echo "  \`cmam\` is the paper's module (scanline tags, average on a miss, conjugate ellipse, adjacency check);"
   echo "  \`cmam-literal\` drops the adjacency check (the paper's literal matching); \`cmam-point\` point-samples on"
   echo "  a miss; \`cmam-pixel-hull\` uses pixel tags with the paper's Section 4 convex hull weighting;"
-  echo "  \`cmam2d\` is the 2-D CMAM (the left neighbour and the pixel above, beyond the paper)."
+  echo "  \`cmam2d\` is the 2-D CMAM (the left neighbour and the sample above, beyond the paper)."
+  echo "* Filters: \`trilinear\` (MIP), \`sat\` (summed-area table of the footprint's bounding box), \`ewa\`"
+  echo "  (elliptical Gaussian), and \`area\`, the exact mean over each sample's own parallelogram"
+  echo "  (docs/algorithms.md §5.2): the box-filtered pixel that the ground truth converges to."
   echo
   sed -n '/^| scene |/,$p' "$OUT/results.md"
 } > docs/results.md.tmp

@@ -220,9 +220,14 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         in.texels_read = 1;
         return img.mean();
     }
-    CmamRegion r = above.valid
-                       ? cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, above, o, tag)
-                       : cmam_region(s0, t0, cached, matches, o);
+    // The region: the 2-D CMAM's Jacobian columns; the 1-D region only where the hull weighting
+    // or the caller needs it here (the dispatcher builds it from the Points footprint anyway).
+    CmamRegion r;
+    r.matches = matches;
+    if (above.valid)
+        r = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, above, o, tag);
+    else if (o.hull || region_out)
+        r = cmam_region(s0, t0, cached, matches, o);
     if (above.valid) matches = std::max(matches, 1);  // a region exists: no miss
     if (o.hull && matches == 2 && !above.valid) {
         // Paper §4: integrate only the part of the new triangle outside the hull so far.
