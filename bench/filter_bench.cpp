@@ -219,7 +219,7 @@ class SummaryReporter : public benchmark::ConsoleReporter {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
             if (r.run_type != Run::RT_Aggregate || r.aggregate_name != "median") continue;
-            for (const char* c : {"ours", "oiio", "ratio"}) {
+            for (const char* c : {"ours", "oiio", "ratio", "ns/lookup"}) {
                 auto it = r.counters.find(c);
                 if (it != r.counters.end()) m_value[r.run_name.str() + "#" + c] = it->second;
             }
@@ -229,6 +229,26 @@ class SummaryReporter : public benchmark::ConsoleReporter {
         ConsoleReporter::Finalize();
         table("BM_Versus", "exact sizes");
         table("BM_VersusSpread", "sizes spread over an octave around each");
+        area_table();
+    }
+
+    // The exact area filter beside our EWA and trilinear (ours alone, spread sizes).
+    void area_table() {
+        std::printf("\nBM_OursSpread (ns per lookup, medians of 3 repetitions)\n%-12s %10s %10s "
+                    "%10s %12s\n",
+                    "size/aniso", "trilinear", "ewa", "area", "area/ewa");
+        for (int size : kSizes)
+            for (int aniso : kAnisos) {
+                const std::string key = "/" + std::to_string(size) + "/" + std::to_string(aniso) +
+                                        "/min_time:0.100/repeats:3#ns/lookup";
+                auto get = [&](const char* filter) {
+                    auto it = m_value.find(std::string("BM_OursSpread/") + filter + key);
+                    return it == m_value.end() ? 0.0 : it->second;
+                };
+                const double t = get("trilinear"), e = get("ewa"), a = get("area");
+                if (t <= 0 || e <= 0 || a <= 0) continue;
+                std::printf("%5d/%-6d %10.1f %10.1f %10.1f %11.2fx\n", size, aniso, t, e, a, a / e);
+            }
     }
 
   private:

@@ -25,11 +25,21 @@ class CmamRowState {
   public:
     texture::CmamCache& cache(uint32_t object, uint32_t texture_node, uint64_t path) {
         const uint64_t key = (uint64_t(object) << 32) | texture_node;
-        for (auto& e : m_caches)
-            if (e.key == key && e.path == path) return e.cache;
+        if (m_last < m_caches.size() && m_caches[m_last].key == key &&
+            m_caches[m_last].path == path)
+            return m_caches[m_last].cache;  // a row mostly stays on one object
+        for (std::size_t i = 0; i < m_caches.size(); ++i)
+            if (m_caches[i].key == key && m_caches[i].path == path) {
+                m_last = i;
+                return m_caches[i].cache;
+            }
+        m_last = m_caches.size();
         return m_caches.push_back({key, path, texture::CmamCache{}}), m_caches.back().cache;
     }
-    void clear() { m_caches.clear(); }
+    void clear() {
+        m_caches.clear();
+        m_last = 0;
+    }
 
   private:
     struct Entry {
@@ -37,6 +47,7 @@ class CmamRowState {
         texture::CmamCache cache;
     };
     std::vector<Entry> m_caches;
+    std::size_t m_last = 0;  // the entry found last
 };
 
 /// What a texture lookup knows about the shading point.

@@ -207,7 +207,9 @@ TEST(Area, MagnificationIsTheBilinearMeanAndContinuous) {
         const double side = 0.5 + 0.01 * k;  // texels, through [kAreaBlendLo, kAreaBlendHi]
         const Footprint fp = Footprint::axes({side / 64, 0.3 * side / 64}, {-0.2 / 64, 0.7 / 64});
         const double x = t.lookup(0.41, 0.57, fp, {FilterKind::Area})[0];
-        if (k > 0) EXPECT_NEAR(x, prev, 0.01) << side;
+        if (k > 0) {
+            EXPECT_NEAR(x, prev, 0.01) << side;
+        }
         prev = x;
     }
 }

@@ -276,7 +276,6 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
 Texel RowPrefixTable::integral(const Vec2d* v0, int n) const {
     Texel out{};
     if (n < 3) return out;
-    Vec2d v[8];
     n = std::min(n, 8);  // the filters' regions have three or four
     double area2 = 0;
     for (int i = 0; i < n; ++i) {
@@ -291,6 +290,14 @@ Texel RowPrefixTable::integral(const Vec2d* v0, int n) const {
                 for (int c = 0; c < m_c; ++c) out[c] = static_cast<float>(m_mean[c] * area);
             return out;
         }
+    return integral_in_range(v0, n, area2);
+}
+
+Texel RowPrefixTable::integral_in_range(const Vec2d* v0, int n, double area2) const {
+    Texel out{};
+    Vec2d v[8];
+    n = std::min(n, 8);
+    const double area = std::abs(area2) / 2;
     // Periodic modes: move the polygon to the base period (small knots, no cancellation).
     double sx = 0, sy = 0;
     double xmin = v0[0].u, ymin = v0[0].v;
@@ -329,24 +336,21 @@ double length(Vec2d a) {
     return std::sqrt(a.u * a.u + a.v * a.v);
 }
 
-// The level rule (algorithms.md §5.2) for a region of area `area` (level-0 texels^2) whose
-// longest side is `longest` and whose sides are `sides` (level-0 texel vectors, for the
-// perimeter on each level).
-int area_level(const FilteredTexture& tex, double width, const Vec2d* sides, int n) {
+// The level rule (algorithms.md §5.2) for a region `width` level-0 texels wide (its area over
+// its longest side) with perimeter `perimeter` there: the coarsest level where it is still
+// kAreaMinWidth texels wide, or coarser until the perimeter is at most kAreaMaxPerimeter (on a
+// level w x h of a W x H texture, at most max(w/W, h/H) times the level-0 perimeter).
+double level_scale(const MipPyramid& pyr, int l, double W, double H) {
+    return std::max(pyr.level(l).width() / W, pyr.level(l).height() / H);
+}
+
+int area_level(const FilteredTexture& tex, double width, double perimeter) {
     const MipPyramid& pyr = tex.pyramid();
     const int top = pyr.levels() - 1;
     int l = 0;
     if (width > 2 * kAreaMinWidth) l = std::min(top, detail::floor_log2(width / kAreaMinWidth));
     const double W = tex.image().width(), H = tex.image().height();
-    for (; l < top; ++l) {
-        const double kx = pyr.level(l).width() / W, ky = pyr.level(l).height() / H;
-        double perimeter = 0;
-        for (int i = 0; i < n; ++i) {
-            const double x = sides[i].u * kx, y = sides[i].v * ky;
-            perimeter += std::sqrt(x * x + y * y);
-        }
-        if (perimeter <= kAreaMaxPerimeter) break;
-    }
+    while (l < top && perimeter * level_scale(pyr, l, W, H) > kAreaMaxPerimeter) ++l;
     return l;
 }
 
@@ -358,28 +362,25 @@ bool within_range(const Vec2d* p, int n, double area) {
     return area > 0 && std::isfinite(area);
 }
 
-// Integrates the polygon `p` (level-0 texels) on level l and returns its mean.
-AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n, double area) {
+// Integrates the polygon `p` (level-0 texels, signed area `area2` / 2, perimeter `perimeter`)
+// on level l and returns its mean.
+AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n, double area2,
+                        double perimeter) {
     AreaResult r;
     r.level = l;
-    r.area = area;
+    r.area = std::abs(area2) / 2;
     const Image& img = tex.image();
-    const int top = tex.pyramid().levels() - 1;
-    const Image& lev = l > 0 ? tex.pyramid().level(l) : img;
+    const MipPyramid& pyr = tex.pyramid();
+    const Image& lev = l > 0 ? pyr.level(l) : img;
     const double kx = double(lev.width()) / img.width(), ky = double(lev.height()) / img.height();
-    if (l == top) {
+    const double perimeter_l = perimeter * std::max(kx, ky);
+    if (l == pyr.levels() - 1) {
         // The coarsest level: a periodic texture's integral over a region spanning many periods
         // is its mean (up to the boundary, 1/perimeter of it); a single texel is constant.
         const bool periodic = img.wrap_s() != WrapMode::Clamp && img.wrap_s() != WrapMode::Black &&
                               img.wrap_t() != WrapMode::Clamp && img.wrap_t() != WrapMode::Black;
-        double perimeter = 0;
-        for (int i = 0; i < n; ++i) {
-            const Vec2d a = p[i], b = p[(i + 1) % n];
-            const double x = (b.u - a.u) * kx, y = (b.v - a.v) * ky;
-            perimeter += std::sqrt(x * x + y * y);
-        }
-        if ((lev.width() == 1 && lev.height() == 1 && periodic) ||
-            (periodic && perimeter > kAreaMaxPerimeter)) {
+        if (periodic &&
+            ((lev.width() == 1 && lev.height() == 1) || perimeter_l > kAreaMaxPerimeter)) {
             r.value = img.mean();
             r.knots = 1;
             return r;
@@ -387,15 +388,10 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     }
     Vec2d q[8];
     for (int i = 0; i < n; ++i) q[i] = {p[i].u * kx, p[i].v * ky};
-    const Texel t = tex.row_prefix(l).integral(q, n);
-    const double inv = 1 / (area * kx * ky);
+    const Texel t = tex.row_prefix(l).integral_in_range(q, n, area2 * kx * ky);
+    const double inv = 1 / (r.area * kx * ky);
     for (int c = 0; c < img.channels(); ++c) r.value[c] = static_cast<float>(t[c] * inv);
-    double perimeter = 0;
-    for (int i = 0; i < n; ++i) {
-        const Vec2d a = q[i], b = q[(i + 1) % n];
-        perimeter += std::abs(b.u - a.u) + std::abs(b.v - a.v);
-    }
-    r.knots = static_cast<int>(perimeter) + 2 * n;
+    r.knots = static_cast<int>(1.5 * perimeter_l) + 2 * n;  // about: rows + columns crossed
     return r;
 }
 
@@ -425,22 +421,24 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
     }
     // The bilinear reconstruction term: each side to sqrt(|side|^2 + 1) texels.
     if (la > 0) {
-        const double g = std::sqrt(1 + 1 / (la * la));
-        A = {A.u * g, A.v * g};
+        const double grown = std::sqrt(la * la + 1);
+        A = {A.u * (grown / la), A.v * (grown / la)};
+        la = grown;
     } else {
         A = {1, 0};
+        la = 1;
     }
     if (lb > 0) {
-        const double g = std::sqrt(1 + 1 / (lb * lb));
-        B = {B.u * g, B.v * g};
+        const double grown = std::sqrt(lb * lb + 1);
+        B = {B.u * (grown / lb), B.v * (grown / lb)};
+        lb = grown;
     } else {
-        const double l = length(A);
-        B = {-A.v / l, A.u / l};
+        B = {-A.v / la, A.u / la};
+        lb = 1;
     }
-    la = length(A);
-    lb = length(B);
     AreaRegion r;
-    r.area = std::abs(A.u * B.v - A.v * B.u);
+    r.area2 = 2 * (A.u * B.v - A.v * B.u);
+    r.area = std::abs(r.area2) / 2;
     const double cs = u * W, ct = v * H;
     r.corners[0] = {cs - 0.5 * (A.u + B.u), ct - 0.5 * (A.v + B.v)};
     r.corners[1] = {cs + 0.5 * (A.u - B.u), ct + 0.5 * (A.v - B.v)};
@@ -448,8 +446,8 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
     r.corners[3] = {cs - 0.5 * (A.u - B.u), ct - 0.5 * (A.v - B.v)};
     r.major = std::max(la, lb);
     r.minor = std::min(la, lb);
-    const Vec2d sides[4] = {A, B, A, B};
-    r.level = area_level(tex, r.area / r.major, sides, 4);
+    r.perimeter = 2 * (la + lb);
+    r.level = area_level(tex, r.area / r.major, r.perimeter);
     return r;
 }
 
@@ -497,7 +495,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
         r.knots = 1;
         return r;
     }
-    AreaResult r = integrate_on(tex, g.level, g.corners, 4, g.area);
+    AreaResult r = integrate_on(tex, g.level, g.corners, 4, g.area2, g.perimeter);
     r.major = g.major;
     r.minor = g.minor;
     if (w_gauss > 0) {
@@ -512,14 +510,15 @@ AreaResult area_polygon(const FilteredTexture& tex, const Vec2d* uv, int n) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
     n = std::min(n, 8);
-    Vec2d p[8], sides[8];
+    Vec2d p[8];
     for (int i = 0; i < n; ++i) p[i] = {uv[i].u * W, uv[i].v * H};
-    double area2 = 0, longest = 0;
+    double area2 = 0, longest = 0, perimeter = 0;
     for (int i = 0; i < n; ++i) {
         const Vec2d a = p[i], b = p[(i + 1) % n];
         area2 += a.u * b.v - b.u * a.v;
-        sides[i] = {b.u - a.u, b.v - a.v};
-        longest = std::max(longest, length(sides[i]));
+        const double side = length({b.u - a.u, b.v - a.v});
+        longest = std::max(longest, side);
+        perimeter += side;
     }
     const double area = std::abs(area2) / 2;
     // Width: the height over the longest side (twice the area over it for a triangle).
@@ -530,7 +529,7 @@ AreaResult area_polygon(const FilteredTexture& tex, const Vec2d* uv, int n) {
         r.knots = 1;
         return r;
     }
-    return integrate_on(tex, area_level(tex, width, sides, n), p, n, area);
+    return integrate_on(tex, area_level(tex, width, perimeter), p, n, area2, perimeter);
 }
 
 }  // namespace cmam::texture

@@ -36,6 +36,9 @@ class RowPrefixTable {
     /// integral for the counter-clockwise polygon. Cost: O(rows + columns the boundary crosses).
     /// A vertex beyond 2^30 texels or not a number gives the mean times the area.
     Texel integral(const Vec2d* v, int n) const;
+    /// The same without the range check: every vertex must lie within 2^30 texels, and
+    /// `signed_area2` is twice the polygon's signed area (what the caller has computed already).
+    Texel integral_in_range(const Vec2d* v, int n, double signed_area2) const;
 
   private:
     int m_w = 0, m_h = 0, m_c = 0;
@@ -79,6 +82,8 @@ struct AreaResult {
 struct AreaRegion {
     Vec2d corners[4];             // counter-clockwise or clockwise
     double area = 0;              // level-0 texels^2
+    double area2 = 0;             // twice the signed area of `corners`
+    double perimeter = 0;         // level-0 texels
     double major = 0, minor = 0;  // side lengths, level-0 texels
     int level = 0;
 };
