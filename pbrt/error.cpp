@@ -1,5 +1,6 @@
 #include "pbrt/error.h"
 
+#include <cmath>
 #include <iomanip>
 #include <sstream>
 
@@ -30,6 +31,7 @@ std::string format_warning(const FileLoc& loc, const std::string& message) {
 }
 
 std::string number_text(double v, int digits) {
+    if (std::isnan(v)) return "nan";  // whatever its sign bit ("-nan" from 0 * -inf)
     std::ostringstream os;
     os << std::setprecision(digits) << v;
     return os.str();

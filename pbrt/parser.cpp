@@ -22,12 +22,62 @@ std::string q(const std::string& s) {
     return "\"" + s + "\"";
 }
 
+// The part of pbrt-v3's graphics state copied at each AttributeBegin. Named textures and
+// materials, also scoped by AttributeBegin/End, are kept in NamedTables instead.
 struct GraphicsState {
     Mat4 ctm = Mat4::identity();
     bool reverse_orientation = false;
     int material = -1;
-    TextureScope textures;
-    std::map<std::string, int> named_materials;
+};
+
+// The named textures and materials visible at the current point of the file: one table each,
+// changed in place. Each change made inside a block is logged with the value it replaced, so
+// AttributeEnd undoes the block's declarations; nothing is copied per block or per directive.
+class NamedTables {
+  public:
+    std::map<std::string, int> float_textures, spectrum_textures, materials;
+
+    // Binds `name` to `index`; true when it was bound already (a redefinition).
+    bool bind(std::map<std::string, int>& table, const std::string& name, int index,
+              bool in_block) {
+        auto [it, added] = table.try_emplace(name, index);
+        if (in_block)
+            m_undo.push_back({&table, name, added ? std::nullopt : std::optional(it->second)});
+        it->second = index;
+        return !added;
+    }
+    std::size_t mark() const { return m_undo.size(); }
+    void undo_to(std::size_t mark) {
+        for (; m_undo.size() > mark; m_undo.pop_back()) {
+            const Change& c = m_undo.back();
+            if (c.previous)
+                (*c.table)[c.name] = *c.previous;
+            else
+                c.table->erase(c.name);
+        }
+    }
+    // The textures `params` name, as visible now (what the builder resolves them against).
+    TextureScope scope_for(const ParamSet& params) const {
+        TextureScope s;
+        for (const Param& p : params.params()) {
+            if (p.type != ParamType::Texture) continue;
+            for (const std::string& name : p.strings) {
+                if (auto it = float_textures.find(name); it != float_textures.end())
+                    s.float_textures.insert(*it);
+                if (auto it = spectrum_textures.find(name); it != spectrum_textures.end())
+                    s.spectrum_textures.insert(*it);
+            }
+        }
+        return s;
+    }
+
+  private:
+    struct Change {
+        std::map<std::string, int>* table;
+        std::string name;
+        std::optional<int> previous;
+    };
+    std::vector<Change> m_undo;
 };
 
 // A block that restores the graphics state: AttributeBegin, TransformBegin, or ObjectBegin
@@ -37,6 +87,7 @@ struct StackEntry {
     Kind kind = Kind::Attribute;
     FileLoc loc;
     GraphicsState saved;
+    std::size_t names_mark = 0;  // NamedTables::mark() when the block was opened
 
     const char* begin() const {
         return kind == Kind::Attribute   ? "AttributeBegin"
@@ -80,6 +131,7 @@ class Parser {
     WarningSink m_warn;
     SceneDesc m_desc;
     GraphicsState m_gs;
+    NamedTables m_names;
     std::vector<StackEntry> m_stack;
     std::map<std::string, Mat4> m_coord_systems;
     std::map<std::string, std::vector<ShapeDesc>> m_instances;
@@ -90,6 +142,11 @@ class Parser {
 
     void warn(const FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(format_warning(loc, msg));
+    }
+    // AttributeEnd or ObjectEnd: the state and the names as the innermost block found them.
+    void restore_attributes() {
+        m_gs = m_stack.back().saved;
+        m_names.undo_to(m_stack.back().names_mark);
     }
 
     void push_file(Tokenizer t) {
@@ -310,7 +367,7 @@ class Parser {
         } else if (d == "AttributeBegin" || d == "TransformBegin") {
             m_stack.push_back(
                 {d == "AttributeBegin" ? StackEntry::Kind::Attribute : StackEntry::Kind::Transform,
-                 dir.loc, m_gs});
+                 dir.loc, m_gs, m_names.mark()});
         } else if (d == "AttributeEnd" || d == "TransformEnd") {
             bool attr = d == "AttributeEnd";
             if (m_stack.empty())
@@ -321,7 +378,7 @@ class Parser {
                 throw SceneError(dir.loc, d + " does not match " + m_stack.back().begin() + " at " +
                                               m_stack.back().loc.to_string());
             if (attr)
-                m_gs = m_stack.back().saved;
+                restore_attributes();
             else
                 m_gs.ctm = m_stack.back().saved.ctm;
             m_stack.pop_back();
@@ -374,17 +431,16 @@ class Parser {
                                  "texture type must be \"float\" or \"spectrum\", got " + q(kind));
             t.entity = entity(dir);
             t.world_from_texture = m_gs.ctm;
-            t.scope = m_gs.textures;
-            auto& names =
-                t.is_float ? m_gs.textures.float_textures : m_gs.textures.spectrum_textures;
-            if (names.count(t.name)) warn(dir.loc, "texture " + q(t.name) + " redefined");
-            names[t.name] = static_cast<int>(m_desc.textures.size());
+            t.scope = m_names.scope_for(t.entity.params);
+            if (m_names.bind(t.is_float ? m_names.float_textures : m_names.spectrum_textures,
+                             t.name, static_cast<int>(m_desc.textures.size()), !m_stack.empty()))
+                warn(dir.loc, "texture " + q(t.name) + " redefined");
             m_desc.textures.push_back(std::move(t));
         } else if (d == "Material") {
             need_world(dir, true);
             MaterialDesc m;
             m.entity = entity(dir);
-            m.scope = m_gs.textures;
+            m.scope = m_names.scope_for(m.entity.params);
             m_gs.material = static_cast<int>(m_desc.materials.size());
             m_desc.materials.push_back(std::move(m));
         } else if (d == "MakeNamedMaterial") {
@@ -399,16 +455,16 @@ class Parser {
                 throw SceneError(dir.loc, "MakeNamedMaterial " + q(m.name) +
                                               " needs a \"string type\" parameter");
             m.entity.type = m.entity.params.get_string("type", "");
-            m.scope = m_gs.textures;
-            if (m_gs.named_materials.count(m.name))
+            m.scope = m_names.scope_for(m.entity.params);
+            if (m_names.bind(m_names.materials, m.name, static_cast<int>(m_desc.materials.size()),
+                             !m_stack.empty()))
                 warn(dir.loc, "named material " + q(m.name) + " redefined");
-            m_gs.named_materials[m.name] = static_cast<int>(m_desc.materials.size());
             m_desc.materials.push_back(std::move(m));
         } else if (d == "NamedMaterial") {
             need_world(dir, true);
             std::string name = expect_string(dir, "a quoted material name");
-            auto it = m_gs.named_materials.find(name);
-            if (it == m_gs.named_materials.end())
+            auto it = m_names.materials.find(name);
+            if (it == m_names.materials.end())
                 throw SceneError(dir.loc, "named material " + q(name) + " is not defined");
             m_gs.material = it->second;
         } else if (d == "Shape") {
@@ -439,7 +495,7 @@ class Parser {
             m_instances[m_object_name].clear();
             m_in_object = true;
             m_object_loc = dir.loc;
-            m_stack.push_back({StackEntry::Kind::Object, dir.loc, m_gs});
+            m_stack.push_back({StackEntry::Kind::Object, dir.loc, m_gs, m_names.mark()});
         } else if (d == "ObjectEnd") {
             if (!m_in_object) throw SceneError(dir.loc, "ObjectEnd without ObjectBegin");
             // Blocks opened inside the object are closed first (the object's own entry is the
@@ -449,7 +505,7 @@ class Parser {
                                               std::string(m_stack.back().begin()) + " at " +
                                               m_stack.back().loc.to_string() + " inside object " +
                                               q(m_object_name));
-            m_gs = m_stack.back().saved;
+            restore_attributes();
             m_stack.pop_back();
             m_in_object = false;
         } else if (d == "ObjectInstance") {

@@ -21,7 +21,9 @@ struct Entity {
     bool given = false;  // false when the file never said it (defaults apply)
 };
 
-/// Texture names visible at a point in the file: name -> index in SceneDesc textures.
+/// Texture names as visible at a point in the file: name -> index in SceneDesc textures. A
+/// texture or material records only the names its "texture" parameters give (those that were
+/// defined there), so the description grows with the file, not with the scope at each line.
 struct TextureScope {
     std::map<std::string, int> float_textures;
     std::map<std::string, int> spectrum_textures;
@@ -32,12 +34,12 @@ struct TextureDesc {
     bool is_float = false;  // "float" or "spectrum"
     Entity entity;          // entity.type is the class ("imagemap", "checkerboard", ...)
     Mat4 world_from_texture;
-    TextureScope scope;  // textures visible when it was declared
+    TextureScope scope;  // the textures its parameters name, as visible when it was declared
 };
 
 struct MaterialDesc {
     Entity entity;       // entity.type is the material type ("matte", ...)
-    TextureScope scope;  // textures visible when it was declared
+    TextureScope scope;  // the textures its parameters name, as visible when it was declared
     std::string name;    // for MakeNamedMaterial
 };
 

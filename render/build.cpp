@@ -80,6 +80,42 @@ class Builder {
         return n;
     }
 
+    // Numbers the renderer uses must be finite in single precision (a NaN or infinite light,
+    // material or shape parameter once rendered black without a word).
+    static bool is_finite_float(double v) {
+        return std::abs(v) <= std::numeric_limits<float>::max();
+    }
+    static double finite(const pbrt::FileLoc& loc, const std::string& name, double v,
+                         bool positive = false) {
+        if (!is_finite_float(v) || (positive && !(v > 0)))
+            throw SceneError(loc, name + " must be a " + (positive ? "positive " : "") +
+                                      "finite number, got " + pbrt::number_text(v));
+        return v;
+    }
+    static double finite_float(const Entity& e, const std::string& name, double def,
+                               bool positive = false) {
+        return finite(loc_of(e, name), name, e.params.get_float(name, def), positive);
+    }
+    template <class Values>
+    static const Values& finite_values(const Entity& e, const std::string& name,
+                                       const Values& values) {
+        for (double v : values)
+            if (!is_finite_float(v))
+                throw SceneError(loc_of(e, name), name + " values must be finite numbers, got " +
+                                                      pbrt::number_text(v));
+        return values;
+    }
+    // A shape's or light's transform: every entry finite (NaN or infinite transforms once gave
+    // black images).
+    static void finite_transform(const Mat4& m, const pbrt::FileLoc& loc, const char* what) {
+        for (const auto& row : m.m)
+            for (double v : row)
+                if (!is_finite_float(v))
+                    throw SceneError(loc, std::string("the ") + what +
+                                              "'s transform must be finite, got an entry of " +
+                                              pbrt::number_text(v));
+    }
+
     void film() {
         const Entity& e = m_desc.film;
         FilmSettings& f = m_scene->film;
@@ -323,18 +359,18 @@ class Builder {
                 throw SceneError(ref->loc, "spectrum texture " + q(ref->name) + " is not defined");
             return {it->second, {}};
         }
-        if (auto c = e.params.get_rgb(name)) return {-1, Rgb((*c)[0], (*c)[1], (*c)[2])};
+        if (auto c = e.params.get_rgb(name)) return {-1, to_rgb(finite_values(e, name, *c))};
         return {-1, def};
     }
     TexInput float_input(const Entity& e, const TextureScope& scope, const std::string& name,
-                         float def) {
+                         float def, bool positive = false) {
         if (auto ref = e.params.get_texture(name)) {
             auto it = scope.float_textures.find(ref->name);
             if (it == scope.float_textures.end())
                 throw SceneError(ref->loc, "float texture " + q(ref->name) + " is not defined");
             return {it->second, {}};
         }
-        return {-1, Rgb(float(e.params.get_float(name, def)))};
+        return {-1, Rgb(float(finite_float(e, name, def, positive)))};
     }
 
     void uv_mapping(const Entity& e, TextureNode* n) {
@@ -361,7 +397,7 @@ class Builder {
             throw SceneError(e.params.find("wrap")->loc,
                              "unknown wrap mode " + q(wrap_name) +
                                  " (expected \"repeat\", \"black\" or \"clamp\")");
-        float scale = float(e.params.get_float("scale", 1));
+        float scale = float(finite_float(e, "scale", 1));
         std::optional<bool> gamma;
         if (e.params.find("gamma")) gamma = e.params.get_bool("gamma", true);
         std::string key = std::filesystem::weakly_canonical(path).string() + "|" +
@@ -509,11 +545,7 @@ class Builder {
             m.kr = spectrum_input(e, s, "Kr", Rgb(1));
             m.kt = spectrum_input(e, s, "Kt", Rgb(1));
             const char* eta = e.params.find("eta") ? "eta" : "index";
-            m.eta = float_input(e, s, eta, 1.5f);
-            if (m.eta.node < 0 && !(m.eta.value.r > 0 && std::isfinite(m.eta.value.r)))
-                throw SceneError(loc_of(e, eta), std::string(eta) +
-                                                     " must be a positive finite number, got " +
-                                                     pbrt::number_text(m.eta.value.r));
+            m.eta = float_input(e, s, eta, 1.5f, true);
             for (const char* r : {"uroughness", "vroughness"}) {
                 TexInput rough = float_input(e, s, r, 0);
                 if (rough.node >= 0 || rough.value.r != 0)
@@ -544,6 +576,7 @@ class Builder {
         const Entity& e = s.entity;
         auto prim = std::make_unique<Primitive>();
         prim->material = s.material;
+        finite_transform(s.world_from_object, e.loc, "shape");
         prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
         const std::vector<std::string> ignored = {"alpha", "shadowalpha"};
         if (e.type == "sphere" || e.type == "disk") {
@@ -555,15 +588,14 @@ class Builder {
             }
             prim->world_from_object = to34(s.world_from_object);
             prim->object_from_world = to34(ow);
-            double r = e.params.get_float("radius", 1);
-            if (!(r > 0)) throw SceneError(e.params.find("radius")->loc, "radius must be positive");
+            double r = finite_float(e, "radius", 1, true);
             prim->radius = r;
-            double phimax = std::clamp(e.params.get_float("phimax", 360), 0.0, 360.0);
+            double phimax = std::clamp(finite_float(e, "phimax", 360), 0.0, 360.0);
             prim->phi_max = phimax * std::numbers::pi / 180;
             if (e.type == "sphere") {
                 prim->kind = Primitive::Kind::Sphere;
-                double z0 = std::clamp(e.params.get_float("zmin", -r), -r, r);
-                double z1 = std::clamp(e.params.get_float("zmax", r), -r, r);
+                double z0 = std::clamp(finite_float(e, "zmin", -r), -r, r);
+                double z1 = std::clamp(finite_float(e, "zmax", r), -r, r);
                 prim->zmin = std::min(z0, z1);
                 prim->zmax = std::max(z0, z1);
                 prim->theta_zmin = std::acos(std::clamp(prim->zmin / r, -1.0, 1.0));
@@ -572,8 +604,8 @@ class Builder {
                     throw SceneError(e.loc, "sphere has zmin == zmax");
             } else {
                 prim->kind = Primitive::Kind::Disk;
-                prim->height = e.params.get_float("height", 0);
-                prim->inner_radius = e.params.get_float("innerradius", 0);
+                prim->height = finite_float(e, "height", 0);
+                prim->inner_radius = finite_float(e, "innerradius", 0);
                 if (prim->inner_radius < 0 || prim->inner_radius >= r)
                     throw SceneError(e.params.find("innerradius")->loc,
                                      "innerradius must be in [0, radius)");
@@ -602,7 +634,7 @@ class Builder {
             } else {
                 auto p = e.params.get_point3s("P");
                 if (!p) throw SceneError(e.loc, "trianglemesh needs a \"point3 P\" parameter");
-                for (double x : *p) P.push_back(float(x));
+                for (double x : finite_values(e, "P", *p)) P.push_back(float(x));
                 std::size_t nv = P.size() / 3;
                 if (auto i = e.params.get_ints("indices")) {
                     idx = *i;
@@ -624,7 +656,7 @@ class Builder {
                     if (n->size() != P.size())
                         throw SceneError(e.params.find("N")->loc,
                                          "N must have one normal per vertex of P");
-                    for (double x : *n) N.push_back(float(x));
+                    for (double x : finite_values(e, "N", *n)) N.push_back(float(x));
                 }
                 const char* uvname = e.params.find("uv") ? "uv" : "st";
                 if (auto uv = e.params.get_point2s(uvname)) {
@@ -632,7 +664,7 @@ class Builder {
                         throw SceneError(
                             e.params.find(uvname)->loc,
                             std::string(uvname) + " must have one (u,v) pair per vertex of P");
-                    for (double x : *uv) UV.push_back(float(x));
+                    for (double x : finite_values(e, uvname, *uv)) UV.push_back(float(x));
                 }
                 e.params.check_unused("shape \"trianglemesh\"", m_warn,
                                       {"alpha", "shadowalpha", "S", "faceIndices"});
@@ -682,26 +714,32 @@ class Builder {
     static Vec3 to_vec(const std::array<double, 3>& a) {
         return Vec3(float(a[0]), float(a[1]), float(a[2]));
     }
+    static Rgb to_rgb(const pbrt::Rgb& c) { return Rgb(c[0], c[1], c[2]); }
 
     void light(const pbrt::LightDesc& d) {
         const Entity& e = d.entity;
         Light l;
         Rgb scale(1);
-        if (auto sc = e.params.get_rgb("scale")) scale = Rgb((*sc)[0], (*sc)[1], (*sc)[2]);
+        if (auto sc = e.params.get_rgb("scale")) scale = to_rgb(finite_values(e, "scale", *sc));
         const Mat4& m = d.world_from_light;
+        finite_transform(m, e.loc, "light");
+        auto intensity = [&](const char* name) {
+            auto v = e.params.get_rgb(name);
+            return (v ? to_rgb(finite_values(e, name, *v)) : Rgb(1)) * scale;
+        };
+        auto point = [&](const char* name, std::array<double, 3> def) {
+            return finite_values(e, name, e.params.get_point3(name, def));
+        };
         if (e.type == "point") {
             l.type = Light::Type::Point;
-            auto I = e.params.get_rgb("I");
-            l.intensity = (I ? Rgb((*I)[0], (*I)[1], (*I)[2]) : Rgb(1)) * scale;
-            l.position = to_vec(m.apply_point(e.params.get_point3("from", {0, 0, 0})));
+            l.intensity = intensity("I");
+            l.position = to_vec(m.apply_point(point("from", {0, 0, 0})));
         } else if (e.type == "spot") {
             l.type = Light::Type::Spot;
-            auto I = e.params.get_rgb("I");
-            l.intensity = (I ? Rgb((*I)[0], (*I)[1], (*I)[2]) : Rgb(1)) * scale;
-            auto from = e.params.get_point3("from", {0, 0, 0});
-            auto to = e.params.get_point3("to", {0, 0, 1});
-            double cone = e.params.get_float("coneangle", 30),
-                   delta = e.params.get_float("conedelta", 5);
+            l.intensity = intensity("I");
+            auto from = point("from", {0, 0, 0});
+            auto to = point("to", {0, 0, 1});
+            double cone = finite_float(e, "coneangle", 30), delta = finite_float(e, "conedelta", 5);
             l.position = to_vec(m.apply_point(from));
             Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
             if (length(axis) == 0)
@@ -711,10 +749,9 @@ class Builder {
             l.cos_falloff_start = float(std::cos((cone - delta) * std::numbers::pi / 180));
         } else if (e.type == "distant") {
             l.type = Light::Type::Distant;
-            auto L = e.params.get_rgb("L");
-            l.intensity = (L ? Rgb((*L)[0], (*L)[1], (*L)[2]) : Rgb(1)) * scale;
-            auto from = e.params.get_point3("from", {0, 0, 0});
-            auto to = e.params.get_point3("to", {0, 0, 1});
+            l.intensity = intensity("L");
+            auto from = point("from", {0, 0, 0});
+            auto to = point("to", {0, 0, 1});
             Vec3 w = to_vec(m.apply_vector({from[0] - to[0], from[1] - to[1], from[2] - to[2]}));
             if (length(w) == 0)
                 throw SceneError(e.loc, "distant light \"from\" and \"to\" coincide");
@@ -725,8 +762,7 @@ class Builder {
                 throw SceneError(mp->loc,
                                  "infinite light environment maps are not supported (give a "
                                  "constant \"rgb L\")");
-            auto L = e.params.get_rgb("L");
-            l.intensity = (L ? Rgb((*L)[0], (*L)[1], (*L)[2]) : Rgb(1)) * scale;
+            l.intensity = intensity("L");
             e.params.get_int("samples",
                              1);  // pbrt-v3's sample count hint; one sample per lookup here
         } else {

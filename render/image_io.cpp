@@ -1,12 +1,18 @@
 #include "render/image_io.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <cmam/texture/image.h>
+#include <fcntl.h>
 #include <unistd.h>
 
-#include <cstdio>
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <iterator>
+#include <mutex>
 
 namespace cmam::render {
 
@@ -72,19 +78,162 @@ std::string lower_extension(const std::string& path) {
     return ext;
 }
 
-void write_pfm(const std::string& path, int w, int h, const std::vector<float>& rgb) {
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw ImageIoError("cannot write \"" + path + "\"");
+std::string cannot_write(const std::string& path, const std::string& why) {
+    return "cannot write \"" + path + "\": " + why;
+}
+
+// The temporary being written, for the signal handler: a fixed buffer, as a handler may only
+// read memory and call async-signal-safe functions (unlink, sigaction, raise).
+char g_temporary[4096];
+volatile std::sig_atomic_t g_have_temporary = 0;
+volatile std::sig_atomic_t g_interrupted = 0;
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+struct sigaction g_previous[std::size(kSignals)];
+bool g_installed[std::size(kSignals)];
+std::mutex g_write_mutex;  // one write at a time owns the globals above
+void (*g_test_hook)() = nullptr;
+
+extern "C" void remove_temporary_and_reraise(int sig) {
+    const int saved_errno = errno;
+    if (g_have_temporary) ::unlink(g_temporary);
+    g_have_temporary = 0;
+    g_interrupted = 1;
+    for (std::size_t i = 0; i < std::size(kSignals); ++i)
+        if (kSignals[i] == sig) ::sigaction(sig, &g_previous[i], nullptr);
+    // Delivered when this handler returns: the default action ends the process; a handler of
+    // the program's own runs, and the write then fails.
+    ::raise(sig);
+    errno = saved_errno;
+}
+
+// A temporary file beside the target, renamed over it by commit(). Until then SIGINT, SIGTERM
+// and SIGHUP remove it before taking effect, and the destructor removes it (any failure).
+// Every write, the flush to disk and the close are checked.
+class Temporary {
+  public:
+    Temporary(std::string target, fs::path tmp)
+        : m_lock(g_write_mutex), m_target(std::move(target)), m_tmp(std::move(tmp)) {
+        const std::string t = m_tmp.string();
+        if (t.size() >= sizeof(g_temporary))
+            throw ImageIoError(cannot_write(m_target, "the path is too long"));
+        std::copy(t.begin(), t.end(), g_temporary);
+        g_temporary[t.size()] = '\0';
+        g_interrupted = 0;
+        g_have_temporary = 1;
+        for (std::size_t i = 0; i < std::size(kSignals); ++i) {
+            struct sigaction sa {};
+            sa.sa_handler = remove_temporary_and_reraise;
+            sigemptyset(&sa.sa_mask);
+            ::sigaction(kSignals[i], nullptr, &g_previous[i]);
+            // A signal the process ignores stays ignored (it would not end the process).
+            g_installed[i] =
+                g_previous[i].sa_handler != SIG_IGN && ::sigaction(kSignals[i], &sa, nullptr) == 0;
+        }
+    }
+    Temporary(const Temporary&) = delete;
+    Temporary& operator=(const Temporary&) = delete;
+    ~Temporary() {
+        if (m_fd >= 0) ::close(m_fd);
+        if (!m_committed) ::unlink(m_tmp.c_str());
+        g_have_temporary = 0;
+        for (std::size_t i = 0; i < std::size(kSignals); ++i)
+            if (g_installed[i]) ::sigaction(kSignals[i], &g_previous[i], nullptr);
+    }
+    const fs::path& path() const { return m_tmp; }
+
+    // Creates the temporary and writes `bytes` to it, flushed to disk.
+    void write(const std::vector<unsigned char>& bytes) {
+        m_fd = ::open(m_tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+        if (m_fd < 0) fail();
+        if (g_test_hook) g_test_hook();
+        for (std::size_t done = 0; done < bytes.size();) {
+            errno = 0;
+            const ssize_t n = ::write(m_fd, bytes.data() + done, bytes.size() - done);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) fail();
+            done += static_cast<std::size_t>(n);
+        }
+        sync_and_close();
+    }
+    // The temporary was written by a library through its own file: flushed to disk here.
+    void sync_written() {
+        m_fd = ::open(m_tmp.c_str(), O_WRONLY | O_CLOEXEC);
+        if (m_fd < 0) fail();
+        sync_and_close();
+    }
+    void commit() {
+        if (g_interrupted) throw ImageIoError(cannot_write(m_target, "interrupted by a signal"));
+        if (::rename(m_tmp.c_str(), m_target.c_str()) != 0) fail();
+        m_committed = true;
+    }
+
+  private:
+    std::lock_guard<std::mutex> m_lock;
+    std::string m_target;
+    fs::path m_tmp;
+    int m_fd = -1;
+    bool m_committed = false;
+
+    [[noreturn]] void fail() {
+        // errno of the failed call; a write that wrote nothing without an error is a full disk.
+        const int e = errno != 0 ? errno : ENOSPC;
+        throw ImageIoError(cannot_write(m_target, std::strerror(e)));
+    }
+    void sync_and_close() {
+        errno = 0;
+        if (::fsync(m_fd) != 0) fail();
+        const int fd = m_fd;
+        m_fd = -1;
+        if (::close(fd) != 0) fail();
+    }
+};
+
+// The temporary's name: hidden, beside the target, with the target's extension (format
+// plug-ins check it).
+fs::path temporary_for(const fs::path& target, const std::string& ext) {
+    fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    std::string name = ".";
+    name += target.filename().string();
+    name += ".tmp";
+    name += std::to_string(::getpid());
+    name += ext;
+    return dir / name;
+}
+
+std::vector<unsigned char> encode_pfm(int w, int h, const std::vector<float>& rgb) {
     // Little-endian PFM: negative scale; rows stored bottom to top.
-    out << "PF\n" << w << " " << h << "\n-1\n";
-    for (int y = h - 1; y >= 0; --y)
-        out.write(reinterpret_cast<const char*>(&rgb[static_cast<std::size_t>(y) * w * 3]),
-                  static_cast<std::streamsize>(sizeof(float)) * w * 3);
-    out.flush();
-    if (!out) throw ImageIoError("cannot write \"" + path + "\": write failed");
+    const std::string header = "PF\n" + std::to_string(w) + " " + std::to_string(h) + "\n-1\n";
+    std::vector<unsigned char> bytes(header.begin(), header.end());
+    const std::size_t row = sizeof(float) * static_cast<std::size_t>(w) * 3;
+    bytes.reserve(header.size() + row * h);
+    for (int y = h - 1; y >= 0; --y) {
+        const auto* p =
+            reinterpret_cast<const unsigned char*>(&rgb[static_cast<std::size_t>(y) * w * 3]);
+        bytes.insert(bytes.end(), p, p + row);
+    }
+    return bytes;
+}
+
+// Encodes the image with `out` into memory and writes it to the temporary (formats whose
+// plug-in cannot write to memory write the temporary themselves, flushed after).
+void write_with(OIIO::ImageOutput& out, Temporary& tmp, const std::string& path,
+                const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* pixels) {
+    OIIO::Filesystem::IOVecOutput memory;
+    const bool in_memory = out.supports("ioproxy") && out.set_ioproxy(&memory);
+    if (!out.open(tmp.path().string(), spec) || !out.write_image(type, pixels) || !out.close())
+        throw ImageIoError(cannot_write(path, out.geterror()));
+    if (in_memory)
+        tmp.write(memory.buffer());
+    else
+        tmp.sync_written();
+    tmp.commit();
 }
 
 }  // namespace
+
+void set_write_test_hook(void (*hook)()) {
+    g_test_hook = hook;
+}
 
 void write_image(const std::string& path, int w, int h, const std::vector<float>& rgb,
                  const std::vector<std::string>& channel_names) {
@@ -94,63 +243,46 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
     if (!fs::is_directory(dir))
         throw ImageIoError("cannot write \"" + path + "\": directory \"" + dir.string() +
                            "\" does not exist");
-    // The temporary keeps the extension so format plug-ins that check it are satisfied.
-    fs::path tmp =
-        dir / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + ext);
-    try {
-        if (ext == ".pfm") {
-            write_pfm(tmp.string(), w, h, rgb);
-        } else {
-            auto out = OIIO::ImageOutput::create(path);
-            if (!out)
-                throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" +
-                                   ext + "\" (use .exr, .pfm or .png)");
-            bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
-            OIIO::ImageSpec spec(w, h, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-            std::vector<unsigned char> bytes;
-            if (!is_float) {
-                spec.attribute("oiio:ColorSpace", "sRGB");
-                bytes.resize(rgb.size());
-                for (std::size_t i = 0; i < rgb.size(); ++i) {
-                    float v = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
-                    float e = texture::linear_to_srgb(v);
-                    bytes[i] =
-                        static_cast<unsigned char>(std::clamp(e * 255.0f + 0.5f, 0.0f, 255.0f));
-                }
-            } else {
-                spec.attribute("oiio:ColorSpace", "Linear");
-                if (channel_names.size() == 3) spec.channelnames = channel_names;
-            }
-            if (!out->open(tmp.string(), spec))
-                throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());
-            bool ok = is_float ? out->write_image(OIIO::TypeDesc::FLOAT, rgb.data())
-                               : out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
-            if (!ok || !out->close())
-                throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());
-        }
-        fs::rename(tmp, target);
-    } catch (...) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw;
+    if (ext == ".pfm") {
+        Temporary tmp(path, temporary_for(target, ext));
+        tmp.write(encode_pfm(w, h, rgb));
+        tmp.commit();
+        return;
     }
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out)
+        throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" + ext +
+                           "\" (use .exr, .pfm or .png)");
+    bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
+    OIIO::ImageSpec spec(w, h, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    std::vector<unsigned char> bytes;
+    if (!is_float) {
+        spec.attribute("oiio:ColorSpace", "sRGB");
+        bytes.resize(rgb.size());
+        for (std::size_t i = 0; i < rgb.size(); ++i) {
+            float v = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
+            float e = texture::linear_to_srgb(v);
+            bytes[i] = static_cast<unsigned char>(std::clamp(e * 255.0f + 0.5f, 0.0f, 255.0f));
+        }
+    } else {
+        spec.attribute("oiio:ColorSpace", "Linear");
+        if (channel_names.size() == 3) spec.channelnames = channel_names;
+    }
+    Temporary tmp(path, temporary_for(target, ext));
+    if (is_float)
+        write_with(*out, tmp, path, spec, OIIO::TypeDesc::FLOAT, rgb.data());
+    else
+        write_with(*out, tmp, path, spec, OIIO::TypeDesc::UINT8, bytes.data());
 }
 
 void write_png8(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb) {
     fs::path target(path);
-    fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                           std::to_string(::getpid()) + ".png");
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw ImageIoError("cannot write \"" + path + "\": no PNG writer");
     OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) ||
-        !out->close()) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw ImageIoError("cannot write \"" + path + "\": " + out->geterror());
-    }
-    fs::rename(tmp, target);
+    Temporary tmp(path, temporary_for(target, ".png"));
+    write_with(*out, tmp, path, spec, OIIO::TypeDesc::UINT8, rgb.data());
 }
 
 }  // namespace cmam::render

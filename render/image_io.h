@@ -1,6 +1,8 @@
 // render — image input and output through OpenImageIO (plus PFM, written directly).
-// Outputs are written to a temporary file beside the target and renamed, so an interrupted
-// render never leaves a truncated image.
+// Outputs are encoded in memory, written to a temporary file beside the target with every
+// write, the flush to disk and the close checked, and renamed over the target: a full disk is
+// an error that leaves the old file, and SIGINT, SIGTERM or SIGHUP during a write remove the
+// temporary before taking effect.
 #pragma once
 
 #include <cmam/texture/image.h>
@@ -44,5 +46,9 @@ void write_image(const std::string& path, int width, int height, const std::vect
 /// Writes 8-bit RGB bytes (already display-encoded) as PNG, atomically.
 void write_png8(const std::string& path, int width, int height,
                 const std::vector<unsigned char>& rgb);
+
+/// For tests: `hook` is called during each write, once its temporary file exists (nullptr:
+/// none).
+void set_write_test_hook(void (*hook)());
 
 }  // namespace cmam::render

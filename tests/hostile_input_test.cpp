@@ -264,3 +264,66 @@ TEST(HostileInput, CameraAndGlassParametersThatGiveNonFiniteRaysAreLocatedErrors
                   expected)
             << eta;
 }
+
+// NaN and infinite light, material, texture and shape parameters, and transforms that are not
+// finite, once rendered black without a word: each is a located error naming the value.
+TEST(HostileInput, NumbersTheRendererUsesMustBeFinite) {
+    const std::string tri = "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]";
+    const std::pair<std::string, std::string> cases[] = {
+        {"LightSource \"point\" \"rgb I\" [nan 1 1]",
+         "t.pbrt:3:21: error: I values must be finite numbers, got nan"},
+        {"LightSource \"spot\" \"rgb I\" [1 inf 1]",
+         "t.pbrt:3:20: error: I values must be finite numbers, got inf"},
+        {"LightSource \"distant\" \"rgb L\" [1 1 nan]",
+         "t.pbrt:3:23: error: L values must be finite numbers, got nan"},
+        {"LightSource \"infinite\" \"rgb scale\" [-inf 1 1]",
+         "t.pbrt:3:24: error: scale values must be finite numbers, got -inf"},
+        {"LightSource \"point\" \"point3 from\" [0 nan 0]",
+         "t.pbrt:3:21: error: from values must be finite numbers, got nan"},
+        {"LightSource \"spot\" \"float coneangle\" nan",
+         "t.pbrt:3:20: error: coneangle must be a finite number, got nan"},
+        {"Translate nan 0 0 LightSource \"point\"",
+         "t.pbrt:3:19: error: the light's transform must be finite, got an entry of nan"},
+        {"Material \"matte\" \"float sigma\" nan",
+         "t.pbrt:3:18: error: sigma must be a finite number, got nan"},
+        {"Material \"plastic\" \"float roughness\" nan",
+         "t.pbrt:3:20: error: roughness must be a finite number, got nan"},
+        {"Material \"mirror\" \"rgb Kr\" [inf inf inf]",
+         "t.pbrt:3:19: error: Kr values must be finite numbers, got inf"},
+        {"Material \"matte\" \"spectrum Kd\" [400 1e300 700 1e300]",
+         "t.pbrt:3:18: error: Kd values must be finite numbers, got inf"},
+        {"Texture \"c\" \"float\" \"constant\" \"float value\" nan",
+         "t.pbrt:3:32: error: value must be a finite number, got nan"},
+        {"Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"x.png\" \"float scale\" "
+         "nan",
+         "t.pbrt:3:61: error: scale must be a finite number, got nan"},
+        {"Scale inf 1 1 Shape \"sphere\"",
+         "t.pbrt:3:15: error: the shape's transform must be finite, got an entry of inf"},
+        {"Translate nan 0 0 " + tri,
+         "t.pbrt:3:19: error: the shape's transform must be finite, got an entry of nan"},
+        {"Shape \"sphere\" \"float radius\" inf",
+         "t.pbrt:3:16: error: radius must be a positive finite number, got inf"},
+        {"Shape \"sphere\" \"float radius\" -1",
+         "t.pbrt:3:16: error: radius must be a positive finite number, got -1"},
+        {"Shape \"sphere\" \"float zmax\" nan",
+         "t.pbrt:3:16: error: zmax must be a finite number, got nan"},
+        {"Shape \"disk\" \"float innerradius\" nan",
+         "t.pbrt:3:14: error: innerradius must be a finite number, got nan"},
+        {"Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 nan 0 0 1 0]",
+         "t.pbrt:3:22: error: P values must be finite numbers, got nan"},
+        {"Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 1e39]",
+         "t.pbrt:3:22: error: P values must be finite numbers, got 1e+39"},
+        {tri + " \"normal N\" [0 0 1 0 0 inf 0 0 1]",
+         "t.pbrt:3:53: error: N values must be finite numbers, got inf"},
+        {tri + " \"point2 uv\" [0 0 1 0 nan 1]",
+         "t.pbrt:3:53: error: uv values must be finite numbers, got nan"},
+        {"LightSource \"spot\" \"float conedelta\" 2\nMaterial \"plastic\" \"float roughness\" "
+         "0.2\nScale 2 2 2\n" +
+             tri + " \"point2 uv\" [0 0 1 0 0 1]",
+         "no error"},
+    };
+    for (const auto& [world, expected] : cases)
+        EXPECT_EQ(error_of(std::string(kCamera) + "WorldBegin\n" + world + "\nWorldEnd\n"),
+                  expected)
+            << world;
+}

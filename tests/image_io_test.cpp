@@ -3,10 +3,13 @@
 
 #include <cmam/texture/image.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 using namespace cmam::render;
 namespace fs = std::filesystem;
@@ -24,6 +27,38 @@ struct TempDir {
     ~TempDir() { fs::remove_all(path); }
     std::size_t entries() const {
         return std::distance(fs::directory_iterator(path), fs::directory_iterator());
+    }
+};
+
+std::string contents(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// Pixels that no format compresses much.
+std::vector<float> noise(int w, int h) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<float> v(static_cast<std::size_t>(w) * h * 3);
+    for (float& x : v) x = u(rng);
+    return v;
+}
+
+// While alive, files this process writes are limited to `bytes` (writes past it fail with
+// EFBIG, as on a full disk, and SIGXFSZ is ignored).
+struct FileSizeLimit {
+    rlimit saved{};
+    void (*saved_handler)(int);
+    explicit FileSizeLimit(rlim_t bytes) {
+        saved_handler = std::signal(SIGXFSZ, SIG_IGN);
+        getrlimit(RLIMIT_FSIZE, &saved);
+        rlimit l = saved;
+        l.rlim_cur = bytes;
+        setrlimit(RLIMIT_FSIZE, &l);
+    }
+    ~FileSizeLimit() {
+        setrlimit(RLIMIT_FSIZE, &saved);
+        std::signal(SIGXFSZ, saved_handler);
     }
 };
 
@@ -100,4 +135,56 @@ TEST(ImageIo, UnreadableImagesNameFileAndReason) {
         EXPECT_EQ(std::string(e.what()).rfind("cannot read image \"" + p + "\": ", 0), 0u)
             << e.what();
     }
+}
+
+// A write that fails part way (here past a file size limit, as on a full disk) is an error
+// naming the file and the reason, for every format: the old file stays and no temporary is
+// left. PNG once reported success and replaced the old file with a cut one.
+TEST(ImageIo, WriteThatRunsOutOfSpaceFailsAndKeepsTheOldFile) {
+    TempDir d;
+    for (const char* name : {"full.png", "full.exr", "full.pfm"}) {
+        SCOPED_TRACE(name);
+        const std::string p = (d.path / name).string();
+        write_image(p, 4, 4, gradient(4, 4));
+        const std::string old = contents(p);
+        try {
+            FileSizeLimit limit(old.size() + 512);
+            write_image(p, 128, 128, noise(128, 128));
+            ADD_FAILURE() << "no error reported";
+        } catch (const ImageIoError& e) {
+            EXPECT_EQ(std::string(e.what()), "cannot write \"" + p + "\": File too large");
+        }
+        EXPECT_EQ(contents(p), old);
+    }
+    EXPECT_EQ(d.entries(), 3u);
+}
+
+namespace {
+volatile std::sig_atomic_t g_signal_seen = 0;
+extern "C" void note_signal(int sig) {
+    g_signal_seen = sig;
+}
+}  // namespace
+
+// SIGINT or SIGTERM while the temporary exists removes it before the signal takes effect: with
+// the default action the process ends by the signal; with a handler of the program's own, the
+// handler runs and the write is an error. The old file stays either way.
+TEST(ImageIo, SignalDuringAWriteRemovesTheTemporary) {
+    TempDir d;
+    const std::string p = (d.path / "sig.png").string();
+    write_image(p, 4, 4, gradient(4, 4));
+    const std::string old = contents(p);
+    set_write_test_hook([] { std::raise(SIGTERM); });
+    EXPECT_EXIT(write_image(p, 8, 8, gradient(8, 8)), ::testing::KilledBySignal(SIGTERM), "");
+    EXPECT_EQ(contents(p), old);
+    EXPECT_EQ(d.entries(), 1u);
+
+    set_write_test_hook([] { std::raise(SIGINT); });
+    void (*saved)(int) = std::signal(SIGINT, note_signal);
+    EXPECT_THROW(write_image(p, 8, 8, gradient(8, 8)), ImageIoError);
+    std::signal(SIGINT, saved);
+    set_write_test_hook(nullptr);
+    EXPECT_EQ(g_signal_seen, SIGINT);
+    EXPECT_EQ(contents(p), old);
+    EXPECT_EQ(d.entries(), 1u);
 }

@@ -75,6 +75,39 @@ TEST(Parser, NamedMaterialsAndTextureScopes) {
     EXPECT_TRUE(d.materials[0].scope.float_textures.empty());
 }
 
+// As in pbrt-v3, AttributeEnd (and ObjectEnd) ends the names declared in its block, and a
+// name redefined there means its outer definition again; TransformEnd keeps them.
+TEST(Parser, NamesDeclaredInABlockEndWithIt) {
+    SceneDesc d = parse_world(
+        "Texture \"k\" \"float\" \"constant\"\n"               // 0
+        "MakeNamedMaterial \"m\" \"string type\" \"matte\"\n"  // 0
+        "AttributeBegin\n"
+        "  Texture \"k\" \"float\" \"constant\"\n"                              // 1
+        "  MakeNamedMaterial \"m\" \"string type\" \"plastic\"\n"               // 1
+        "  TransformBegin Texture \"j\" \"float\" \"constant\" TransformEnd\n"  // 2
+        "  MakeNamedMaterial \"n\" \"string type\" \"matte\" \"texture sigma\" \"j\"\n"
+        "  NamedMaterial \"m\" Shape \"sphere\"\n"
+        "AttributeEnd\n"
+        "ObjectBegin \"o\" Texture \"k\" \"float\" \"constant\" ObjectEnd\n"  // 3
+        "MakeNamedMaterial \"p\" \"string type\" \"matte\" \"texture sigma\" \"k\"\n"
+        "NamedMaterial \"m\" Shape \"sphere\"\n");
+    ASSERT_EQ(d.materials.size(), 4u);
+    EXPECT_EQ(d.materials[d.shapes[0].material].entity.type, "plastic");
+    EXPECT_EQ(d.materials[2].scope.float_textures.at("j"), 2);
+    EXPECT_EQ(d.materials[3].scope.float_textures.at("k"), 0);
+    EXPECT_EQ(d.materials[3].scope.float_textures.size(), 1u);
+    EXPECT_EQ(d.materials[d.shapes[1].material].entity.type, "matte");
+    EXPECT_EQ(d.shapes[1].material, 0);
+    try {
+        parse_world(
+            "AttributeBegin MakeNamedMaterial \"m\" \"string type\" \"matte\" "
+            "AttributeEnd NamedMaterial \"m\"");
+        FAIL();
+    } catch (const SceneError& e) {
+        EXPECT_STREQ(e.what(), "t.pbrt:3:73: error: named material \"m\" is not defined");
+    }
+}
+
 TEST(Parser, ObjectInstancesAreFlattenedWithTheirTransforms) {
     SceneDesc d = parse_world(
         "ObjectBegin \"ball\" Translate 0 1 0 Shape \"sphere\" ObjectEnd\n"
