@@ -17,9 +17,9 @@ RowPrefixTable::RowPrefixTable(const Image& image)
       m_wrap_t(image.wrap_t()),
       m_mean(image.mean()) {
     const std::size_t stride = static_cast<std::size_t>(m_w + 1) * m_c;
-    m_d.assign(stride * static_cast<std::size_t>(m_h), 0.0f);
+    m_d = TexelBuffer(stride * static_cast<std::size_t>(m_h));  // zero-filled
     for (int j = 0; j < m_h; ++j) {
-        float* row = &m_d[stride * static_cast<std::size_t>(j)];
+        float* row = m_d.data() + stride * static_cast<std::size_t>(j);
         double acc[4] = {0, 0, 0, 0};  // accumulated in double, stored as float
         for (int i = 0; i < m_w; ++i) {
             const float* t = image.texel(i, j);
@@ -117,7 +117,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
         for (int c = 0; c < NC; ++c) acc[c] -= h * m_mean[c] * 0.5 * (x0 + x1);
         return;
     }
-    const float* row = &m_d[static_cast<std::size_t>(jj) * (m_w + 1) * NC];
+    const float* row = m_d.data() + static_cast<std::size_t>(jj) * (m_w + 1) * NC;
     if (x0 > x1) std::swap(x0, x1);
     const int64_t k0 = floor_to_int(x0);
     double ra[NC], rb[NC];
@@ -220,7 +220,7 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
             // The common case, the edge within the table: rows and knots read directly.
             const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
             int64_t j = floor_to_int(y);
-            const float* row = &m_d[static_cast<std::size_t>(j) * stride];
+            const float* row = m_d.data() + static_cast<std::size_t>(j) * stride;
             while (y < q.v) {
                 const double ynext = std::min(double(j + 1), q.v);
                 const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;

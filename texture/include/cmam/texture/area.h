@@ -44,7 +44,9 @@ class RowPrefixTable {
     int m_w = 0, m_h = 0, m_c = 0;
     WrapMode m_wrap_s{}, m_wrap_t{};
     Texel m_mean{};
-    std::vector<float> m_d;  // H rows of (W+1) * C floats
+    // H rows of (W+1) * C floats, in the image's buffer type: aligned and, when large, on
+    // transparent huge pages, since a region's boundary reads one row after another.
+    TexelBuffer m_d;
 
     template <int NC>
     void integrate(const Vec2d* v, int n, double* acc) const;
