@@ -144,7 +144,7 @@ std::string reference_key(const std::string& scene_path, int reference_spp) {
     auto add_files = [&](const pbrt::Entity& e) {
         if (const pbrt::Param* p = e.params.find("filename"))
             if (!p->strings.empty())
-                h = fnv1a(h, read_file(pbrt::resolve_path(p->loc, p->strings[0])));
+                h = fnv1a(h, read_file(pbrt::resolve_path(desc.base_dir, p->loc, p->strings[0])));
     };
     for (const auto& t : desc.textures) add_files(t.entity);
     for (const auto& s : desc.shapes) add_files(s.entity);

@@ -91,11 +91,16 @@ void check_spectrum_samples(const Param& p) {
 }
 }  // namespace
 
-void ParamSet::add(Param p) {
-    for (const Param& o : m_params)
-        if (o.name == p.name)
-            throw SceneError(p.loc, "parameter " + q(p.name) + " given twice (first at " +
-                                        o.loc.to_string() + ")");
+std::optional<FileLoc> ParamSet::add(Param p) {
+    // pbrt-v3 takes the later of two values of one parameter: the earlier one is dropped (and
+    // its location returned, for the caller's warning).
+    std::optional<FileLoc> replaced;
+    for (auto it = m_params.begin(); it != m_params.end(); ++it)
+        if (it->name == p.name) {
+            replaced = it->loc;
+            m_params.erase(it);
+            break;
+        }
     std::size_t n = p.numbers.size() + p.strings.size() + p.bools.size();
     if (n == 0) throw SceneError(p.loc, "parameter " + q(p.name) + " has no values");
     std::size_t k = arity(p.type);
@@ -120,6 +125,7 @@ void ParamSet::add(Param p) {
                                             " must be a whole number in int's range, got " +
                                             number_text(x));
     m_params.push_back(std::move(p));
+    return replaced;
 }
 
 const Param* ParamSet::find(const std::string& name) const {

@@ -53,7 +53,9 @@ struct TextureRef {
 class ParamSet {
   public:
     /// Adds a parameter; throws SceneError on a duplicate name or a malformed value list.
-    void add(Param p);
+    /// Adds `p` after checking its values. A parameter of the same name given before is
+    /// replaced, as pbrt-v3 takes the later value; its location is returned.
+    std::optional<FileLoc> add(Param p);
     bool empty() const { return m_params.empty(); }
     const std::vector<Param>& params() const { return m_params; }
 

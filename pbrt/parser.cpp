@@ -9,11 +9,21 @@
 
 namespace cmam::pbrt {
 
-std::string resolve_path(const FileLoc& loc, const std::string& name) {
-    std::filesystem::path p(name);
-    if (p.is_absolute() || !loc.file) return name;
-    std::filesystem::path dir = std::filesystem::path(*loc.file).parent_path();
-    return dir.empty() ? name : (dir / p).string();
+std::string resolve_path(const std::string& base_dir, const FileLoc& loc,
+                         const std::string& name) {
+    const std::filesystem::path p(name);
+    if (p.is_absolute()) return name;
+    // pbrt-v3 resolves every relative path against the main scene file's folder, in Included
+    // files too; a path that exists only beside the file naming it (the convention of scenes
+    // written for renderers that resolve that way) is found there.
+    const std::filesystem::path main = base_dir.empty() ? p : std::filesystem::path(base_dir) / p;
+    if (!loc.file) return main.string();
+    const std::filesystem::path dir = std::filesystem::path(*loc.file).parent_path();
+    const std::filesystem::path beside = dir.empty() ? p : dir / p;
+    std::error_code ec;
+    if (beside != main && !std::filesystem::exists(main, ec) && std::filesystem::exists(beside, ec))
+        return beside.string();
+    return main.string();
 }
 
 namespace {
@@ -285,7 +295,10 @@ class Parser {
             }
             if (p.type == ParamType::Spectrum && !p.strings.empty() && !p.numbers.empty())
                 throw SceneError(p.loc, "spectrum " + q(name) + " mixes numbers and strings");
-            ps.add(std::move(p));
+            const FileLoc loc = p.loc;
+            if (const auto first = ps.add(std::move(p)))
+                warn(loc, "parameter " + q(name) + " given twice; the later value is used (the "
+                          "first is at " + first->to_string() + ")");
         }
         return ps;
     }
@@ -384,7 +397,7 @@ class Parser {
             m_stack.pop_back();
         } else if (d == "Include") {
             std::string name = expect_string(dir, "a quoted file name");
-            std::string path = resolve_path(dir.loc, name);
+            std::string path = resolve_path(m_desc.base_dir, dir.loc, name);
             std::error_code ec;
             std::string canon = std::filesystem::weakly_canonical(path, ec).string();
             for (const auto& f : m_files)

@@ -15,7 +15,10 @@ SceneDesc parse_file(const std::string& path, const WarningSink& warn = {});
 SceneDesc parse_string(const std::string& text, const std::string& filename = "<string>",
                        const WarningSink& warn = {});
 
-/// Resolves `name` (as written in the file at `loc`) relative to that file's directory.
-std::string resolve_path(const FileLoc& loc, const std::string& name);
+/// Resolves `name`, as written in the file at `loc`, as pbrt-v3 does: relative to the main
+/// scene file's directory `base_dir` (SceneDesc::base_dir), in Included files too; a path that
+/// does not exist there but does beside the file at `loc` resolves there.
+std::string resolve_path(const std::string& base_dir, const FileLoc& loc,
+                         const std::string& name);
 
 }  // namespace cmam::pbrt

@@ -63,8 +63,8 @@ struct SceneDesc {
     std::vector<ShapeDesc> shapes;
     std::vector<LightDesc> lights;
     std::vector<std::string> sources;  // every scene file read (the main file, then Includes)
-    std::string base_dir;  // directory of the main file (relative paths resolve against the
-                           // directory of the file that names them; see Param locations)
+    std::string base_dir;  // directory of the main file, which relative paths resolve against
+                           // (pbrt-v3), Included files' too (resolve_path())
 };
 
 }  // namespace cmam::pbrt

@@ -267,7 +267,7 @@ class Builder {
                                      std::to_string(s.ysamples) + " = " + std::to_string(spp) +
                                      " samples per pixel is above cmam's limit of " +
                                      std::to_string(kMaxSamplesPerPixel));
-            e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions"});
+            e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions", "pixelsamples"});
         } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" ||
                    e.type == "02sequence" || e.type == "lowdiscrepancy" || e.type == "maxmindist") {
             int n = e.params.get_int("pixelsamples", 16);
@@ -390,7 +390,7 @@ class Builder {
         const auto* fp = e.params.find("filename");
         if (!fp) throw SceneError(e.loc, "imagemap texture needs a \"string filename\" parameter");
         std::string name = e.params.get_string("filename", "");
-        std::string path = pbrt::resolve_path(fp->loc, name);
+        std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc, name);
         std::string wrap_name = e.params.get_string("wrap", "repeat");
         auto wrap = texture::parse_wrap_mode(wrap_name);
         if (!wrap || *wrap == texture::WrapMode::Mirror)
@@ -618,7 +618,8 @@ class Builder {
             if (e.type == "plymesh") {
                 const auto* fp = e.params.find("filename");
                 if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
-                std::string path = pbrt::resolve_path(fp->loc, e.params.get_string("filename", ""));
+                std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc,
+                                                      e.params.get_string("filename", ""));
                 pbrt::PlyMesh mesh;
                 try {
                     mesh = pbrt::read_ply(path);
@@ -739,7 +740,13 @@ class Builder {
             l.intensity = intensity("I");
             auto from = point("from", {0, 0, 0});
             auto to = point("to", {0, 0, 1});
-            double cone = finite_float(e, "coneangle", 30), delta = finite_float(e, "conedelta", 5);
+            // pbrt-v3 names the falloff "conedeltaangle"; "conedelta" is read too (cmam read only
+            // that name before).
+            const char* delta_name = e.params.find("conedelta") && !e.params.find("conedeltaangle")
+                                         ? "conedelta"
+                                         : "conedeltaangle";
+            double cone = finite_float(e, "coneangle", 30),
+                   delta = finite_float(e, delta_name, 5);
             l.position = to_vec(m.apply_point(from));
             Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
             if (length(axis) == 0)
@@ -770,7 +777,9 @@ class Builder {
                              "unsupported light " + q(e.type) +
                                  " (supported: \"point\", \"spot\", \"distant\", \"infinite\")");
         }
-        e.params.check_unused("light " + q(e.type), m_warn);
+        // pbrt-v3's sample counts: a delta light needs one shadow ray, and the infinite light
+        // is sampled once per shading point here.
+        e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta"});
         m_scene->lights.push_back(l);
     }
 };

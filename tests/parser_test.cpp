@@ -3,6 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
 using namespace cmam::pbrt;
 
 namespace {
@@ -141,6 +146,40 @@ TEST(Parser, IgnoredDirectivesWarnWithLocation) {
               "t.pbrt:3:1: warning: TransformTimes ignored: cmam renders no motion blur");
     EXPECT_EQ(warnings[1],
               "t.pbrt:4:1: warning: ActiveTransform All ignored: cmam renders no motion blur");
+}
+
+TEST(Parser, RepeatedParameterTakesTheLaterValueWithAWarning) {
+    std::vector<std::string> warnings;
+    SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 1 \"float radius\" 2",
+                              [&](const std::string& w) { warnings.push_back(w); });
+    EXPECT_EQ(d.shapes[0].entity.params.get_float("radius", 0), 2);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0],
+              "t.pbrt:3:33: warning: parameter \"radius\" given twice; the later value is used "
+              "(the first is at t.pbrt:3:16)");
+}
+
+TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
+    // main.pbrt Includes sub/part.pbrt, which names "data/x.ply": pbrt-v3 reads <main>/data/x.ply.
+    // A path found only beside the including file (other renderers' convention) is read there.
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("cmam_paths_" + std::to_string(::getpid()));
+    fs::create_directories(dir / "sub" / "only");
+    fs::create_directories(dir / "data");
+    std::ofstream(dir / "data" / "x.ply") << "x";
+    std::ofstream(dir / "sub" / "only" / "y.ply") << "y";
+    std::ofstream(dir / "sub" / "part.pbrt") << "Shape \"plymesh\" \"string filename\" \"data/x.ply\"\n"
+                                             << "Shape \"plymesh\" \"string filename\" \"only/y.ply\"\n";
+    std::ofstream(dir / "main.pbrt") << kHeader << "Include \"sub/part.pbrt\"\nWorldEnd\n";
+    SceneDesc d = parse_file((dir / "main.pbrt").string());
+    ASSERT_EQ(d.shapes.size(), 2u);
+    auto resolved = [&](int k) {
+        const Param* p = d.shapes[k].entity.params.find("filename");
+        return fs::path(resolve_path(d.base_dir, p->loc, p->strings[0]));
+    };
+    EXPECT_TRUE(fs::equivalent(resolved(0), dir / "data" / "x.ply")) << resolved(0);
+    EXPECT_TRUE(fs::equivalent(resolved(1), dir / "sub" / "only" / "y.ply")) << resolved(1);
+    fs::remove_all(dir);
 }
 
 TEST(Parser, UnusedParameterErrorNamesEntity) {

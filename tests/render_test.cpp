@@ -97,6 +97,35 @@ TEST(Analytic, SpotLightFalloff) {
     EXPECT_NEAR(mid.r, 0.5 / 3.14159265 * 25 * std::pow(delta, 4) * c / d2, 1e-6);
 }
 
+TEST(Scenes, PbrtV3LightAndSamplerParametersAreReadOrWarned) {
+    // pbrt-v3 names the spot light's falloff "conedeltaangle" (cmam's earlier "conedelta" is
+    // still read); "nsamples" on lights and "pixelsamples" on the stratified sampler are pbrt-v3
+    // parameters cmam has no use for: warnings, not errors.
+    const std::string body =
+        "LightSource \"spot\" \"point from\" [0 0 5] \"point to\" [0 0 0] "
+        "\"float coneangle\" 30 \"float DELTA\" 10 \"rgb I\" [25 25 25] \"integer nsamples\" 4\n";
+    for (const char* name : {"conedeltaangle", "conedelta"}) {
+        std::string light = body;
+        light.replace(light.find("DELTA"), 5, name);
+        std::vector<std::string> warnings;
+        const std::string text =
+            "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\n"
+            "Sampler \"stratified\" \"integer pixelsamples\" 16\nWorldBegin\n" +
+            light + "WorldEnd\n";
+        auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {},
+                             [&](const std::string& w) { warnings.push_back(w); });
+        ASSERT_EQ(s->lights.size(), 1u) << name;
+        EXPECT_NEAR(s->lights[0].cos_falloff_start, std::cos(20 * 3.14159265 / 180), 1e-6) << name;
+        ASSERT_EQ(warnings.size(), 2u) << name;
+        EXPECT_EQ(warnings[0],
+                  "t.pbrt:3:22: warning: parameter \"pixelsamples\" of Sampler \"stratified\" "
+                  "is not supported by cmam; ignored");
+        EXPECT_NE(warnings[1].find("parameter \"nsamples\" of light \"spot\" is not supported"),
+                  std::string::npos)
+            << warnings[1];
+    }
+}
+
 TEST(Analytic, ShadowsBlockDirectLight) {
     auto s = test::scene_from(
         plane_with(
