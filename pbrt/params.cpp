@@ -15,7 +15,7 @@ std::optional<ParamType> parse_param_type(const std::string& n) {
     if (n == "vector3" || n == "vector") return ParamType::Vector3;
     if (n == "normal" || n == "normal3") return ParamType::Normal;
     if (n == "rgb" || n == "color") return ParamType::Rgb;
-    if (n == "spectrum") return ParamType::Spectrum;
+    if (n == "spectrum" || n == "blackbody") return ParamType::Spectrum;  // blackbody: sampled
     if (n == "bool") return ParamType::Bool;
     if (n == "string") return ParamType::String;
     if (n == "texture") return ParamType::Texture;
@@ -91,6 +91,23 @@ void check_spectrum_samples(const Param& p) {
 }
 }  // namespace
 
+std::vector<double> blackbody_samples(double kelvin, double scale) {
+    // Planck's law per wavelength, divided by its value at the peak (Wien: 2.8977721e-3 m K / T),
+    // as pbrt-v3's BlackbodyNormalized; sampled every 5 nm over the colour matching functions.
+    constexpr double h = 6.62606957e-34, c = 299792458.0, kb = 1.3806488e-23;
+    auto planck = [&](double lambda_m) {
+        const double l5 = lambda_m * lambda_m * lambda_m * lambda_m * lambda_m;
+        return (2 * h * c * c) / (l5 * (std::exp((h * c) / (lambda_m * kb * kelvin)) - 1));
+    };
+    const double peak = planck(2.8977721e-3 / kelvin);
+    std::vector<double> out;
+    for (int nm = 360; nm <= 830; nm += 5) {
+        out.push_back(nm);
+        out.push_back(scale * planck(nm * 1e-9) / peak);
+    }
+    return out;
+}
+
 std::optional<FileLoc> ParamSet::add(Param p) {
     // pbrt-v3 takes the later of two values of one parameter: the earlier one is dropped (and
     // its location returned, for the caller's warning).
@@ -103,6 +120,25 @@ std::optional<FileLoc> ParamSet::add(Param p) {
         }
     std::size_t n = p.numbers.size() + p.strings.size() + p.bools.size();
     if (n == 0) throw SceneError(p.loc, "parameter " + q(p.name) + " has no values");
+    if (p.type_name == "blackbody") {  // [temperature scale]: a sampled spectrum
+        if (!p.strings.empty() || p.numbers.size() != 2)
+            throw SceneError(p.loc, "blackbody " + q(p.name) +
+                                        " needs two numbers, a temperature in kelvin and a "
+                                        "scale, got " +
+                                        std::to_string(p.numbers.size() + p.strings.size()) +
+                                        " values");
+        const double kelvin = p.numbers[0], scale = p.numbers[1];
+        if (!(kelvin > 0 && std::isfinite(kelvin)))
+            throw SceneError(p.loc, "blackbody " + q(p.name) +
+                                        " temperature must be a positive finite number of "
+                                        "kelvin, got " +
+                                        number_text(kelvin));
+        if (!std::isfinite(scale))
+            throw SceneError(p.loc, "blackbody " + q(p.name) +
+                                        " scale must be a finite number, got " +
+                                        number_text(scale));
+        p.numbers = blackbody_samples(kelvin, scale);
+    }
     std::size_t k = arity(p.type);
     if (p.type == ParamType::Spectrum) {
         if (!p.numbers.empty() && p.numbers.size() % 2 != 0)

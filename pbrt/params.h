@@ -91,5 +91,9 @@ class ParamSet {
 /// (analytic fit of the CIE 1931 2-degree observer), normalised so a constant 1 has Y = 1.
 /// The pairs are as ParamSet::add accepts them: at least one, finite, wavelengths increasing.
 Rgb spectrum_to_rgb(const std::vector<double>& lambda_value_pairs);
+/// pbrt-v3's "blackbody" [T scale]: Planck's spectrum at T kelvin divided by its peak, times
+/// `scale`, as (wavelength in nm, value) pairs every 5 nm from 360 to 830 nm. The parser turns a
+/// blackbody parameter into these samples (a spectrum parameter).
+std::vector<double> blackbody_samples(double kelvin, double scale);
 
 }  // namespace cmam::pbrt

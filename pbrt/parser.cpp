@@ -255,7 +255,8 @@ class Parser {
                 throw SceneError(decl.loc,
                                  "unknown parameter type " + q(type_name) +
                                      " (expected integer, float, point2, vector2, point3, "
-                                     "vector3, normal, rgb, spectrum, bool, string, texture)");
+                                     "vector3, normal, rgb, spectrum, blackbody, bool, string, "
+                                     "texture)");
             Param p;
             p.type = *type;
             p.type_name = type_name;

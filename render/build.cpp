@@ -157,8 +157,10 @@ class Builder {
         f.y1 = static_cast<int>(std::ceil(f.yres * std::max(cw[2], cw[3])));
         if (f.width() <= 0 || f.height() <= 0)
             throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
+        // pbrt-v3 multiplies every pixel by "scale" (radiance only, not AOVs).
+        f.scale = static_cast<float>(finite_float(e, "scale", 1));
         e.params.check_unused("Film \"image\"", m_warn,
-                              {"diagonal", "maxsampleluminance", "scale", "pixelbounds"});
+                              {"diagonal", "maxsampleluminance", "pixelbounds"});
     }
 
     void camera() {

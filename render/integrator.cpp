@@ -422,8 +422,9 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                     for (int sx = 0; sx < nx; ++sx) trace_sample(i, sx, sy);
         }
         float* out = &fb.rgb[(static_cast<std::size_t>(row) * fb.width + x_begin) * 3];
+        const double scale = options.aov == AovKind::None ? double(film.scale) : 1.0;
         for (std::size_t k = static_cast<std::size_t>(prime) * 3; k < sum.size(); ++k)
-            out[k - static_cast<std::size_t>(prime) * 3] = static_cast<float>(sum[k] / spp);
+            out[k - static_cast<std::size_t>(prime) * 3] = static_cast<float>(sum[k] / spp * scale);
         counts.add_to(stats);
     };
 

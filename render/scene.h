@@ -59,6 +59,7 @@ struct FilmSettings {
     int xres = 640, yres = 480;
     int x0 = 0, y0 = 0, x1 = 640, y1 = 480;  // cropped pixel bounds [x0,x1) x [y0,y1)
     std::string filename = "pbrt.exr";
+    float scale = 1;  // pbrt-v3's Film "scale": every pixel's radiance is multiplied by it
     int width() const { return x1 - x0; }
     int height() const { return y1 - y0; }
 };

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -180,6 +181,46 @@ TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
     EXPECT_TRUE(fs::equivalent(resolved(0), dir / "data" / "x.ply")) << resolved(0);
     EXPECT_TRUE(fs::equivalent(resolved(1), dir / "sub" / "only" / "y.ply")) << resolved(1);
     fs::remove_all(dir);
+}
+
+TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
+    // pbrt-v3's "blackbody" [T scale]: B(lambda, T) / B(lambda_max, T) * scale, as RGB.
+    SceneDesc d = parse_world(
+        "LightSource \"point\" \"blackbody I\" [3000 2]\n"
+        "LightSource \"point\" \"blackbody I\" [10000 1]\n"
+        "LightSource \"point\" \"blackbody I\" [5000 1]");
+    auto rgb_of = [&](int k) { return *d.lights[k].entity.params.get_rgb("I"); };
+    const auto warm = rgb_of(0), cool = rgb_of(1);
+    EXPECT_GT(warm[0], warm[2]);  // 3000 K is red, 10000 K blue
+    EXPECT_LT(cool[0], cool[2]);
+    // Independently: Planck's law at the CIE samples, by the formula, through the same
+    // conversion the spectrum type uses.
+    std::vector<double> pairs;
+    const double h = 6.62606957e-34, c = 299792458.0, kb = 1.3806488e-23, T = 3000;
+    auto planck = [&](double l) { return 2 * h * c * c / (std::pow(l, 5) * (std::exp(h * c / (l * kb * T)) - 1)); };
+    for (int nm = 360; nm <= 830; nm += 5) {
+        pairs.push_back(nm);
+        pairs.push_back(2 * planck(nm * 1e-9) / planck(2.8977721e-3 / T));
+    }
+    const Rgb want = spectrum_to_rgb(pairs);
+    EXPECT_NEAR(warm[0], want[0], 1e-5);
+    EXPECT_NEAR(warm[1], want[1], 1e-5);
+    EXPECT_NEAR(warm[2], want[2], 1e-5);
+    // Normalised to the peak: at 5000 K (peak 579.6 nm, inside the samples) no sample exceeds 1
+    // and the largest is within 0.1% of it.
+    const auto s = blackbody_samples(5000, 1);
+    double top = 0;
+    for (std::size_t i = 1; i < s.size(); i += 2) top = std::max(top, s[i]);
+    EXPECT_LE(top, 1.0);
+    EXPECT_GT(top, 0.999);
+    try {
+        parse_world("LightSource \"point\" \"blackbody I\" [-5 1]");
+        FAIL();
+    } catch (const SceneError& e) {
+        EXPECT_STREQ(e.what(),
+                     "t.pbrt:3:21: error: blackbody \"I\" temperature must be a positive finite "
+                     "number of kelvin, got -5");
+    }
 }
 
 TEST(Parser, UnusedParameterErrorNamesEntity) {
