@@ -90,9 +90,10 @@ struct TextureNode {
 };
 
 struct Material {
-    enum class Type { Matte, Mirror, Glass, Plastic, None };
+    enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, None };
     Type type = Type::Matte;
     TexInput kd{-1, Rgb(0.5f)}, ks, kr, kt, sigma, roughness, eta;
+    TexInput k;  // metal: the conductor's absorption (eta is its index of refraction)
     bool remap_roughness = true;
 };
 

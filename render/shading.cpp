@@ -213,9 +213,15 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
         Vec3 wh = wi + wo;
         if (cos_i != 0 && cos_o != 0 && (wh.x != 0 || wh.y != 0 || wh.z != 0)) {
             wh = normalize(wh);
-            float fr = fresnel_dielectric(dot(wi, faceforward(wh, Vec3(0, 0, 1))), 1.5f, 1.0f);
+            const float c = dot(wi, faceforward(wh, Vec3(0, 0, 1)));
             float g = 1 / (1 + tr_lambda(wo, alpha) + tr_lambda(wi, alpha));
-            out += ks * (tr_d(wh, alpha) * g * fr / (4 * cos_i * cos_o));
+            const float common = tr_d(wh, alpha) * g / (4 * cos_i * cos_o);
+            if (conductor) {
+                const float m = 1 - std::clamp(c, 0.0f, 1.0f), m5 = (m * m) * (m * m) * m;
+                out += ks * (f0 + (Rgb(1) - f0) * m5) * common;
+            } else {
+                out += ks * (fresnel_dielectric(c, 1.5f, 1.0f) * common);
+            }
         }
     }
     return out;
@@ -254,6 +260,29 @@ bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, con
             b->kt = clamp0(eval_texture(scene, m.kt, ctx));
             b->eta = eval_texture(scene, m.eta, ctx).r;
             break;
+        case Material::Type::Uber: {
+            b->kd = clamp0(eval_texture(scene, m.kd, ctx));
+            b->ks = clamp0(eval_texture(scene, m.ks, ctx));
+            float rough = eval_texture(scene, m.roughness, ctx).r;
+            b->alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
+            b->kr = clamp0(eval_texture(scene, m.kr, ctx));
+            b->kt = clamp0(eval_texture(scene, m.kt, ctx));
+            b->eta = eval_texture(scene, m.eta, ctx).r;
+            break;
+        }
+        case Material::Type::Metal: {
+            // Normal-incidence reflectance of a conductor: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+            const Rgb n = eval_texture(scene, m.eta, ctx), k = eval_texture(scene, m.k, ctx);
+            auto r0 = [](float n_, float k_) {
+                return ((n_ - 1) * (n_ - 1) + k_ * k_) / ((n_ + 1) * (n_ + 1) + k_ * k_);
+            };
+            b->conductor = true;
+            b->f0 = clamp0(Rgb(r0(n.r, k.r), r0(n.g, k.g), r0(n.b, k.b)));
+            b->ks = Rgb(1);
+            float rough = eval_texture(scene, m.roughness, ctx).r;
+            b->alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
+            break;
+        }
         case Material::Type::None:
             return false;
     }

@@ -102,6 +102,10 @@ struct Bsdf {
     Rgb kr{}, kt{};
     bool fresnel_noop = false;  // mirror
     float eta = 1.5f;           // glass
+    // Metal: the microfacet lobe's Fresnel term is Schlick's with this normal-incidence
+    // reflectance (ks is then 1) instead of the dielectric's.
+    bool conductor = false;
+    Rgb f0{};
 
     bool has_diffuse() const { return !kd.is_black(); }
     bool has_glossy() const { return !ks.is_black(); }

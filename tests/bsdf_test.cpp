@@ -1,6 +1,8 @@
 // Fresnel, refraction, BSDF values and glass energy conservation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "render/integrator.h"
 #include "render/shading.h"
 #include "scene_util.h"
@@ -87,4 +89,79 @@ TEST(Mirror, ReflectsWithKr) {
     EXPECT_NEAR(L.r, 1.0, 1e-6);
     EXPECT_NEAR(L.g, 0.5, 1e-6);
     EXPECT_NEAR(L.b, 2.0, 1e-6);
+}
+
+namespace {
+// The BSDF of the first material of a one-sphere scene with `material`, at the sphere's top.
+Bsdf bsdf_of(const std::string& material, std::vector<std::string>* warnings = nullptr) {
+    const std::string text =
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n" + material +
+        "\nShape \"sphere\" \"float radius\" 1\nWorldEnd\n";
+    auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {}, [&](const std::string& w) {
+        if (warnings) warnings->push_back(w);
+    });
+    SurfaceHit h;
+    EXPECT_TRUE(s->intersect(Vec3(0, 0, 5), Vec3(0, 0, -1), 0, 100, &h));
+    Bsdf b;
+    EXPECT_TRUE(make_bsdf(*s, s->materials.at(0), h, TexContext{}, &b));
+    return b;
+}
+}  // namespace
+
+TEST(Materials, UberIsDiffusePlusPlasticsLobePlusGlassesSpecularLobes) {
+    const Bsdf b = bsdf_of(
+        "Material \"uber\" \"rgb Kd\" [0.5 0.4 0.3] \"rgb Ks\" [0.1 0.1 0.1] \"rgb Kr\" [0.2 0.2 "
+        "0.2] \"rgb Kt\" [0.3 0.3 0.3] \"float index\" 1.33 \"float roughness\" 0.05");
+    EXPECT_FLOAT_EQ(b.kd.g, 0.4f);
+    EXPECT_FLOAT_EQ(b.ks.r, 0.1f);
+    EXPECT_FLOAT_EQ(b.kr.r, 0.2f);
+    EXPECT_FLOAT_EQ(b.kt.r, 0.3f);
+    EXPECT_FLOAT_EQ(b.eta, 1.33f);
+    EXPECT_FALSE(b.fresnel_noop);
+    // An uber with only Kd is a matte: the same BSDF values.
+    const Bsdf u = bsdf_of("Material \"uber\" \"rgb Kd\" [0.5 0.4 0.3] \"rgb Ks\" [0 0 0]");
+    const Bsdf m = bsdf_of("Material \"matte\" \"rgb Kd\" [0.5 0.4 0.3]");
+    const Vec3 wo = normalize(Vec3(0.3f, 0.2f, 1)), wi = normalize(Vec3(-0.5f, 0.1f, 0.7f));
+    EXPECT_FLOAT_EQ(u.f(wo, wi).b, m.f(wo, wi).b);
+}
+
+TEST(Materials, MetalUsesTheConductorsNormalIncidenceReflectance) {
+    // pbrt-v3's default metal is copper; ((n-1)^2 + k^2) / ((n+1)^2 + k^2) per channel.
+    const Bsdf b = bsdf_of("Material \"metal\"");
+    EXPECT_TRUE(b.conductor);
+    EXPECT_NEAR(b.f0.r, 0.95215, 1e-4);  // n 0.2004, k 3.9129
+    const Bsdf gold = bsdf_of("Material \"metal\" \"rgb eta\" [0.143 0.374 1.442] \"rgb k\" "
+                              "[3.983 2.385 1.603] \"float roughness\" 0.2");
+    EXPECT_NEAR(gold.f0.b, ((1.442 - 1) * (1.442 - 1) + 1.603 * 1.603) /
+                               ((1.442 + 1) * (1.442 + 1) + 1.603 * 1.603),
+                1e-5);
+    // Reflection only, and brighter towards grazing (Schlick).
+    const Vec3 n(0, 0, 1);
+    const Vec3 wo = normalize(Vec3(0.2f, 0, 1)), wi = normalize(Vec3(-0.2f, 0, 1));
+    EXPECT_GT(gold.f(wo, wi).r, 0);
+    EXPECT_TRUE(gold.f(wo, -n).is_black());
+}
+
+TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
+    std::vector<std::string> warnings;
+    const Bsdf b = bsdf_of("Material \"kdsubsurface\" \"rgb Kd\" [0.2 0.3 0.4] \"float eta\" 1.3",
+                           &warnings);
+    EXPECT_FLOAT_EQ(b.kd.b, 0.4f);
+    EXPECT_TRUE(b.ks.is_black());
+    // (Besides the scene's own: no integrator, no lights.)
+    auto count = [&](const std::string& text) {
+        return std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
+            return w.find(text) != std::string::npos;
+        });
+    };
+    EXPECT_EQ(count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
+                    "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, and "
+                    "substrate and translucent as plastic)"),
+              1);
+    EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
+    warnings.clear();
+    const Bsdf s = bsdf_of("Material \"substrate\" \"float uroughness\" 0.1 \"float vroughness\" 0.3",
+                           &warnings);
+    EXPECT_FLOAT_EQ(s.kd.r, 0.5f);
+    EXPECT_EQ(count("material \"substrate\" is rendered as \"plastic\""), 1);
 }
