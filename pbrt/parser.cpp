@@ -2,9 +2,12 @@
 
 #include <charconv>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <optional>
 
+#include "pbrt/input_file.h"
 #include "pbrt/tokenizer.h"
 
 namespace cmam::pbrt {
@@ -149,6 +152,45 @@ class Parser {
     bool m_in_object = false;
     std::string m_object_name;
     FileLoc m_object_loc, m_last_loc;
+
+    // A spectrum given as a file name: pbrt-v3's .spd text, (wavelength value) pairs with '#'
+    // comments, resolved as every path is; its samples replace the name.
+    void read_spd(Param& p) {
+        if (p.strings.size() != 1)
+            throw SceneError(p.loc, "spectrum " + q(p.name) + " names " +
+                                        std::to_string(p.strings.size()) +
+                                        " files; give one .spd file");
+        const std::string path = resolve_path(m_desc.base_dir, p.loc, p.strings[0]);
+        if (std::string why = not_a_regular_file(path); !why.empty())
+            throw SceneError(p.loc, "cannot read spectrum file " + q(path) + ": " + why);
+        std::ifstream in(path);
+        if (!in)
+            throw SceneError(p.loc, "cannot read spectrum file " + q(path) + " (named by spectrum " +
+                                        q(p.name) + "; pbrt-v3 reads .spd files of wavelength, value "
+                                        "pairs)");
+        std::vector<double> values;
+        std::string line;
+        while (std::getline(in, line) && values.size() < 100000) {
+            line = line.substr(0, line.find('#'));
+            std::istringstream words(line);
+            std::string w;
+            while (words >> w) {
+                char* end = nullptr;
+                const double v = std::strtod(w.c_str(), &end);
+                if (end != w.c_str() + w.size())
+                    throw SceneError(p.loc, "spectrum file " + q(path) + ": " + q(w) +
+                                                " is not a number");
+                values.push_back(v);
+            }
+        }
+        if (values.empty() || values.size() % 2 != 0)
+            throw SceneError(p.loc, "spectrum file " + q(path) +
+                                        " must hold (wavelength, value) pairs, got " +
+                                        std::to_string(values.size()) + " numbers");
+        p.strings.clear();
+        p.numbers = std::move(values);
+        m_desc.sources.push_back(path);
+    }
 
     void warn(const FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(format_warning(loc, msg));
@@ -296,6 +338,7 @@ class Parser {
             }
             if (p.type == ParamType::Spectrum && !p.strings.empty() && !p.numbers.empty())
                 throw SceneError(p.loc, "spectrum " + q(name) + " mixes numbers and strings");
+            if (p.type == ParamType::Spectrum && !p.strings.empty()) read_spd(p);
             const FileLoc loc = p.loc;
             if (const auto first = ps.add(std::move(p)))
                 warn(loc, "parameter " + q(name) + " given twice; the later value is used (the "

@@ -223,6 +223,36 @@ TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
     }
 }
 
+TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
+    // pbrt-v3 reads "spectrum Kd" "file.spd" (wavelength value pairs, '#' comments) relative to
+    // the main file's folder: the same RGB as the pairs written inline.
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("cmam_spd_" + std::to_string(::getpid()));
+    fs::create_directories(dir / "spds");
+    std::ofstream(dir / "spds" / "k.spd") << "# a test\n400 0.2\n500 0.5 # mid\n600 0.9\n700 0.4\n";
+    std::ofstream(dir / "main.pbrt")
+        << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
+        << "Material \"matte\" \"spectrum Kd\" [400 0.2 500 0.5 600 0.9 700 0.4]\n"
+        << "Material \"matte\" \"spectrum Kd\" \"spds/missing.spd\"\nWorldEnd\n";
+    try {
+        parse_file((dir / "main.pbrt").string());
+        FAIL();
+    } catch (const SceneError& e) {  // the third names a file that is not there
+        EXPECT_NE(std::string(e.what()).find(":5:18: error: cannot read spectrum file"),
+                  std::string::npos)
+            << e.what();
+    }
+    std::ofstream(dir / "main.pbrt")
+        << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
+        << "Material \"matte\" \"spectrum Kd\" [400 0.2 500 0.5 600 0.9 700 0.4]\nWorldEnd\n";
+    SceneDesc d = parse_file((dir / "main.pbrt").string());
+    ASSERT_EQ(d.materials.size(), 2u);
+    const auto a = *d.materials[0].entity.params.get_rgb("Kd"),
+               b = *d.materials[1].entity.params.get_rgb("Kd");
+    for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(a[c], b[c]);
+    fs::remove_all(dir);
+}
+
 TEST(Parser, UnusedParameterErrorNamesEntity) {
     SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 1 \"float bogus\" 3");
     const ParamSet& p = d.shapes[0].entity.params;
