@@ -395,8 +395,8 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                 tag.id = static_cast<uint32_t>(py * ny + sy);
                 tag.seq = static_cast<uint32_t>(col * nx + sx);
                 tag.positioned = true;  // in strata: the 2-D CMAM's Jacobian and centre
-                tag.x = float(col * nx + sx) + j[0];
-                tag.y = float(py * ny + sy) + j[1];
+                tag.x = double(col) * nx + sx + j[0];
+                tag.y = double(py) * ny + sy + j[1];
             } else {
                 tag.id = static_cast<uint32_t>(py * film.xres + px);
                 tag.seq = static_cast<uint32_t>(sample);

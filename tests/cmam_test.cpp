@@ -329,8 +329,8 @@ TEST(Cmam2d, PositionedTagsSolveTheJacobianWhateverTheJitter) {
         auto [s, t] = map(x, y);
         CmamCache::Entry e{RayTag{}, s, t, true};
         e.tag.positioned = true;
-        e.tag.x = float(x);
-        e.tag.y = float(y);
+        e.tag.x = x;
+        e.tag.y = y;
         return e;
     };
     const CmamCache::Entry cur = entry(10.8, 20.15), left = entry(9.1, 20.7),

@@ -134,15 +134,15 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
         // [a b] = J [dl da] with dl, da the neighbours' image-plane offsets (strata): solve for
         // J, whose columns are the steps of one stratum across and down, and move the centre
         // to the stratum's. Nearly coincident samples (|det| < 1/4) keep the plain vectors.
-        const double lx = double(left->tag.x) - cur.x, ly = double(left->tag.y) - cur.y;
-        const double ax = double(above.tag.x) - cur.x, ay = double(above.tag.y) - cur.y;
+        const double lx = left->tag.x - cur.x, ly = left->tag.y - cur.y;
+        const double ax = above.tag.x - cur.x, ay = above.tag.y - cur.y;
         const double det = lx * ay - ax * ly;
         if (std::abs(det) >= 0.25) {
             // inverse of [[lx ax] [ly ay]] = [[ay -ax] [-ly lx]] / det
             const double jx[2] = {(a[0] * ay - b[0] * ly) / det, (a[1] * ay - b[1] * ly) / det};
             const double jy[2] = {(b[0] * lx - a[0] * ax) / det, (b[1] * lx - a[1] * ax) / det};
-            const double cx = std::floor(double(cur.x)) + 0.5 - cur.x,
-                         cy = std::floor(double(cur.y)) + 0.5 - cur.y;
+            const double cx = std::floor(cur.x) + 0.5 - cur.x,
+                         cy = std::floor(cur.y) + 0.5 - cur.y;
             r.offset[0] = jx[0] * cx + jy[0] * cy;
             r.offset[1] = jx[1] * cx + jy[1] * cy;
             a[0] = jx[0];

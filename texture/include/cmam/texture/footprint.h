@@ -26,7 +26,7 @@ struct RayTag {
     /// neighbours' differences into the Jacobian exactly, however the samples are jittered, and
     /// centres the footprint on the sample's stratum (algorithms.md §6.3.1).
     bool positioned = false;
-    float x = 0, y = 0;
+    double x = 0, y = 0;
 };
 
 /// How EWA reads the CMAM's two non-orthogonal vectors (algorithms.md §6.2 item 3): R1
