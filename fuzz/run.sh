@@ -27,8 +27,9 @@ regressions() { [[ -d "fuzz/regressions/$1" ]] && echo "fuzz/regressions/$1" || 
 
 # Per input: 10 s at most, 1 GB per allocation and 2 GB in all, so hostile sizes fail fast.
 LIMITS=(-timeout=10 -malloc_limit_mb=1024 -rss_limit_mb=2048)
-# OpenEXR allocates what a header attribute claims, up to 2 GB, before reading it.
-[[ "${2:-}" == image ]] && LIMITS=(-timeout=10 -malloc_limit_mb=2048 -rss_limit_mb=2048)
+# OpenEXR allocates what a header attribute claims, up to 2 GB, before reading it, and fills
+# a string attribute of that size: images may take 2 GB per allocation and 4 GB in all.
+[[ "${2:-}" == image ]] && LIMITS=(-timeout=10 -malloc_limit_mb=2048 -rss_limit_mb=4096)
 export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=0:detect_leaks=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp:print_suppressions=0}"
