@@ -5,12 +5,16 @@
 #   make bench    build and run the benchmarks (Google Benchmark)
 #   make paper-figures  render the paper's scenes with the CMAM on and off, with an error table
 #   make results  evaluate every method on the bundled scenes; rewrites docs/results.md
+#   make fuzz     build the fuzz targets (Clang, build/fuzz) and run each for FUZZ_SECONDS
 JOBS ?= $(shell nproc)
 BUILD := build/release
 CMAM := $(BUILD)/app/cmam
 DEMO_OUT ?= $(BUILD)/demo.png
 
-.PHONY: all build deps configure demo test bench paper-figures results clean
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS ?= parse scene ply image filter
+
+.PHONY: all build deps configure demo test bench paper-figures results fuzz clean
 
 all: build
 
@@ -48,6 +52,17 @@ paper-figures: deps
 results: deps
 	@$(MAKE) --no-print-directory build
 	@bash scripts/results.sh $(CMAM)
+
+# Each target replays its seeds and regressions, then fuzzes; crashing inputs are written to
+# fuzz/regressions/TARGET/ (commit them). Every target runs even when one fails.
+fuzz:
+	@bash scripts/setup-deps.sh --fuzz
+	@JOBS=$(JOBS) bash fuzz/run.sh build
+	@failed=""; for t in $(FUZZ_TARGETS); do \
+	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
+	  bash fuzz/run.sh fuzz $$t $(FUZZ_SECONDS) || failed="$$failed $$t"; \
+	done; \
+	if [ -n "$$failed" ]; then echo "fuzz: inputs that fail are in fuzz/regressions/ for:$$failed"; exit 1; fi
 
 clean:
 	rm -rf build

@@ -7,6 +7,7 @@
 
 #include <cmam/texture/image.h>
 
+#include <cstddef>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -27,8 +28,14 @@ struct RawImage {
     std::vector<float> pixels;
 };
 
-/// Reads an image; throws ImageIoError naming the file and the reason.
+/// Reads an image; throws ImageIoError naming the file and the reason. An image whose pixels
+/// (as 32-bit floats) would take more than the image memory limit is refused, with its size,
+/// before anything is allocated.
 RawImage read_image(const std::string& path);
+
+/// The image memory limit in bytes (default: the machine's physical memory); for tests and
+/// fuzzing, which keep hostile sizes small.
+void set_image_memory_limit(std::size_t bytes);
 
 /// Reads a texture as pbrt-v3's imagemap does: flipped so that row 0 is v = 0, decoded from
 /// sRGB when `gamma` (default: when the file stores 8-bit data), multiplied by `scale`. Float

@@ -9,10 +9,12 @@ packages=(
   libgtest-dev libgmock-dev googletest libbenchmark-dev
 )
 # With --test, also what the tests need beyond the build: Chromium opens the HTML report, and
-# Clang builds the filtering library a second time.
-if [[ "${1:-}" == "--test" ]]; then
-  packages+=(chromium clang)
-fi
+# Clang builds the filtering library a second time and, with libFuzzer and the sanitizers'
+# runtimes (libclang-rt-14-dev), the fuzz targets. With --fuzz, only what `make fuzz` needs.
+case "${1:-}" in
+  --test) packages+=(chromium clang libclang-rt-14-dev) ;;
+  --fuzz) packages+=(clang libclang-rt-14-dev) ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -137,6 +137,31 @@ TEST(ImageIo, UnreadableImagesNameFileAndReason) {
     }
 }
 
+// A header claiming more pixels than the image memory limit is refused, naming the file and the
+// size, before the pixels are allocated (a PPM claiming 65535^2 once ended in std::bad_alloc).
+TEST(ImageIo, ImagesOverTheMemoryLimitAreRefusedBeforeReading) {
+    TempDir d;
+    const std::string p = (d.path / "huge.ppm").string();
+    std::ofstream(p, std::ios::binary) << "P6\n65535 65535\n255\n" << std::string(12, '\x7f');
+    set_image_memory_limit(std::size_t(1) << 30);
+    try {
+        read_image(p);
+        FAIL();
+    } catch (const ImageIoError& e) {
+        EXPECT_NE(std::string(e.what()).find("\"" + p + "\": 65535x65535 with 3 channels needs "
+                                             "49150 MB, over the limit of 1024 MB"),
+                  std::string::npos)
+            << e.what();
+    }
+    const std::string small = (d.path / "small.exr").string();
+    write_image(small, 4, 4, gradient(4, 4));
+    set_image_memory_limit(4 * 4 * 3 * sizeof(float) - 1);
+    EXPECT_THROW(read_image(small), ImageIoError);
+    set_image_memory_limit(4 * 4 * 3 * sizeof(float));
+    EXPECT_EQ(read_image(small).width, 4);
+    set_image_memory_limit(std::size_t(1) << 40);
+}
+
 // A write that fails part way (here past a file size limit, as on a full disk) is an error
 // naming the file and the reason, for every format: the old file stays and no temporary is
 // left. PNG once reported success and replaced the old file with a cut one.
