@@ -46,16 +46,19 @@ case "${1:-}" in
     ;;
   fuzz)
     t=$2 seconds=$3
+    extra=()
     if [[ "${4:-}" == ci ]]; then
       work="$BUILD/ci-corpus/$t" artifacts="$BUILD/artifacts/$t"
       rm -rf "$work"
+      # A fixed seed: CI explores the same inputs on every run, so its result is reproducible.
+      extra=(-seed=1)
     else
       work="$BUILD/corpus/$t" artifacts="fuzz/regressions/$t"
     fi
     mkdir -p "$work" "$artifacts"
     # New inputs go to the first directory (under build/), never to the seeds.
     # shellcheck disable=SC2046
-    "$BUILD/fuzz/fuzz_$t" "${LIMITS[@]}" $(dict "$t") -max_total_time="$seconds" \
+    "$BUILD/fuzz/fuzz_$t" "${LIMITS[@]}" "${extra[@]}" $(dict "$t") -max_total_time="$seconds" \
       -print_final_stats=1 -artifact_prefix="$artifacts/" "$work" $(seeds "$t") $(regressions "$t")
     ;;
   *)
