@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 #include <sstream>
@@ -118,6 +119,24 @@ void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
                      (unsigned long long)stats.dropped_differentials);
 }
 
+// The image is written to a temporary beside `out` and renamed: its folder must exist and be
+// writable.
+void check_output_folder(const std::string& out) {
+    namespace fs = std::filesystem;
+    fs::path dir = fs::path(out).parent_path();
+    if (dir.empty()) dir = ".";
+    std::error_code ec;
+    if (!fs::exists(dir, ec))
+        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                                    "\" does not exist");
+    if (!fs::is_directory(dir, ec))
+        throw std::invalid_argument("cannot write \"" + out + "\": \"" + dir.string() +
+                                    "\" is not a folder");
+    if (::access(dir.c_str(), W_OK) != 0)
+        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                                    "\" is not writable");
+}
+
 int run_render(const RenderArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
@@ -163,6 +182,7 @@ int run_render(const RenderArgs& a) {
     bo.cmam.two_d = a.cmam_2d;
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
+    check_output_folder(out);  // before rendering: a long render is not lost to a typo
 
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     render::RenderOptions ro;

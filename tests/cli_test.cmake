@@ -19,6 +19,13 @@ endif()
 if(EXISTS ${OUT}/bad.png)
   message(FATAL_ERROR "a failed render must not write an image")
 endif()
+# An output folder that does not exist is reported before rendering, and nothing is written.
+execute_process(COMMAND ${CMAM} render ${SCENES}/demo.pbrt -o ${OUT}/missing/demo.png --spp 1 --quiet
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "cannot write \"${OUT}/missing/demo.png\": the folder \"${OUT}/missing\" does not exist"
+   OR EXISTS ${OUT}/missing)
+  message(FATAL_ERROR "a missing output folder must fail before rendering: ${rc} ${err}")
+endif()
 execute_process(COMMAND ${CMAM} check ${SCENES}/demo.pbrt RESULT_VARIABLE rc OUTPUT_VARIABLE out)
 if(NOT rc EQUAL 0 OR NOT out MATCHES "ok:")
   message(FATAL_ERROR "check failed: ${out}")
