@@ -462,6 +462,7 @@ int run_check(const std::string& path) {
 
 int main(int argc, char** argv) {
     CLI::App app{"cmam: a texture-filtering Whitted ray tracer for pbrt-v3 scenes"};
+    app.set_version_flag("--version", std::string("cmam ") + CMAM_VERSION);
     app.require_subcommand(1);
 
     RenderArgs ra;

@@ -19,6 +19,10 @@ endif()
 if(EXISTS ${OUT}/bad.png)
   message(FATAL_ERROR "a failed render must not write an image")
 endif()
+execute_process(COMMAND ${CMAM} --version RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "^cmam [0-9]+\\.[0-9]+\\.[0-9]+")
+  message(FATAL_ERROR "--version must print the version: ${rc} ${out}")
+endif()
 # An output folder that does not exist is reported before rendering, and nothing is written.
 execute_process(COMMAND ${CMAM} render ${SCENES}/demo.pbrt -o ${OUT}/missing/demo.png --spp 1 --quiet
                 RESULT_VARIABLE rc ERROR_VARIABLE err)
