@@ -342,12 +342,14 @@ int run_lookup(const LookupArgs& a) {
         std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n",
                     info.major, info.minor);
     else if (*kind == texture::FilterKind::Area && info.major > 0)
-        std::printf("footprint: parallelogram, sides %.4f and %.4f texels (with the reconstruction "
-                    "term), area %.4f texels^2, integrated on level %d\n",
-                    info.major, info.minor, info.area, info.level_lo);
+        std::printf(
+            "footprint: parallelogram, sides %.4f and %.4f texels (with the reconstruction "
+            "term), area %.4f texels^2, integrated on level %d\n",
+            info.major, info.minor, info.area, info.level_lo);
     else if (*kind == texture::FilterKind::Area)
-        std::printf("footprint: the samples' triangle, area %.4f texels^2, integrated on level %d\n",
-                    info.area, info.level_lo);
+        std::printf(
+            "footprint: the samples' triangle, area %.4f texels^2, integrated on level %d\n",
+            info.area, info.level_lo);
     else
         std::printf("footprint: width %.4f texels\n", info.width);
     return 0;
@@ -531,8 +533,7 @@ int main(int argc, char** argv) {
         ->add_option("--points", la.points,
                      "Footprint sample points U1,V1[,U2,V2[,U3,V3]], current first")
         ->excludes(axes_opt);
-    lookup_cmd->add_option("--filter", la.filter, texture::filter_names())
-        ->capture_default_str();
+    lookup_cmd->add_option("--filter", la.filter, texture::filter_names())->capture_default_str();
     lookup_cmd->add_option("--wrap", la.wrap, "repeat, clamp, black or mirror")
         ->capture_default_str();
     lookup_cmd->add_option("--maxaniso", la.max_aniso, "EWA maximum anisotropy")

@@ -234,9 +234,10 @@ class SummaryReporter : public benchmark::ConsoleReporter {
 
     // The exact area filter beside our EWA and trilinear (ours alone, spread sizes).
     void area_table() {
-        std::printf("\nBM_OursSpread (ns per lookup, medians of 3 repetitions)\n%-12s %10s %10s "
-                    "%10s %12s\n",
-                    "size/aniso", "trilinear", "ewa", "area", "area/ewa");
+        std::printf(
+            "\nBM_OursSpread (ns per lookup, medians of 3 repetitions)\n%-12s %10s %10s "
+            "%10s %12s\n",
+            "size/aniso", "trilinear", "ewa", "area", "area/ewa");
         for (int size : kSizes)
             for (int aniso : kAnisos) {
                 const std::string key = "/" + std::to_string(size) + "/" + std::to_string(aniso) +

@@ -263,9 +263,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
                         k == "cmam_trilinear" ? "  (target <= +10%)" : "");
         }
         if (m_area_vs_ewa != 0)
-            std::printf("differentials: --filter area vs --filter ewa: %+.1f%% render time "
-                        "(paired; target <= 0%%)\n",
-                        m_area_vs_ewa);
+            std::printf(
+                "differentials: --filter area vs --filter ewa: %+.1f%% render time "
+                "(paired; target <= 0%%)\n",
+                m_area_vs_ewa);
     }
 
   private:

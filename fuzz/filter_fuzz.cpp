@@ -4,13 +4,12 @@
 // and a cache shared by the sequence), RowPrefixTable::integral or polygon_integral, with
 // coordinates that may be huge, tiny, infinite or not numbers. Lookups must return finite
 // values (the texels are finite); the integrals must not crash.
-#include <fuzzer/FuzzedDataProvider.h>
-
 #include <cmam/texture/area.h>
 #include <cmam/texture/cmam.h>
 #include <cmam/texture/filter.h>
 #include <cmam/texture/polygon.h>
 #include <cmam/texture/sat.h>
+#include <fuzzer/FuzzedDataProvider.h>
 
 #include <cmath>
 #include <cstdio>
@@ -25,12 +24,18 @@ namespace {
 /// A coordinate: mostly moderate values, sometimes not a number, infinite, tiny or anything.
 double number(FuzzedDataProvider& in, double scale = 1) {
     switch (in.ConsumeIntegralInRange(0, 9)) {
-        case 0: return std::numeric_limits<double>::quiet_NaN();
-        case 1: return in.ConsumeBool() ? HUGE_VAL : -HUGE_VAL;
-        case 2: return in.ConsumeFloatingPoint<double>();
-        case 3: return in.ConsumeFloatingPointInRange(-1e-6, 1e-6) * scale;
-        case 4: return in.ConsumeFloatingPointInRange(-1e6, 1e6) * scale;
-        default: return in.ConsumeFloatingPointInRange(-4.0, 4.0) * scale;
+        case 0:
+            return std::numeric_limits<double>::quiet_NaN();
+        case 1:
+            return in.ConsumeBool() ? HUGE_VAL : -HUGE_VAL;
+        case 2:
+            return in.ConsumeFloatingPoint<double>();
+        case 3:
+            return in.ConsumeFloatingPointInRange(-1e-6, 1e-6) * scale;
+        case 4:
+            return in.ConsumeFloatingPointInRange(-1e6, 1e6) * scale;
+        default:
+            return in.ConsumeFloatingPointInRange(-4.0, 4.0) * scale;
     }
 }
 
@@ -42,7 +47,8 @@ tx::Vec2d vec(FuzzedDataProvider& in, double scale = 1) {
 tx::Footprint footprint(FuzzedDataProvider& in) {
     tx::Footprint fp;
     switch (in.ConsumeIntegralInRange(0, 2)) {
-        case 0: return tx::Footprint::none();
+        case 0:
+            return tx::Footprint::none();
         case 1: {
             const tx::Vec2d a = vec(in, 0.25);
             return tx::Footprint::axes(a, vec(in, 0.25));

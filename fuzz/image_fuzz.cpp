@@ -13,9 +13,9 @@
 namespace {
 
 // The formats a scene's textures are likely to be in, and a few more OpenImageIO reads.
-const char* const kExtensions[] = {".png", ".exr", ".tga", ".bmp", ".ppm", ".pfm", ".hdr",
-                                   ".tif", ".jpg", ".gif", ".webp", ".dds", ".psd", ".ico",
-                                   ".sgi", ".iff", ".fits", ".rla", ".dpx", ".pic"};
+const char* const kExtensions[] = {".png", ".exr", ".tga",  ".bmp",  ".ppm", ".pfm", ".hdr",
+                                   ".tif", ".jpg", ".gif",  ".webp", ".dds", ".psd", ".ico",
+                                   ".sgi", ".iff", ".fits", ".rla",  ".dpx", ".pic"};
 constexpr std::size_t kCount = std::size(kExtensions);
 
 }  // namespace

@@ -3,17 +3,16 @@
 #include <charconv>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <memory>
 #include <optional>
+#include <sstream>
 
 #include "pbrt/input_file.h"
 #include "pbrt/tokenizer.h"
 
 namespace cmam::pbrt {
 
-std::string resolve_path(const std::string& base_dir, const FileLoc& loc,
-                         const std::string& name) {
+std::string resolve_path(const std::string& base_dir, const FileLoc& loc, const std::string& name) {
     const std::filesystem::path p(name);
     if (p.is_absolute()) return name;
     // pbrt-v3 resolves every relative path against the main scene file's folder, in Included
@@ -165,8 +164,9 @@ class Parser {
             throw SceneError(p.loc, "cannot read spectrum file " + q(path) + ": " + why);
         std::ifstream in(path);
         if (!in)
-            throw SceneError(p.loc, "cannot read spectrum file " + q(path) + " (named by spectrum " +
-                                        q(p.name) + "; pbrt-v3 reads .spd files of wavelength, value "
+            throw SceneError(p.loc, "cannot read spectrum file " + q(path) +
+                                        " (named by spectrum " + q(p.name) +
+                                        "; pbrt-v3 reads .spd files of wavelength, value "
                                         "pairs)");
         std::vector<double> values;
         std::string line;
@@ -178,8 +178,8 @@ class Parser {
                 char* end = nullptr;
                 const double v = std::strtod(w.c_str(), &end);
                 if (end != w.c_str() + w.size())
-                    throw SceneError(p.loc, "spectrum file " + q(path) + ": " + q(w) +
-                                                " is not a number");
+                    throw SceneError(p.loc,
+                                     "spectrum file " + q(path) + ": " + q(w) + " is not a number");
                 values.push_back(v);
             }
         }
@@ -341,8 +341,10 @@ class Parser {
             if (p.type == ParamType::Spectrum && !p.strings.empty()) read_spd(p);
             const FileLoc loc = p.loc;
             if (const auto first = ps.add(std::move(p)))
-                warn(loc, "parameter " + q(name) + " given twice; the later value is used (the "
-                          "first is at " + first->to_string() + ")");
+                warn(loc, "parameter " + q(name) +
+                              " given twice; the later value is used (the "
+                              "first is at " +
+                              first->to_string() + ")");
         }
         return ps;
     }

@@ -18,7 +18,6 @@ SceneDesc parse_string(const std::string& text, const std::string& filename = "<
 /// Resolves `name`, as written in the file at `loc`, as pbrt-v3 does: relative to the main
 /// scene file's directory `base_dir` (SceneDesc::base_dir), in Included files too; a path that
 /// does not exist there but does beside the file at `loc` resolves there.
-std::string resolve_path(const std::string& base_dir, const FileLoc& loc,
-                         const std::string& name);
+std::string resolve_path(const std::string& base_dir, const FileLoc& loc, const std::string& name);
 
 }  // namespace cmam::pbrt

@@ -534,7 +534,8 @@ class Builder {
     // distribution is isotropic).
     TexInput rough_input(const Entity& e, const TextureScope& s, float def) {
         if (e.params.find("uroughness") || e.params.find("vroughness")) {
-            TexInput u = float_input(e, s, "uroughness", def), v = float_input(e, s, "vroughness", def);
+            TexInput u = float_input(e, s, "uroughness", def),
+                     v = float_input(e, s, "vroughness", def);
             if (u.node < 0 && v.node < 0) return TexInput{-1, Rgb(0.5f * (u.value.r + v.value.r))};
             warn(e.loc, "textured uroughness/vroughness: uroughness is used for both");
             (void)e.params.get_float("roughness", def);
@@ -596,8 +597,8 @@ class Builder {
             m.type = Material::Type::Plastic;
             m.kd = spectrum_input(e, s, "Kd", Rgb(t == "substrate" ? 0.5f : 0.25f));
             m.ks = spectrum_input(e, s, "Ks", Rgb(t == "substrate" ? 0.5f : 0.25f));
-            m.roughness = t == "substrate" ? rough_input(e, s, 0.1f)
-                                           : float_input(e, s, "roughness", 0.1f);
+            m.roughness =
+                t == "substrate" ? rough_input(e, s, 0.1f) : float_input(e, s, "roughness", 0.1f);
             m.remap_roughness = e.params.get_bool("remaproughness", true);
             if (t == "translucent") {
                 (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
@@ -807,8 +808,7 @@ class Builder {
             const char* delta_name = e.params.find("conedelta") && !e.params.find("conedeltaangle")
                                          ? "conedelta"
                                          : "conedeltaangle";
-            double cone = finite_float(e, "coneangle", 30),
-                   delta = finite_float(e, delta_name, 5);
+            double cone = finite_float(e, "coneangle", 30), delta = finite_float(e, delta_name, 5);
             l.position = to_vec(m.apply_point(from));
             Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
             if (length(axis) == 0)

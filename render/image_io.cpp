@@ -31,7 +31,9 @@ std::atomic<std::size_t> g_image_memory_limit{physical_memory()};
 
 }  // namespace
 
-void set_image_memory_limit(std::size_t bytes) { g_image_memory_limit.store(bytes); }
+void set_image_memory_limit(std::size_t bytes) {
+    g_image_memory_limit.store(bytes);
+}
 
 RawImage read_image(const std::string& path) {
     if (!fs::exists(path)) throw ImageIoError("cannot read image \"" + path + "\": file not found");
@@ -53,12 +55,11 @@ RawImage read_image(const std::string& path) {
     // In double: width x height x channels x 4 can exceed 64 bits (OpenImageIO's sizes are int).
     const double bytes = double(img.width) * img.height * img.channels * sizeof(float);
     if (bytes > double(g_image_memory_limit.load()))
-        throw ImageIoError("cannot read image \"" + path + "\": " + std::to_string(img.width) +
-                           "x" + std::to_string(img.height) + " with " +
-                           std::to_string(img.channels) + " channels needs " +
-                           std::to_string(static_cast<long long>(bytes / (1 << 20))) +
-                           " MB, over the limit of " +
-                           std::to_string(g_image_memory_limit.load() >> 20) + " MB");
+        throw ImageIoError(
+            "cannot read image \"" + path + "\": " + std::to_string(img.width) + "x" +
+            std::to_string(img.height) + " with " + std::to_string(img.channels) +
+            " channels needs " + std::to_string(static_cast<long long>(bytes / (1 << 20))) +
+            " MB, over the limit of " + std::to_string(g_image_memory_limit.load() >> 20) + " MB");
     img.pixels.resize(static_cast<std::size_t>(img.width) * img.height * img.channels);
     if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
         std::string why = in->geterror();

@@ -176,8 +176,7 @@ struct Tracer {
                         texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
                     ctx.stratum_offset = {hd.dudx * to_stratum_x + hd.dudy * to_stratum_y,
                                           hd.dvdx * to_stratum_x + hd.dvdy * to_stratum_y};
-                }
-                else if (counts && ray.diff.valid)
+                } else if (counts && ray.diff.valid)
                     ++counts->dropped_differentials;
             }
             if (scene.needs_cones) {

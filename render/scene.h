@@ -171,7 +171,7 @@ class Scene {
     TagPolicy tags = TagPolicy::Scanline;  // CMAM ray tagging
     // Which footprint producers some texture asks for (the tracer computes only those).
     bool needs_differentials = false, needs_cones = false, needs_cones_aniso = false;
-    bool uses_cmam = false;  // some texture's footprint comes from the CMAM
+    bool uses_cmam = false;     // some texture's footprint comes from the CMAM
     texture::CmamOptions cmam;  // CMAM policies (the filter comes from each texture)
 
     /// Creates the Embree scene from `primitives`; call once after filling them.

@@ -62,9 +62,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 texture::LookupInfo info;
                 texture::CmamRegion region;
                 x = texture::cmam_lookup(
-                    *n.image,
-                    ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node), ctx.path), ctx.tag,
-                    s, t, o, ctx.counts ? &info : nullptr,
+                    *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node), ctx.path),
+                    ctx.tag, s, t, o, ctx.counts ? &info : nullptr,
                     ctx.counts && o.two_d ? &region : nullptr);
                 if (ctx.counts) {
                     ++ctx.counts->by_filter[static_cast<int>(o.filter)];

@@ -52,8 +52,8 @@ class CmamRowState {
 
 /// What a texture lookup knows about the shading point.
 struct TexContext {
-    float u = 0, v = 0;               // surface (u,v) of the hit
-    texture::Footprint footprint{};   // ray differentials' footprint (None: point sample)
+    float u = 0, v = 0;              // surface (u,v) of the hit
+    texture::Footprint footprint{};  // ray differentials' footprint (None: point sample)
     // Ray differentials: from the hit to the centre of the sample's stratum (uv), the first-order
     // image of the sample's jitter. The area filter integrates the stratum itself, centred there,
     // so that a pixel's strata tile it (algorithms.md §5.2).
@@ -66,7 +66,7 @@ struct TexContext {
     // The ray's path: 1 for camera rays, then 2p for the reflected and 2p + 1 for the refracted
     // child of path p (the CMAM keeps a cache per path).
     uint64_t path = 1;
-    CmamRowState* cmam = nullptr;     // the row's CMAM caches (null: no CMAM)
+    CmamRowState* cmam = nullptr;  // the row's CMAM caches (null: no CMAM)
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the

@@ -71,7 +71,8 @@ TEST_P(AreaWrap, RowPrefixIntegralMatchesTheCellOracle) {
 TEST_P(AreaWrap, ConstantTextureStaysConstant) {
     const WrapMode w = GetParam();
     std::vector<float> px(std::size_t(40) * 24 * 3);
-    for (std::size_t i = 0; i < px.size(); ++i) px[i] = i % 3 == 0 ? 0.25f : (i % 3 == 1 ? 0.5f : 2);
+    for (std::size_t i = 0; i < px.size(); ++i)
+        px[i] = i % 3 == 0 ? 0.25f : (i % 3 == 1 ? 0.5f : 2);
     FilteredTexture t(Image(40, 24, 3, px, w, w));
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> pos(0.1, 0.9), size(-9, 2), angle(0, 6.3);
@@ -135,8 +136,8 @@ TEST(Area, LevelRuleErrorAgainstLevelZeroIsBounded) {
     std::printf("level rule vs level 0 on white noise: rms %.5f, max %.5f, %d of %d coarser\n", rms,
                 worst, coarse, count);
     EXPECT_GT(coarse, count / 2);  // the rule does pick coarser levels
-    EXPECT_LT(rms, 0.006);  // measured 0.0034
-    EXPECT_LT(worst, 0.04);  // measured 0.020
+    EXPECT_LT(rms, 0.006);         // measured 0.0034
+    EXPECT_LT(worst, 0.04);        // measured 0.020
 }
 
 TEST(Area, CostIsBoundedByThePerimeterRule) {
@@ -166,9 +167,9 @@ TEST(Area, SymmetricRegionOnALinearRampGivesTheCentre) {
         EXPECT_NEAR(t.lookup(0.5, 0.5, fp, {FilterKind::Area})[0], 32.0, tol) << s;
     }
     // A sub-texel region is the bilinear reconstruction, which is the ramp itself.
-    EXPECT_NEAR(t.lookup(0.3 + 0.1 / 64, 0.5, Footprint::axes({1e-5, 0}, {0, 1e-5}),
-                         {FilterKind::Area})[0],
-                0.3 * 64 + 0.1, 1e-4);
+    EXPECT_NEAR(
+        t.lookup(0.3 + 0.1 / 64, 0.5, Footprint::axes({1e-5, 0}, {0, 1e-5}), {FilterKind::Area})[0],
+        0.3 * 64 + 0.1, 1e-4);
 }
 
 TEST(Area, TinyAxisAlignedRegionIsTheBilinearValue) {
@@ -265,12 +266,12 @@ TEST(Area, CollinearAndNonFiniteFootprints) {
     const AreaRegion g = area_region(t, 0.5, 0.5, {0.25, 0.125}, {-0.5, -0.25});
     EXPECT_NEAR(g.minor, 1.0, 1e-9);
     EXPECT_NEAR(g.major, std::sqrt(0.5 * 0.5 * 32 * 32 + 0.25 * 0.25 * 32 * 32 + 1), 1e-9);
-    const Texel x = t.lookup(0.5, 0.5, Footprint::axes({0.25, 0.125}, {-0.5, -0.25}),
-                             {FilterKind::Area});
+    const Texel x =
+        t.lookup(0.5, 0.5, Footprint::axes({0.25, 0.125}, {-0.5, -0.25}), {FilterKind::Area});
     EXPECT_TRUE(std::isfinite(x[0]));
     LookupInfo info;
-    const Texel m = t.lookup(0.5, 0.5, Footprint::axes({NAN, 0}, {0, 0.1}), {FilterKind::Area},
-                             &info);
+    const Texel m =
+        t.lookup(0.5, 0.5, Footprint::axes({NAN, 0}, {0, 0.1}), {FilterKind::Area}, &info);
     EXPECT_TRUE(info.fallback);
     EXPECT_EQ(m[0], t.image().mean()[0]);
     EXPECT_EQ(area_parallelogram(t, 0.5, INFINITY, {0.1, 0}, {0, 0.1}).value[0],

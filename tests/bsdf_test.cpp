@@ -94,9 +94,8 @@ TEST(Mirror, ReflectsWithKr) {
 namespace {
 // The BSDF of the first material of a one-sphere scene with `material`, at the sphere's top.
 Bsdf bsdf_of(const std::string& material, std::vector<std::string>* warnings = nullptr) {
-    const std::string text =
-        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n" + material +
-        "\nShape \"sphere\" \"float radius\" 1\nWorldEnd\n";
+    const std::string text = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n" +
+                             material + "\nShape \"sphere\" \"float radius\" 1\nWorldEnd\n";
     auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {}, [&](const std::string& w) {
         if (warnings) warnings->push_back(w);
     });
@@ -130,11 +129,13 @@ TEST(Materials, MetalUsesTheConductorsNormalIncidenceReflectance) {
     const Bsdf b = bsdf_of("Material \"metal\"");
     EXPECT_TRUE(b.conductor);
     EXPECT_NEAR(b.f0.r, 0.95215, 1e-4);  // n 0.2004, k 3.9129
-    const Bsdf gold = bsdf_of("Material \"metal\" \"rgb eta\" [0.143 0.374 1.442] \"rgb k\" "
-                              "[3.983 2.385 1.603] \"float roughness\" 0.2");
-    EXPECT_NEAR(gold.f0.b, ((1.442 - 1) * (1.442 - 1) + 1.603 * 1.603) /
-                               ((1.442 + 1) * (1.442 + 1) + 1.603 * 1.603),
-                1e-5);
+    const Bsdf gold = bsdf_of(
+        "Material \"metal\" \"rgb eta\" [0.143 0.374 1.442] \"rgb k\" "
+        "[3.983 2.385 1.603] \"float roughness\" 0.2");
+    EXPECT_NEAR(
+        gold.f0.b,
+        ((1.442 - 1) * (1.442 - 1) + 1.603 * 1.603) / ((1.442 + 1) * (1.442 + 1) + 1.603 * 1.603),
+        1e-5);
     // Reflection only, and brighter towards grazing (Schlick).
     const Vec3 n(0, 0, 1);
     const Vec3 wo = normalize(Vec3(0.2f, 0, 1)), wi = normalize(Vec3(-0.2f, 0, 1));
@@ -144,8 +145,8 @@ TEST(Materials, MetalUsesTheConductorsNormalIncidenceReflectance) {
 
 TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
     std::vector<std::string> warnings;
-    const Bsdf b = bsdf_of("Material \"kdsubsurface\" \"rgb Kd\" [0.2 0.3 0.4] \"float eta\" 1.3",
-                           &warnings);
+    const Bsdf b =
+        bsdf_of("Material \"kdsubsurface\" \"rgb Kd\" [0.2 0.3 0.4] \"float eta\" 1.3", &warnings);
     EXPECT_FLOAT_EQ(b.kd.b, 0.4f);
     EXPECT_TRUE(b.ks.is_black());
     // (Besides the scene's own: no integrator, no lights.)
@@ -160,8 +161,8 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
               1);
     EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
     warnings.clear();
-    const Bsdf s = bsdf_of("Material \"substrate\" \"float uroughness\" 0.1 \"float vroughness\" 0.3",
-                           &warnings);
+    const Bsdf s = bsdf_of(
+        "Material \"substrate\" \"float uroughness\" 0.1 \"float vroughness\" 0.3", &warnings);
     EXPECT_FLOAT_EQ(s.kd.r, 0.5f);
     EXPECT_EQ(count("material \"substrate\" is rendered as \"plastic\""), 1);
 }

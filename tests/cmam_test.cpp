@@ -296,11 +296,11 @@ TEST(Cmam, PointsFootprintIsTheRenderersRouteForEveryFilter) {
     std::vector<float> px(37 * 23 * 3);
     for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 7919) % 101) / 100;
     FilteredTexture t(Image(37, 23, 3, px));
-    const Vec2d pts[][3] = {{{0.4, 0.5}, {0.39, 0.5}, {0.38, 0.501}},   // a row: nearly collinear
-                            {{0.4, 0.5}, {0.37, 0.49}, {0.41, 0.45}},   // a triangle with area
+    const Vec2d pts[][3] = {{{0.4, 0.5}, {0.39, 0.5}, {0.38, 0.501}},  // a row: nearly collinear
+                            {{0.4, 0.5}, {0.37, 0.49}, {0.41, 0.45}},  // a triangle with area
                             {{0.1, 0.9}, {0.05, 0.93}, {0.0, 0.96}}};  // collinear
-    for (FilterKind kind : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
-                            FilterKind::Area})
+    for (FilterKind kind :
+         {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa, FilterKind::Area})
         for (const auto& p : pts)
             for (int n : {2, 3}) {
                 Footprint fp;

@@ -511,9 +511,8 @@ TEST(Filter, SymmetricFootprintOnALinearRampGivesTheCentre) {
     for (int j = 0; j < 64; ++j)
         for (int i = 0; i < 64; ++i) px[j * 64 + i] = float(i + 0.5);  // value = s at texel centres
     FilteredTexture t(Image(64, 64, 1, px, WrapMode::Clamp, WrapMode::Clamp));
-    for (FilterKind kind :
-         {FilterKind::Bilinear, FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
-          FilterKind::Area}) {
+    for (FilterKind kind : {FilterKind::Bilinear, FilterKind::Trilinear, FilterKind::Sat,
+                            FilterKind::Ewa, FilterKind::Area}) {
         Texel x = t.lookup(0.5, 0.5, Footprint::axes({4.0 / 64, 1.0 / 64}, {-1.0 / 64, 3.0 / 64}),
                            {kind});
         EXPECT_NEAR(x[0], 32.0, 1e-3) << to_string(kind);

@@ -148,7 +148,8 @@ TEST(ImageIo, ImagesOverTheMemoryLimitAreRefusedBeforeReading) {
         read_image(p);
         FAIL();
     } catch (const ImageIoError& e) {
-        EXPECT_NE(std::string(e.what()).find("\"" + p + "\": 65535x65535 with 3 channels needs "
+        EXPECT_NE(std::string(e.what()).find("\"" + p +
+                                             "\": 65535x65535 with 3 channels needs "
                                              "49150 MB, over the limit of 1024 MB"),
                   std::string::npos)
             << e.what();

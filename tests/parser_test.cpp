@@ -2,12 +2,11 @@
 #include "pbrt/parser.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <unistd.h>
 
 using namespace cmam::pbrt;
 
@@ -169,8 +168,9 @@ TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
     fs::create_directories(dir / "data");
     std::ofstream(dir / "data" / "x.ply") << "x";
     std::ofstream(dir / "sub" / "only" / "y.ply") << "y";
-    std::ofstream(dir / "sub" / "part.pbrt") << "Shape \"plymesh\" \"string filename\" \"data/x.ply\"\n"
-                                             << "Shape \"plymesh\" \"string filename\" \"only/y.ply\"\n";
+    std::ofstream(dir / "sub" / "part.pbrt")
+        << "Shape \"plymesh\" \"string filename\" \"data/x.ply\"\n"
+        << "Shape \"plymesh\" \"string filename\" \"only/y.ply\"\n";
     std::ofstream(dir / "main.pbrt") << kHeader << "Include \"sub/part.pbrt\"\nWorldEnd\n";
     SceneDesc d = parse_file((dir / "main.pbrt").string());
     ASSERT_EQ(d.shapes.size(), 2u);
@@ -197,7 +197,9 @@ TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
     // conversion the spectrum type uses.
     std::vector<double> pairs;
     const double h = 6.62606957e-34, c = 299792458.0, kb = 1.3806488e-23, T = 3000;
-    auto planck = [&](double l) { return 2 * h * c * c / (std::pow(l, 5) * (std::exp(h * c / (l * kb * T)) - 1)); };
+    auto planck = [&](double l) {
+        return 2 * h * c * c / (std::pow(l, 5) * (std::exp(h * c / (l * kb * T)) - 1));
+    };
     for (int nm = 360; nm <= 830; nm += 5) {
         pairs.push_back(nm);
         pairs.push_back(2 * planck(nm * 1e-9) / planck(2.8977721e-3 / T));

@@ -130,25 +130,28 @@ TEST(Analytic, FilmScaleMultipliesRadianceNotAovs) {
     // pbrt-v3's Film "scale": the same scene at scale 2.5 is 2.5 times as bright; the texture
     // AOV is unscaled.
     auto with_scale = [](const char* film, AovKind aov) {
-        const std::string text = std::string("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\n") +
-                                 "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8" +
-                                 film + "\nWorldBegin\nLightSource \"distant\" \"rgb L\" [1 1 1] " +
-                                 "\"point from\" [0 0 5] \"point to\" [0 0 0]\n" +
-                                 "Material \"matte\" \"rgb Kd\" [0.5 0.25 0.125]\n" +
-                                 "Shape \"sphere\" \"float radius\" 3\nWorldEnd\n";
+        const std::string text =
+            std::string("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\n") +
+            "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8" + film +
+            "\nWorldBegin\nLightSource \"distant\" \"rgb L\" [1 1 1] " +
+            "\"point from\" [0 0 5] \"point to\" [0 0 0]\n" +
+            "Material \"matte\" \"rgb Kd\" [0.5 0.25 0.125]\n" +
+            "Shape \"sphere\" \"float radius\" 3\nWorldEnd\n";
         auto s = test::scene_from(text, "t.pbrt", 1);
         RenderOptions o;
         o.aov = aov;
         return render::render(*s, o, nullptr).rgb;
     };
-    const auto one = with_scale("", AovKind::None), two = with_scale(" \"float scale\" 2.5", AovKind::None);
+    const auto one = with_scale("", AovKind::None),
+               two = with_scale(" \"float scale\" 2.5", AovKind::None);
     double sum = 0;
     for (std::size_t i = 0; i < one.size(); ++i) {
         EXPECT_FLOAT_EQ(two[i], 2.5f * one[i]);
         sum += one[i];
     }
     EXPECT_GT(sum, 0);
-    EXPECT_EQ(with_scale("", AovKind::Texture), with_scale(" \"float scale\" 2.5", AovKind::Texture));
+    EXPECT_EQ(with_scale("", AovKind::Texture),
+              with_scale(" \"float scale\" 2.5", AovKind::Texture));
 }
 
 TEST(Analytic, ShadowsBlockDirectLight) {

@@ -74,8 +74,8 @@ void RowPrefixTable::knot(const float* row, int64_t k, double* out) const {
             return;
         case WrapMode::Black:
             for (int c = 0; c < NC; ++c)
-                out[c] = k < 0 ? -m_mean[c] * double(k)
-                               : row[W * NC + c] - m_mean[c] * double(k - W);
+                out[c] =
+                    k < 0 ? -m_mean[c] * double(k) : row[W * NC + c] - m_mean[c] * double(k - W);
             return;
     }
 }
@@ -89,7 +89,8 @@ void RowPrefixTable::outside_integral(const float* row, double a, double b, doub
     if (a < 0) {  // R(x) = x s on x <= 0
         const double e = std::min(b, 0.0);
         for (int c = 0; c < NC; ++c) {
-            const double s = m_wrap_s == WrapMode::Clamp ? double(row[NC + c]) - row[c] : -m_mean[c];
+            const double s =
+                m_wrap_s == WrapMode::Clamp ? double(row[NC + c]) - row[c] : -m_mean[c];
             out[c] += s * (e * e - a * a) / 2;
         }
     }
@@ -97,9 +98,8 @@ void RowPrefixTable::outside_integral(const float* row, double a, double b, doub
         const double e = std::max(a, W);
         for (int c = 0; c < NC; ++c) {
             const double dw = row[m_w * NC + c];
-            const double s = m_wrap_s == WrapMode::Clamp
-                                 ? dw - row[(m_w - 1) * NC + c]
-                                 : -m_mean[c];
+            const double s =
+                m_wrap_s == WrapMode::Clamp ? dw - row[(m_w - 1) * NC + c] : -m_mean[c];
             out[c] += dw * (b - e) + s * ((b - W) * (b - W) - (e - W) * (e - W)) / 2;
         }
     }
@@ -246,8 +246,8 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
                     const double w1 = x1 - double(kend), f1 = 0.5 * w1;
                     const float* e = row + kend * NC;
                     for (int c = 0; c < NC; ++c)
-                        acc[c] += h_per_x * (sum[c] + 0.5 * mid[c] +
-                                             w1 * (e[c] + f1 * (e[NC + c] - e[c])));
+                        acc[c] += h_per_x *
+                                  (sum[c] + 0.5 * mid[c] + w1 * (e[c] + f1 * (e[NC + c] - e[c])));
                 }
                 y = ynext;
                 x = xnext;

@@ -116,8 +116,7 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
 }
 
 CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
-                          const CmamCache::Entry& above, const CmamOptions& o,
-                          const RayTag& cur) {
+                          const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur) {
     CmamRegion r;
     r.used_above = true;
     double b[2] = {above.s - s0, above.t - t0};
@@ -141,8 +140,7 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
             // inverse of [[lx ax] [ly ay]] = [[ay -ax] [-ly lx]] / det
             const double jx[2] = {(a[0] * ay - b[0] * ly) / det, (a[1] * ay - b[1] * ly) / det};
             const double jy[2] = {(b[0] * lx - a[0] * ax) / det, (b[1] * lx - a[1] * ax) / det};
-            const double cx = std::floor(cur.x) + 0.5 - cur.x,
-                         cy = std::floor(cur.y) + 0.5 - cur.y;
+            const double cx = std::floor(cur.x) + 0.5 - cur.x, cy = std::floor(cur.y) + 0.5 - cur.y;
             r.offset[0] = jx[0] * cx + jy[0] * cy;
             r.offset[1] = jx[1] * cx + jy[1] * cy;
             a[0] = jx[0];

@@ -278,8 +278,8 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
             in.texels_read = 16;
             return sat().average(r.rect[0], r.rect[1], r.rect[2], r.rect[3]);
         case FilterKind::Ewa: {
-            EwaResult e =
-                ewa(pyramid(), u, v, r.a[0] / W, r.a[1] / H, r.b[0] / W, r.b[1] / H, opts.max_aniso);
+            EwaResult e = ewa(pyramid(), u, v, r.a[0] / W, r.a[1] / H, r.b[0] / W, r.b[1] / H,
+                              opts.max_aniso);
             in.lambda = e.lambda;
             in.level_lo = static_cast<int>(std::floor(e.lambda));
             in.level_hi = e.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;

@@ -73,10 +73,10 @@ inline constexpr double kAreaBlendHi = 2;
 
 struct AreaResult {
     Texel value{};
-    int level = 0;           // MIP level integrated on
-    int knots = 0;           // row-prefix entries read (a cost measure)
-    double area = 0;         // the region's area, level-0 texels^2 (after the reconstruction
-                             // term)
+    int level = 0;                // MIP level integrated on
+    int knots = 0;                // row-prefix entries read (a cost measure)
+    double area = 0;              // the region's area, level-0 texels^2 (after the reconstruction
+                                  // term)
     double major = 0, minor = 0;  // parallelogram: side lengths in level-0 texels (after it)
 };
 
@@ -101,8 +101,7 @@ AreaRegion area_region(const FilteredTexture& texture, double u, double v, Vec2d
 
 /// Mean of the texture over the parallelogram (u,v) ± a/2 ± b/2: area_region() integrated on
 /// its level, or for magnified footprints the Gauss rule on the bilinear reconstruction (above).
-AreaResult area_parallelogram(const FilteredTexture& texture, double u, double v, Vec2d a,
-                              Vec2d b);
+AreaResult area_parallelogram(const FilteredTexture& texture, double u, double v, Vec2d a, Vec2d b);
 
 /// Mean of the box-reconstructed texture over a convex polygon given in uv units (the CMAM's
 /// triangle), on the level the same rule picks for it. Precondition: its area is at least one
