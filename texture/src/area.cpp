@@ -38,6 +38,28 @@ int64_t floor_div(int64_t a, int64_t b) {  // b > 0
     return q - ((a % b != 0) && (a < 0) ? 1 : 0);
 }
 
+// Adds the integral of R over [lo, hi] to `out`, for 0 <= lo <= hi and floor(hi) < W (every
+// knot read is in the table): R is linear within each texel, so partial texels at both ends
+// take their midpoint value times their length, and whole ones (R(k) + R(k+1)) / 2.
+template <int NC>
+[[gnu::always_inline]] inline void integral_inside(const float* row, double lo, double hi,
+                                                   double* out) {
+    const int64_t k0 = static_cast<int64_t>(lo), kend = static_cast<int64_t>(hi);  // floors
+    const float* d = row + k0 * NC;
+    const double b0 = std::min(hi, double(k0 + 1)), f0 = 0.5 * (lo + b0) - double(k0);
+    for (int c = 0; c < NC; ++c) out[c] += (b0 - lo) * (d[c] + f0 * (d[NC + c] - d[c]));
+    if (kend == k0) return;
+    double mid[NC];
+    for (int c = 0; c < NC; ++c) mid[c] = 0;
+    for (int64_t k = k0 + 1; k < kend; ++k) {
+        const float* e = row + k * NC;
+        for (int c = 0; c < NC; ++c) mid[c] += double(e[c]) + e[NC + c];
+    }
+    const double w1 = hi - double(kend), f1 = 0.5 * w1;
+    const float* e = row + kend * NC;
+    for (int c = 0; c < NC; ++c) out[c] += 0.5 * mid[c] + w1 * (e[c] + f1 * (e[NC + c] - e[c]));
+}
+
 }  // namespace
 
 // R(k): the row integral from 0 to the integer k (unwrapped), with the wrap modes' extension.
@@ -143,7 +165,6 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
     }
     if (lo < hi) {
         int64_t k = floor_to_int(lo);
-        const int64_t kfirst = k;
         const int64_t kend = floor_to_int(hi);  // the last texel is [kend, hi] (may be empty)
         // First and last texels are partial; those between are whole: (R(k) + R(k+1)) / 2.
         auto partial = [&](int64_t kk, double a, double b, const double* r0, const double* r1) {
@@ -151,27 +172,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
             for (int c = 0; c < NC; ++c) sum[c] += (b - a) * (r0[c] + f * (r1[c] - r0[c]));
         };
         if (k >= 0 && kend < m_w) {  // inside the table: direct reads
-            const float* d = row + k * NC;
-            for (int c = 0; c < NC; ++c) {
-                ra[c] = d[c];
-                rb[c] = d[NC + c];
-            }
-            partial(k, lo, std::min(hi, double(k + 1)), ra, rb);  // clipped: may be all of it
-            double mid[NC];
-            for (int c = 0; c < NC; ++c) mid[c] = 0;
-            for (++k; k < kend; ++k) {
-                d = row + k * NC;
-                for (int c = 0; c < NC; ++c) mid[c] += double(d[c]) + d[NC + c];
-            }
-            for (int c = 0; c < NC; ++c) sum[c] += 0.5 * mid[c];
-            if (kend > kfirst && hi > double(kend)) {
-                d = row + kend * NC;
-                for (int c = 0; c < NC; ++c) {
-                    ra[c] = d[c];
-                    rb[c] = d[NC + c];
-                }
-                partial(kend, double(kend), hi, ra, rb);
-            }
+            integral_inside<NC>(row, lo, hi, sum);
         } else if (m_wrap_s == WrapMode::Repeat) {
             // Across a period: R(q W + r) = q D[W] + D[r], stepping r without dividing.
             const int64_t W = m_w;
@@ -232,22 +233,10 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
                     const double f = 0.5 * (x0 + x1) - double(k0);
                     for (int c = 0; c < NC; ++c) acc[c] += h * (d[c] + f * (d[NC + c] - d[c]));
                 } else {  // partial first and last texels, whole ones between
-                    const int64_t kend = static_cast<int64_t>(x1);
                     double sum[NC];
-                    const double f0 = 0.5 * (x0 + double(k0 + 1)) - double(k0),
-                                 w0 = double(k0 + 1) - x0;
-                    for (int c = 0; c < NC; ++c) sum[c] = w0 * (d[c] + f0 * (d[NC + c] - d[c]));
-                    double mid[NC];
-                    for (int c = 0; c < NC; ++c) mid[c] = 0;
-                    for (int64_t k = k0 + 1; k < kend; ++k) {
-                        const float* e = row + k * NC;
-                        for (int c = 0; c < NC; ++c) mid[c] += double(e[c]) + e[NC + c];
-                    }
-                    const double w1 = x1 - double(kend), f1 = 0.5 * w1;
-                    const float* e = row + kend * NC;
-                    for (int c = 0; c < NC; ++c)
-                        acc[c] += h_per_x *
-                                  (sum[c] + 0.5 * mid[c] + w1 * (e[c] + f1 * (e[NC + c] - e[c])));
+                    for (int c = 0; c < NC; ++c) sum[c] = 0;
+                    integral_inside<NC>(row, x0, x1, sum);
+                    for (int c = 0; c < NC; ++c) acc[c] += h_per_x * sum[c];
                 }
                 y = ynext;
                 x = xnext;
@@ -482,7 +471,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
             AreaResult r;
             r.value = gauss;
             r.knots = 16;
-            r.major = std::sqrt(std::max(la2, lb2));
+            r.major = major;
             r.minor = std::sqrt(std::min(la2, lb2));
             r.area = std::abs(a.u * b.v - a.v * b.u) * W * H;
             return r;
