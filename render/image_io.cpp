@@ -1,7 +1,5 @@
 #include "render/image_io.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <cmam/texture/image.h>
 #include <fcntl.h>
 #include <unistd.h>
@@ -14,6 +12,8 @@
 #include <filesystem>
 #include <iterator>
 #include <mutex>
+
+#include "render/image_codecs.h"
 
 namespace cmam::render {
 
@@ -36,38 +36,28 @@ void set_image_memory_limit(std::size_t bytes) {
 }
 
 RawImage read_image(const std::string& path) {
-    if (!fs::exists(path)) throw ImageIoError("cannot read image \"" + path + "\": file not found");
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-        std::string why = OIIO::geterror();
-        throw ImageIoError("cannot read image \"" + path +
-                           "\": " + (why.empty() ? "unknown format" : why));
+    const std::string where = "cannot read image \"" + path + "\": ";
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (!fs::exists(st)) throw ImageIoError(where + "file not found");
+    if (fs::is_directory(st)) throw ImageIoError(where + "it is a directory");
+    auto check = [&](const RawImage& img) {
+        const double bytes = double(img.width) * img.height * img.channels * sizeof(float);
+        if (bytes > double(g_image_memory_limit.load()))
+            throw codec::CodecError(std::to_string(img.width) + "x" + std::to_string(img.height) +
+                                    " with " + std::to_string(img.channels) +
+                                    (img.channels == 1 ? " channel" : " channels") + " needs " +
+                                    std::to_string(static_cast<long long>(bytes / (1 << 20))) +
+                                    " MB, over the limit of " +
+                                    std::to_string(g_image_memory_limit.load() >> 20) + " MB");
+    };
+    try {
+        return codec::decode(path, check);
+    } catch (const codec::CodecError& e) {
+        throw ImageIoError(where + e.what());
+    } catch (const std::bad_alloc&) {
+        throw ImageIoError(where + "out of memory");
     }
-    const OIIO::ImageSpec& spec = in->spec();
-    RawImage img;
-    img.width = spec.width;
-    img.height = spec.height;
-    img.channels = spec.nchannels;
-    img.is_8bit = spec.format.basetype == OIIO::TypeDesc::UINT8 ||
-                  spec.format.basetype == OIIO::TypeDesc::INT8;
-    if (img.width <= 0 || img.height <= 0 || img.channels <= 0)
-        throw ImageIoError("cannot read image \"" + path + "\": empty image");
-    // In double: width x height x channels x 4 can exceed 64 bits (OpenImageIO's sizes are int).
-    const double bytes = double(img.width) * img.height * img.channels * sizeof(float);
-    if (bytes > double(g_image_memory_limit.load()))
-        throw ImageIoError(
-            "cannot read image \"" + path + "\": " + std::to_string(img.width) + "x" +
-            std::to_string(img.height) + " with " + std::to_string(img.channels) +
-            " channels needs " + std::to_string(static_cast<long long>(bytes / (1 << 20))) +
-            " MB, over the limit of " + std::to_string(g_image_memory_limit.load() >> 20) + " MB");
-    img.pixels.resize(static_cast<std::size_t>(img.width) * img.height * img.channels);
-    if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
-        std::string why = in->geterror();
-        throw ImageIoError("cannot read image \"" + path +
-                           "\": " + (why.empty() ? "corrupt data" : why));
-    }
-    in->close();
-    return img;
 }
 
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt,
@@ -225,89 +215,73 @@ fs::path temporary_for(const fs::path& target, const std::string& ext) {
     return dir / name;
 }
 
-std::vector<unsigned char> encode_pfm(int w, int h, const std::vector<float>& rgb) {
-    // Little-endian PFM: negative scale; rows stored bottom to top.
-    const std::string header = "PF\n" + std::to_string(w) + " " + std::to_string(h) + "\n-1\n";
-    std::vector<unsigned char> bytes(header.begin(), header.end());
-    const std::size_t row = sizeof(float) * static_cast<std::size_t>(w) * 3;
-    bytes.reserve(header.size() + row * h);
-    for (int y = h - 1; y >= 0; --y) {
-        const auto* p =
-            reinterpret_cast<const unsigned char*>(&rgb[static_cast<std::size_t>(y) * w * 3]);
-        bytes.insert(bytes.end(), p, p + row);
-    }
-    return bytes;
-}
-
-// Encodes the image with `out` into memory and writes it to the temporary (formats whose
-// plug-in cannot write to memory write the temporary themselves, flushed after).
-void write_with(OIIO::ImageOutput& out, Temporary& tmp, const std::string& path,
-                const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* pixels) {
-    OIIO::Filesystem::IOVecOutput memory;
-    const bool in_memory = out.supports("ioproxy") && out.set_ioproxy(&memory);
-    if (!out.open(tmp.path().string(), spec) || !out.write_image(type, pixels) || !out.close())
-        throw ImageIoError(cannot_write(path, out.geterror()));
-    if (in_memory)
-        tmp.write(memory.buffer());
-    else
-        tmp.sync_written();
-    tmp.commit();
-}
-
 }  // namespace
 
 void set_write_test_hook(void (*hook)()) {
     g_test_hook = hook;
 }
 
+namespace {
+
+// Encodes with `encode` (which throws CodecError) and writes the bytes atomically.
+template <class Encode>
+void write_encoded(const std::string& path, const std::string& ext, Encode&& encode) {
+    std::vector<unsigned char> bytes;
+    try {
+        bytes = encode();
+    } catch (const codec::CodecError& e) {
+        throw ImageIoError(cannot_write(path, e.what()));
+    }
+    Temporary tmp(path, temporary_for(fs::path(path), ext));
+    tmp.write(bytes);
+    tmp.commit();
+}
+
+}  // namespace
+
 void write_image(const std::string& path, int w, int h, const std::vector<float>& rgb,
                  const std::vector<std::string>& channel_names) {
-    std::string ext = lower_extension(path);
-    fs::path target(path);
-    fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    const std::string ext = lower_extension(path);
+    const fs::path target(path);
+    const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
     if (!fs::is_directory(dir))
         throw ImageIoError("cannot write \"" + path + "\": directory \"" + dir.string() +
                            "\" does not exist");
-    if (ext == ".pfm") {
+    const codec::Output format = codec::output_format(ext);
+    if (format == codec::Output::Unsupported)
+        throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" + ext +
+                           "\" (use .exr, .pfm or .png)");
+    if (format == codec::Output::Tiff) {
+        // libtiff writes the temporary itself; it is flushed to disk before the rename.
         Temporary tmp(path, temporary_for(target, ext));
-        tmp.write(encode_pfm(w, h, rgb));
+        try {
+            codec::write_tiff(tmp.path().string(), w, h, rgb.data());
+        } catch (const codec::CodecError& e) {
+            throw ImageIoError(cannot_write(path, e.what()));
+        }
+        tmp.sync_written();
         tmp.commit();
         return;
     }
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out)
-        throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" + ext +
-                           "\" (use .exr, .pfm or .png)");
-    bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
-    OIIO::ImageSpec spec(w, h, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    std::vector<unsigned char> bytes;
-    if (!is_float) {
-        spec.attribute("oiio:ColorSpace", "sRGB");
-        bytes.resize(rgb.size());
-        for (std::size_t i = 0; i < rgb.size(); ++i) {
-            float v = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
-            float e = texture::linear_to_srgb(v);
-            bytes[i] = static_cast<unsigned char>(std::clamp(e * 255.0f + 0.5f, 0.0f, 255.0f));
-        }
-    } else {
-        spec.attribute("oiio:ColorSpace", "Linear");
-        if (channel_names.size() == 3) spec.channelnames = channel_names;
+    if (codec::stores_float(format)) {
+        const std::vector<std::string> names =
+            channel_names.size() == 3 ? channel_names : std::vector<std::string>{"R", "G", "B"};
+        write_encoded(path, ext,
+                      [&] { return codec::encode_float(format, w, h, rgb.data(), names); });
+        return;
     }
-    Temporary tmp(path, temporary_for(target, ext));
-    if (is_float)
-        write_with(*out, tmp, path, spec, OIIO::TypeDesc::FLOAT, rgb.data());
-    else
-        write_with(*out, tmp, path, spec, OIIO::TypeDesc::UINT8, bytes.data());
+    std::vector<unsigned char> bytes(rgb.size());
+    for (std::size_t i = 0; i < rgb.size(); ++i) {
+        const float v = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
+        const float e = texture::linear_to_srgb(v);
+        bytes[i] = static_cast<unsigned char>(std::clamp(e * 255.0f + 0.5f, 0.0f, 255.0f));
+    }
+    write_encoded(path, ext, [&] { return codec::encode_8bit(format, w, h, bytes.data()); });
 }
 
 void write_png8(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb) {
-    fs::path target(path);
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw ImageIoError("cannot write \"" + path + "\": no PNG writer");
-    OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    Temporary tmp(path, temporary_for(target, ".png"));
-    write_with(*out, tmp, path, spec, OIIO::TypeDesc::UINT8, rgb.data());
+    write_encoded(path, ".png",
+                  [&] { return codec::encode_8bit(codec::Output::Png, w, h, rgb.data()); });
 }
 
 }  // namespace cmam::render

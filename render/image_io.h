@@ -1,4 +1,4 @@
-// render — image input and output through OpenImageIO (plus PFM, written directly).
+// render — image input and output, through each format's own library (image_codecs.h).
 // Outputs are encoded in memory, written to a temporary file beside the target with every
 // write, the flush to disk and the close checked, and renamed over the target: a full disk is
 // an error that leaves the old file, and SIGINT, SIGTERM or SIGHUP during a write remove the
@@ -45,8 +45,8 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
                             float scale, texture::WrapMode wrap, bool* gamma_used = nullptr);
 
 /// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
-/// extension: .exr (32-bit float), .pfm (float), .png (8-bit sRGB, clamped), or anything else
-/// OpenImageIO writes (8-bit formats get sRGB encoding). Atomic: temp file, then rename.
+/// extension: .exr (32-bit float), .pfm (float), .hdr (RGBE), .tif/.tiff (32-bit float), or
+/// 8-bit sRGB, clamped: .png, .jpg/.jpeg, .tga, .bmp. Atomic: temp file, then rename.
 void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
                  const std::vector<std::string>& channel_names = {"R", "G", "B"});
 

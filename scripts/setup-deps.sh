@@ -5,8 +5,9 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libembree-dev libopenimageio-dev openimageio-tools libtbb-dev libcli11-dev
-  libgtest-dev libgmock-dev googletest libbenchmark-dev
+  libembree-dev libtbb-dev libcli11-dev
+  libpng-dev libjpeg62-turbo-dev libtiff-dev libopenexr-dev libstb-dev
+  libgtest-dev libgmock-dev googletest libbenchmark-dev libopenimageio-dev
 )
 # With --test, also what the tests need beyond the build: Chromium opens the HTML report, and
 # Clang builds the filtering library a second time and, with libFuzzer and the sanitizers'

@@ -6,6 +6,8 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -84,6 +86,107 @@ TEST(ImageIo, ExrAndPfmRoundTripExactly) {
         EXPECT_EQ(r.pixels, px) << name;  // top row first in both
     }
     EXPECT_EQ(d.entries(), 2u);  // no temporaries left behind
+}
+
+// Every output format reads back: float formats within their precision (RGBE: 8-bit mantissa
+// with a shared exponent), 8-bit formats as the sRGB bytes written; JPEG, lossy and with its
+// colour subsampled, on average within a few levels.
+TEST(ImageIo, EveryOutputFormatReadsBack) {
+    TempDir d;
+    const std::vector<float> px = gradient(7, 5);
+    struct Case {
+        const char* name;
+        bool is_8bit;
+        double tolerance;
+    };
+    for (const Case& c : {Case{"a.exr", false, 0}, Case{"a.pfm", false, 0}, Case{"a.tif", false, 0},
+                          Case{"a.hdr", false, 1.0 / 128}, Case{"a.png", true, 0.5 / 255},
+                          Case{"a.tga", true, 0.5 / 255}, Case{"a.bmp", true, 0.5 / 255},
+                          Case{"a.jpg", true, 3.0 / 255}}) {
+        SCOPED_TRACE(c.name);
+        const std::string p = (d.path / c.name).string();
+        write_image(p, 7, 5, px);
+        const RawImage r = read_image(p);
+        ASSERT_EQ(r.width, 7);
+        ASSERT_EQ(r.height, 5);
+        ASSERT_EQ(r.channels, 3);
+        EXPECT_EQ(r.is_8bit, c.is_8bit);
+        const bool lossy = std::string(c.name) == "a.jpg";
+        double worst = 0, sum = 0;
+        for (std::size_t i = 0; i < px.size(); ++i) {
+            const float want =
+                c.is_8bit ? cmam::texture::linear_to_srgb(std::min(px[i], 1.0f)) : px[i];
+            const double e = std::abs(r.pixels[i] - want) / std::max(1.0f, want);
+            worst = std::max(worst, e);
+            sum += e;
+        }
+        EXPECT_LE(lossy ? sum / px.size() : worst, c.tolerance);
+    }
+    EXPECT_EQ(d.entries(), 8u);  // no temporaries left behind
+}
+
+namespace {
+RawImage read_fixture(const char* name) {
+    return read_image(std::string(CMAM_TEST_DATA_DIR) + "/images/" + name);
+}
+}  // namespace
+
+// Stored layouts other than 8-bit RGB, read as they are stored (tests/data/images/README.md).
+TEST(ImageIo, PngLayoutsReadAsStored) {
+    const RawImage g16 = read_fixture("gray16.png");
+    ASSERT_EQ(g16.channels, 1);
+    EXPECT_FALSE(g16.is_8bit);
+    EXPECT_EQ(g16.pixels, (std::vector<float>{0, 1000 / 65535.0f, 30000 / 65535.0f, 1, 1,
+                                              64535 / 65535.0f, 35535 / 65535.0f, 0}));
+    const RawImage g1 = read_fixture("gray1.png");
+    ASSERT_EQ(g1.channels, 1);
+    EXPECT_TRUE(g1.is_8bit);
+    EXPECT_EQ(g1.pixels, (std::vector<float>{1, 0, 0, 1}));
+    // A palette with a transparent entry: RGBA, colours as in the palette.
+    const RawImage pal = read_fixture("palette.png");
+    ASSERT_EQ(pal.channels, 4);
+    EXPECT_EQ(pal.pixels[0], 1);
+    EXPECT_EQ(pal.pixels[3], 1);
+    EXPECT_EQ(pal.pixels[5], 1);
+    EXPECT_EQ(pal.pixels[7], 0);
+    EXPECT_FLOAT_EQ(pal.pixels[9], 20 / 255.0f);
+    // Alpha is kept apart, as pbrt-v3 reads PNG: colour is not multiplied by it.
+    const RawImage rgba = read_fixture("rgba.png");
+    ASSERT_EQ(rgba.channels, 4);
+    EXPECT_FLOAT_EQ(rgba.pixels[0], 200 / 255.0f);
+    EXPECT_EQ(rgba.pixels[3], 0);
+    EXPECT_FLOAT_EQ(rgba.pixels[4], 10 / 255.0f);
+}
+
+TEST(ImageIo, TiffExrJpegAndPfmFixtures) {
+    // 4x2, left to right: x/3 times (1, 0.5, 0.25).
+    for (const char* name : {"float32.tif", "uint16.tif", "window.exr"}) {
+        SCOPED_TRACE(name);
+        const RawImage r = read_fixture(name);
+        ASSERT_EQ(r.width, 4);
+        ASSERT_EQ(r.height, 2);
+        ASSERT_EQ(r.channels, 3);
+        EXPECT_FALSE(r.is_8bit);
+        for (int y = 0; y < 2; ++y)
+            for (int x = 0; x < 4; ++x)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(r.pixels[(y * 4 + x) * 3 + c],
+                                x / 3.0 *
+                                    (c == 0   ? 1
+                                     : c == 1 ? 0.5
+                                              : 0.25),
+                                5e-4);  // half: 11 bits
+    }
+    const RawImage y = read_fixture("luminance.exr");  // a Y channel only
+    ASSERT_EQ(y.channels, 1);
+    for (int i = 0; i < 8; ++i) EXPECT_NEAR(y.pixels[i], (i % 4) / 3.0, 1e-3);  // half
+    const RawImage j = read_fixture("gray.jpg");  // 8x8 of 0.4, one channel
+    ASSERT_EQ(j.channels, 1);
+    EXPECT_TRUE(j.is_8bit);
+    for (float v : j.pixels) EXPECT_NEAR(v, 0.4, 1.0 / 255);
+    // Big-endian with scale 2: values are multiplied by |scale|, as pbrt-v3 reads them.
+    const RawImage pfm = read_fixture("scaled_be.pfm");
+    EXPECT_EQ(pfm.pixels, (std::vector<float>{0.5f, 1, 2, 4, 6, 8}));
 }
 
 TEST(ImageIo, PngIsSrgbEncodedAndClamped) {
