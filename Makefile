@@ -2,7 +2,8 @@
 #   make          build the cmam binary (build/release/app/cmam)
 #   make demo     install dependencies, build, render scenes/demo.pbrt
 #   make test     install dependencies, build, run every test through CTest
-#   make bench    build and run the benchmarks (Google Benchmark)
+#   make bench    build and run the benchmarks (Google Benchmark), then whole-process figures
+#                 (start-up, peak memory, renders at 1 and 64 spp; PBRT=/path/to/pbrt adds pbrt-v3)
 #   make paper-figures  render the paper's scenes with the CMAM on and off, with an error table
 #   make results  evaluate every method on the bundled scenes; rewrites docs/results.md
 #   make fuzz     build the fuzz targets (Clang, build/fuzz) and run each for FUZZ_SECONDS
@@ -44,6 +45,7 @@ bench: deps
 	@$(MAKE) --no-print-directory build
 	@$(BUILD)/bench/render_bench
 	@$(BUILD)/bench/filter_bench
+	@bash scripts/process-bench.sh $(CMAM)
 
 paper-figures: deps
 	@$(MAKE) --no-print-directory build

@@ -146,7 +146,7 @@ class Parser {
     NamedTables m_names;
     std::vector<StackEntry> m_stack;
     std::map<std::string, Mat4> m_coord_systems;
-    std::map<std::string, std::vector<ShapeDesc>> m_instances;
+    std::map<std::string, int> m_objects;  // name -> index in m_desc.objects (the latest)
     bool m_world_begun = false, m_world_ended = false;
     bool m_in_object = false;
     std::string m_object_name;
@@ -534,7 +534,7 @@ class Parser {
             s.reverse_orientation = m_gs.reverse_orientation;
             s.material = m_gs.material;
             if (m_in_object)
-                m_instances[m_object_name].push_back(std::move(s));
+                m_desc.objects[m_objects[m_object_name]].shapes.push_back(std::move(s));
             else
                 m_desc.shapes.push_back(std::move(s));
         } else if (d == "LightSource") {
@@ -549,9 +549,11 @@ class Parser {
                 throw SceneError(dir.loc,
                                  "ObjectBegin inside the definition of object " + q(m_object_name));
             m_object_name = expect_string(dir, "a quoted object name");
-            if (m_instances.count(m_object_name))
+            // A redefinition is a new object: instances before it keep the old one (pbrt-v3).
+            if (m_objects.count(m_object_name))
                 warn(dir.loc, "object " + q(m_object_name) + " redefined");
-            m_instances[m_object_name].clear();
+            m_objects[m_object_name] = static_cast<int>(m_desc.objects.size());
+            m_desc.objects.push_back({m_object_name, {}, dir.loc});
             m_in_object = true;
             m_object_loc = dir.loc;
             m_stack.push_back({StackEntry::Kind::Object, dir.loc, m_gs, m_names.mark()});
@@ -572,14 +574,10 @@ class Parser {
             std::string name = expect_string(dir, "a quoted object name");
             if (m_in_object)
                 throw SceneError(dir.loc, "ObjectInstance inside an object definition");
-            auto it = m_instances.find(name);
-            if (it == m_instances.end())
+            auto it = m_objects.find(name);
+            if (it == m_objects.end())
                 throw SceneError(dir.loc, "object " + q(name) + " is not defined");
-            for (const ShapeDesc& s : it->second) {
-                ShapeDesc c = s;
-                c.world_from_object = m_gs.ctm * s.world_from_object;
-                m_desc.shapes.push_back(std::move(c));
-            }
+            m_desc.instances.push_back({it->second, m_gs.ctm, dir.loc});
         } else if (d == "AreaLightSource") {
             throw SceneError(dir.loc,
                              "AreaLightSource is not supported (cmam's Whitted integrator "

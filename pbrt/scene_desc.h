@@ -50,6 +50,22 @@ struct ShapeDesc {
     int material = -1;  // index into SceneDesc::materials; -1 is the default matte
 };
 
+/// An object (ObjectBegin ... ObjectEnd): its shapes, each placed by the transform current at
+/// its Shape directive.
+struct ObjectDesc {
+    std::string name;
+    std::vector<ShapeDesc> shapes;
+    FileLoc loc;
+};
+
+/// An ObjectInstance: the object (index into SceneDesc::objects), placed in the world by the
+/// transform current at the directive.
+struct InstanceDesc {
+    int object = 0;
+    Mat4 world_from_instance;
+    FileLoc loc;
+};
+
 struct LightDesc {
     Entity entity;
     Mat4 world_from_light;
@@ -60,7 +76,9 @@ struct SceneDesc {
     Mat4 camera_from_world = Mat4::identity();
     std::vector<TextureDesc> textures;
     std::vector<MaterialDesc> materials;
-    std::vector<ShapeDesc> shapes;
+    std::vector<ShapeDesc> shapes;  // outside objects
+    std::vector<ObjectDesc> objects;
+    std::vector<InstanceDesc> instances;
     std::vector<LightDesc> lights;
     std::vector<std::string> sources;  // every scene file read (the main file, then Includes)
     std::string base_dir;  // directory of the main file, which relative paths resolve against

@@ -51,9 +51,11 @@ class Builder {
                                                    names_of(m_desc.accelerator));
         for (std::size_t i = 0; i < m_desc.textures.size(); ++i) texture(m_desc.textures[i]);
         for (const auto& m : m_desc.materials) m_scene->materials.push_back(material(m));
-        for (const auto& s : m_desc.shapes) shape(s);
+        for (const auto& s : m_desc.shapes) shape(s, m_scene->primitives);
+        instances();
         for (const auto& l : m_desc.lights) light(l);
-        if (m_desc.lights.empty() && !m_desc.shapes.empty() && m_warn)
+        if (m_desc.lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) &&
+            m_warn)
             m_warn(pbrt::format_warning(m_desc.camera.loc,
                                         "the scene has no lights; it will render black"));
         m_scene->commit();
@@ -65,6 +67,7 @@ class Builder {
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;
     std::unique_ptr<Scene> m_scene;
+    std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
 
     void warn(const pbrt::FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(pbrt::format_warning(loc, msg));
@@ -635,7 +638,8 @@ class Builder {
     }
 
     // --- shapes ---------------------------------------------------------------------------
-    void shape(const pbrt::ShapeDesc& s) {
+    // Appends the shape's primitive (if it has any surface) to `out`.
+    void shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primitive>>& out) {
         const Entity& e = s.entity;
         auto prim = std::make_unique<Primitive>();
         prim->material = s.material;
@@ -683,16 +687,19 @@ class Builder {
                 if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
                 std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc,
                                                       e.params.get_string("filename", ""));
-                pbrt::PlyMesh mesh;
-                try {
-                    mesh = pbrt::read_ply(path);
-                } catch (const pbrt::PlyError& err) {
-                    throw SceneError(fp->loc, err.what());
+                // Each file is read once, however many shapes name it.
+                auto& mesh = m_ply[path];
+                if (!mesh) {
+                    try {
+                        mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path));
+                    } catch (const pbrt::PlyError& err) {
+                        throw SceneError(fp->loc, err.what());
+                    }
                 }
-                P = std::move(mesh.positions);
-                N = std::move(mesh.normals);
-                UV = std::move(mesh.uvs);
-                idx = std::move(mesh.indices);
+                P = mesh->positions;
+                N = mesh->normals;
+                UV = mesh->uvs;
+                idx = mesh->indices;
                 e.params.check_unused("shape \"plymesh\"", m_warn,
                                       {"alpha", "shadowalpha", "displacement", "edgelength"});
             } else {
@@ -770,8 +777,49 @@ class Builder {
                 e.loc, "unsupported shape " + q(e.type) +
                            " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
         }
-        prim->id = static_cast<uint32_t>(m_scene->primitives.size());
-        m_scene->primitives.push_back(std::move(prim));
+        prim->id = static_cast<uint32_t>(out.size());
+        out.push_back(std::move(prim));
+    }
+
+    // Each object an instance uses is built once, in its own space; each instance places it
+    // (algorithms.md §7.1). Textured-object ids (the CMAM's caches) are per instance.
+    void instances() {
+        std::vector<int> built(m_desc.objects.size(), -1);
+        std::size_t next_id = m_scene->primitives.size();
+        for (const pbrt::InstanceDesc& d : m_desc.instances) {
+            int& o = built[d.object];
+            if (o < 0) {
+                o = static_cast<int>(m_scene->objects.size());
+                m_scene->objects.emplace_back();
+                for (const auto& s : m_desc.objects[d.object].shapes)
+                    shape(s, m_scene->objects.back().primitives);
+            }
+            const std::size_t n = m_scene->objects[o].primitives.size();
+            if (n == 0) continue;  // an empty object places nothing
+            finite_transform(d.world_from_instance, d.loc, "object instance");
+            Mat4 inv;
+            try {
+                inv = d.world_from_instance.inverse();
+            } catch (const std::domain_error&) {
+                throw SceneError(d.loc, "the instance's transform is singular");
+            }
+            Instance in;
+            in.object = static_cast<uint32_t>(o);
+            const auto w = to34(d.world_from_instance), iw = to34(inv);
+            for (int k = 0; k < 12; ++k) {
+                in.world_from_object[k] = static_cast<float>(w[k]);
+                in.object_from_world[k] = static_cast<float>(iw[k]);
+            }
+            const double det = w[0] * (w[5] * w[10] - w[6] * w[9]) -
+                               w[1] * (w[4] * w[10] - w[6] * w[8]) +
+                               w[2] * (w[4] * w[9] - w[5] * w[8]);
+            in.curvature_scale = static_cast<float>(std::cbrt(std::abs(det)));
+            if (next_id + n > std::numeric_limits<uint32_t>::max())
+                throw SceneError(d.loc, "more than 2^32 instanced primitives");
+            in.first_id = static_cast<uint32_t>(next_id);
+            next_id += n;
+            m_scene->instances.push_back(in);
+        }
     }
 
     // --- lights ---------------------------------------------------------------------------

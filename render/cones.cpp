@@ -40,6 +40,7 @@ float surface_curvature(const SurfaceHit& hit) {
         k += dot(nj - ni, dp) / dot(dp, dp);
     }
     k /= 3;
+    if (hit.instance) k /= hit.instance->curvature_scale;  // measured in the object's space
     return pr.flip ? -k : k;
 }
 

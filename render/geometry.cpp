@@ -151,6 +151,95 @@ Vec3 to_vec(const D3& d) {
     return Vec3(float(d[0]), float(d[1]), float(d[2]));
 }
 
+// d(n/|n|) = ((n.n) dn - (n.dn) n) / |n|^3 for an unnormalised normal n.
+Vec3 unit_derivative(const Vec3& n, const Vec3& dn) {
+    float nn = dot(n, n);
+    return (nn * dn - dot(n, dn) * n) / (nn * std::sqrt(nn));
+}
+
+// A 3x4 row-major affine transform applied to a point, a vector, or (as its inverse transpose,
+// given the inverse) a normal.
+Vec3 apply_point(const std::array<float, 12>& m, const Vec3& p) {
+    return Vec3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
+                m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+Vec3 apply_vector(const std::array<float, 12>& m, const Vec3& v) {
+    return Vec3(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+                m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+Vec3 apply_transpose(const std::array<float, 12>& m, const Vec3& n) {
+    return Vec3(m[0] * n.x + m[4] * n.y + m[8] * n.z, m[1] * n.x + m[5] * n.y + m[9] * n.z,
+                m[2] * n.x + m[6] * n.y + m[10] * n.z);
+}
+
+// The hit on h.prim in the primitive's own space (the world, or an instance's object space).
+void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit* out) {
+    const Primitive& prim = *out->prim;
+    SurfaceHit& h = *out;
+    if (prim.kind == Primitive::Kind::Triangles) {
+        uint32_t i0 = prim.indices[3 * hit.primID], i1 = prim.indices[3 * hit.primID + 1],
+                 i2 = prim.indices[3 * hit.primID + 2];
+        float b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
+        h.triangle = hit.primID;
+        h.b1 = b1;
+        h.b2 = b2;
+        const Vec3 &p0 = prim.positions[i0], &p1 = prim.positions[i1], &p2 = prim.positions[i2];
+        h.p = b0 * p0 + b1 * p1 + b2 * p2;
+        if (!prim.uvs.empty()) {
+            h.u = b0 * prim.uvs[i0][0] + b1 * prim.uvs[i1][0] + b2 * prim.uvs[i2][0];
+            h.v = b0 * prim.uvs[i0][1] + b1 * prim.uvs[i1][1] + b2 * prim.uvs[i2][1];
+        } else {  // pbrt-v3 default parameterization (0,0), (1,0), (1,1)
+            h.u = b1 + b2;
+            h.v = b2;
+        }
+        Vec3 n = normalize(cross(p0 - p2, p1 - p2));
+        if (prim.flip) n = -n;
+        h.ng = n;
+        h.ns = n;
+        if (!prim.normals.empty()) {
+            Vec3 ns = b0 * prim.normals[i0] + b1 * prim.normals[i1] + b2 * prim.normals[i2];
+            float l = length(ns);
+            if (l > 0) {
+                ns = ns / l;
+                if (prim.flip) ns = -ns;
+                h.ns = ns;
+                h.ng = faceforward(n, ns);
+            }
+        }
+        return;
+    }
+    // Quadric: recompute the hit in object space (double precision).
+    D3 o = xform_point(prim.object_from_world, {org.x, org.y, org.z});
+    D3 d = xform_vector(prim.object_from_world, {dir.x, dir.y, dir.z});
+    double t = h.t;
+    D3 p = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+    D3 n_obj;
+    if (prim.kind == Primitive::Kind::Sphere) {
+        double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        for (double& x : p) x *= prim.radius / len;
+        if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * prim.radius;
+        double phi = phi_of(p[0], p[1]);
+        double theta = std::acos(std::clamp(p[2] / prim.radius, -1.0, 1.0));
+        h.u = static_cast<float>(phi / prim.phi_max);
+        h.v = static_cast<float>((theta - prim.theta_zmin) / (prim.theta_zmax - prim.theta_zmin));
+        n_obj = p;  // cross(dpdu, dpdv) points outwards
+    } else {
+        p[2] = prim.height;
+        double r = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        h.u = static_cast<float>(phi_of(p[0], p[1]) / prim.phi_max);
+        h.v = static_cast<float>((prim.radius - r) / (prim.radius - prim.inner_radius));
+        n_obj = {0, 0, 1};
+    }
+    if (prim.flip)
+        for (double& x : n_obj) x = -x;
+    h.p_object = p;
+    h.p = to_vec(xform_point(prim.world_from_object, p));
+    Vec3 n = normalize(to_vec(xform_normal(prim.object_from_world, n_obj)));
+    h.ng = n;
+    h.ns = n;
+}
+
 }  // namespace
 
 Scene::Scene() {
@@ -161,39 +250,71 @@ Scene::Scene() {
 
 Scene::~Scene() {
     if (m_scene) rtcReleaseScene(m_scene);
+    for (RTCScene s : m_object_scenes)
+        if (s) rtcReleaseScene(s);
     if (m_device) rtcReleaseDevice(m_device);
 }
 
+namespace {
+
+void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id) {
+    RTCGeometry g;
+    if (prim.kind == Primitive::Kind::Triangles) {
+        g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                              prim.positions.size()));
+        for (std::size_t i = 0; i < prim.positions.size(); ++i) {
+            v[3 * i] = prim.positions[i].x;
+            v[3 * i + 1] = prim.positions[i].y;
+            v[3 * i + 2] = prim.positions[i].z;
+        }
+        auto* idx = static_cast<uint32_t*>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                    3 * sizeof(uint32_t), prim.indices.size() / 3));
+        std::copy(prim.indices.begin(), prim.indices.end(), idx);
+    } else {
+        g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(g, 1);
+        rtcSetGeometryUserData(g, &prim);
+        rtcSetGeometryBoundsFunction(g, quadric_bounds, nullptr);
+        rtcSetGeometryIntersectFunction(g, quadric_intersect);
+        rtcSetGeometryOccludedFunction(g, quadric_occluded);
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scene, g, id);
+    rtcReleaseGeometry(g);
+}
+
+}  // namespace
+
 void Scene::commit() {
+    // Objects first: an instance refers to its object's committed scene. Objects that no
+    // instance uses are not built.
+    std::vector<bool> used(objects.size(), false);
+    for (const Instance& in : instances) used[in.object] = true;
+    m_object_scenes.assign(objects.size(), nullptr);
+    for (std::size_t o = 0; o < objects.size(); ++o) {
+        if (!used[o]) continue;
+        RTCScene s = rtcNewScene(m_device);
+        rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
+        for (std::size_t id = 0; id < objects[o].primitives.size(); ++id)
+            attach(m_device, s, *objects[o].primitives[id], static_cast<unsigned>(id));
+        rtcCommitScene(s);
+        m_object_scenes[o] = s;
+    }
     m_scene = rtcNewScene(m_device);
     rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
-    for (std::size_t id = 0; id < primitives.size(); ++id) {
-        Primitive& prim = *primitives[id];
-        RTCGeometry g;
-        if (prim.kind == Primitive::Kind::Triangles) {
-            g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* v = static_cast<float*>(
-                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                        3 * sizeof(float), prim.positions.size()));
-            for (std::size_t i = 0; i < prim.positions.size(); ++i) {
-                v[3 * i] = prim.positions[i].x;
-                v[3 * i + 1] = prim.positions[i].y;
-                v[3 * i + 2] = prim.positions[i].z;
-            }
-            auto* idx = static_cast<uint32_t*>(
-                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                        3 * sizeof(uint32_t), prim.indices.size() / 3));
-            std::copy(prim.indices.begin(), prim.indices.end(), idx);
-        } else {
-            g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_USER);
-            rtcSetGeometryUserPrimitiveCount(g, 1);
-            rtcSetGeometryUserData(g, &prim);
-            rtcSetGeometryBoundsFunction(g, quadric_bounds, nullptr);
-            rtcSetGeometryIntersectFunction(g, quadric_intersect);
-            rtcSetGeometryOccludedFunction(g, quadric_occluded);
-        }
+    for (std::size_t id = 0; id < primitives.size(); ++id)
+        attach(m_device, m_scene, *primitives[id], static_cast<unsigned>(id));
+    // Instances take the geometry ids after the primitives outside objects.
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+        RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(g, m_object_scenes[instances[i].object]);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR,
+                                instances[i].world_from_object.data());
         rtcCommitGeometry(g);
-        rtcAttachGeometryByID(m_scene, g, static_cast<unsigned>(id));
+        rtcAttachGeometryByID(m_scene, g, static_cast<unsigned>(primitives.size() + i));
         rtcReleaseGeometry(g);
     }
     rtcCommitScene(m_scene);
@@ -234,75 +355,29 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
     rtcIntersect1(m_scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
-    const Primitive& prim = *primitives[rh.hit.geomID];
     SurfaceHit& h = *out;
-    h.prim = &prim;
     h.t = rh.ray.tfar;
-    if (prim.kind == Primitive::Kind::Triangles) {
-        uint32_t i0 = prim.indices[3 * rh.hit.primID], i1 = prim.indices[3 * rh.hit.primID + 1],
-                 i2 = prim.indices[3 * rh.hit.primID + 2];
-        float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
-        h.triangle = rh.hit.primID;
-        h.b1 = b1;
-        h.b2 = b2;
-        const Vec3 &p0 = prim.positions[i0], &p1 = prim.positions[i1], &p2 = prim.positions[i2];
-        h.p = b0 * p0 + b1 * p1 + b2 * p2;
-        if (!prim.uvs.empty()) {
-            h.u = b0 * prim.uvs[i0][0] + b1 * prim.uvs[i1][0] + b2 * prim.uvs[i2][0];
-            h.v = b0 * prim.uvs[i0][1] + b1 * prim.uvs[i1][1] + b2 * prim.uvs[i2][1];
-        } else {  // pbrt-v3 default parameterization (0,0), (1,0), (1,1)
-            h.u = b1 + b2;
-            h.v = b2;
-        }
-        Vec3 n = normalize(cross(p0 - p2, p1 - p2));
-        if (prim.flip) n = -n;
-        h.ng = n;
-        h.ns = n;
-        if (!prim.normals.empty()) {
-            Vec3 ns = b0 * prim.normals[i0] + b1 * prim.normals[i1] + b2 * prim.normals[i2];
-            float l = length(ns);
-            if (l > 0) {
-                ns = ns / l;
-                if (prim.flip) ns = -ns;
-                h.ns = ns;
-                h.ng = faceforward(n, ns);
-            }
-        }
+    if (rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
+        h.instance = nullptr;
+        h.prim = primitives[rh.hit.geomID].get();
+        h.object_id = h.prim->id;
+        local_hit(org, dir, rh.hit, &h);
         return true;
     }
-    // Quadric: recompute the hit in object space (double precision).
-    D3 o = xform_point(prim.object_from_world, {org.x, org.y, org.z});
-    D3 d = xform_vector(prim.object_from_world, {dir.x, dir.y, dir.z});
-    double t = h.t;
-    D3 p = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
-    D3 n_obj;
-    if (prim.kind == Primitive::Kind::Sphere) {
-        double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-        for (double& x : p) x *= prim.radius / len;
-        if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * prim.radius;
-        double phi = phi_of(p[0], p[1]);
-        double theta = std::acos(std::clamp(p[2] / prim.radius, -1.0, 1.0));
-        h.u = static_cast<float>(phi / prim.phi_max);
-        h.v = static_cast<float>((theta - prim.theta_zmin) / (prim.theta_zmax - prim.theta_zmin));
-        n_obj = p;  // cross(dpdu, dpdv) points outwards
-    } else {
-        p[2] = prim.height;
-        double r = std::sqrt(p[0] * p[0] + p[1] * p[1]);
-        h.u = static_cast<float>(phi_of(p[0], p[1]) / prim.phi_max);
-        h.v = static_cast<float>((prim.radius - r) / (prim.radius - prim.inner_radius));
-        n_obj = {0, 0, 1};
-    }
-    if (prim.flip)
-        for (double& x : n_obj) x = -x;
-    h.p_object = p;
-    h.p = to_vec(xform_point(prim.world_from_object, p));
-    Vec3 n = normalize(to_vec(xform_normal(prim.object_from_world, n_obj)));
-    h.ng = n;
-    h.ns = n;
+    // In an instance: the hit is found in the object's space, then placed in the world.
+    const Instance& in = instances[rh.hit.instID[0] - primitives.size()];
+    h.instance = &in;
+    h.prim = objects[in.object].primitives[rh.hit.geomID].get();
+    h.object_id = in.first_id + rh.hit.geomID;
+    local_hit(in.to_object_point(org), in.to_object_vector(dir), rh.hit, &h);
+    h.p = in.to_world_point(h.p);
+    h.ns_object = h.ns;
+    h.ng = normalize(in.to_world_normal(h.ng));
+    h.ns = normalize(in.to_world_normal(h.ns));
     return true;
 }
 
-void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {
+void SurfaceHit::local_partials(Vec3* dpdu, Vec3* dpdv) const {
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
@@ -362,7 +437,7 @@ void barycentric_offsets(const Primitive& pr, uint32_t tri, const Vec3& dp, floa
 }
 }  // namespace
 
-void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
+void SurfaceHit::local_uv_offset(const Vec3& dp, float* du, float* dv) const {
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {
         // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
@@ -382,7 +457,7 @@ void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
     }
     // Least squares: [dpdu dpdv] (du dv)^T = dP.
     Vec3 a, b;
-    partials(&a, &b);
+    local_partials(&a, &b);
     double aa = dot(a, a), ab = dot(a, b), bb = dot(b, b), ad = dot(a, dp), bd = dot(b, dp);
     double det = aa * bb - ab * ab;
     if (!(std::abs(det) > 0) || !std::isfinite(det)) {
@@ -393,13 +468,8 @@ void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
     *dv = static_cast<float>((aa * bd - ab * ad) / det);
 }
 
-Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {
+Vec3 SurfaceHit::local_normal_offset(const Vec3& dp) const {
     const Primitive& pr = *prim;
-    // d(n/|n|) = ((n.n) dn - (n.dn) n) / |n|^3 for an unnormalised normal n.
-    auto unit_derivative = [](const Vec3& n, const Vec3& dn) {
-        float nn = dot(n, n);
-        return (nn * dn - dot(n, dn) * n) / (nn * std::sqrt(nn));
-    };
     if (pr.kind == Primitive::Kind::Triangles) {
         if (pr.normals.empty()) return Vec3(0, 0, 0);  // flat: the normal is constant
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
@@ -419,6 +489,41 @@ Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {
     Vec3 dn = to_vec(xform_normal(pr.object_from_world, dpo));
     Vec3 d = unit_derivative(n, dn);
     return pr.flip ? -d : d;
+}
+
+void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {
+    local_partials(dpdu, dpdv);
+    if (instance) {
+        *dpdu = instance->to_world_vector(*dpdu);
+        *dpdv = instance->to_world_vector(*dpdv);
+    }
+}
+
+void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
+    local_uv_offset(instance ? instance->to_object_vector(dp) : dp, du, dv);
+}
+
+Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {
+    if (!instance) return local_normal_offset(dp);
+    // The world normal is normalize(M^-T n_object): its change follows from the object one's.
+    const Vec3 dn = local_normal_offset(instance->to_object_vector(dp));
+    return unit_derivative(instance->to_world_normal(ns_object), instance->to_world_normal(dn));
+}
+
+Vec3 Instance::to_world_point(const Vec3& p) const {
+    return apply_point(world_from_object, p);
+}
+Vec3 Instance::to_world_vector(const Vec3& v) const {
+    return apply_vector(world_from_object, v);
+}
+Vec3 Instance::to_world_normal(const Vec3& n) const {
+    return apply_transpose(object_from_world, n);
+}
+Vec3 Instance::to_object_point(const Vec3& p) const {
+    return apply_point(object_from_world, p);
+}
+Vec3 Instance::to_object_vector(const Vec3& v) const {
+    return apply_vector(object_from_world, v);
 }
 
 }  // namespace cmam::render

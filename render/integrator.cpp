@@ -165,7 +165,7 @@ struct Tracer {
             ctx.v = h.v;
             ctx.tag = t;
             ctx.counts = counts ? &counts->lookups : nullptr;
-            ctx.object = h.prim->id;
+            ctx.object = h.object_id;
             ctx.cmam = cmam;
             ctx.path = ray.path;
             HitDifferential hd;

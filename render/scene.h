@@ -123,6 +123,28 @@ struct Primitive {
     double height = 0, inner_radius = 0;
 };
 
+/// An object's primitives, in the object's own space, with their own Embree scene, which every
+/// instance of the object shares.
+struct Object {
+    std::vector<std::unique_ptr<Primitive>> primitives;
+};
+
+/// An ObjectInstance: an object placed in the world by a transform (3x4, row-major).
+struct Instance {
+    uint32_t object = 0;  // index in Scene::objects
+    std::array<float, 12> world_from_object{}, object_from_world{};
+    /// World curvature = object curvature / curvature_scale (the cube root of the transform's
+    /// determinant: exact for rotations with uniform scale).
+    float curvature_scale = 1;
+    uint32_t first_id = 0;  // the textured-object id of the object's first primitive here
+
+    Vec3 to_world_point(const Vec3& p) const;
+    Vec3 to_world_vector(const Vec3& v) const;
+    Vec3 to_world_normal(const Vec3& n) const;  // not normalised
+    Vec3 to_object_point(const Vec3& p) const;
+    Vec3 to_object_vector(const Vec3& v) const;
+};
+
 /// A surface hit, in world space, oriented as pbrt-v3 orients it.
 struct SurfaceHit {
     Vec3 p;
@@ -131,9 +153,12 @@ struct SurfaceHit {
     float u = 0, v = 0;
     float t = 0;
     const Primitive* prim = nullptr;
-    uint32_t triangle = 0;             // triangles: the triangle index
-    float b1 = 0, b2 = 0;              // triangles: barycentrics of vertices 1 and 2
-    std::array<double, 3> p_object{};  // quadrics: the hit in object space
+    const Instance* instance = nullptr;  // the instance hit; nullptr outside objects
+    uint32_t object_id = 0;              // the textured object (the CMAM's cache key): per instance
+    Vec3 ns_object;                      // instances: the shading normal in the object's space
+    uint32_t triangle = 0;               // triangles: the triangle index
+    float b1 = 0, b2 = 0;                // triangles: barycentrics of vertices 1 and 2
+    std::array<double, 3> p_object{};    // quadrics: the hit in object space
 
     /// Surface partial derivatives dP/du and dP/dv in world space.
     void partials(Vec3* dpdu, Vec3* dpdv) const;
@@ -142,6 +167,11 @@ struct SurfaceHit {
     void uv_offset(const Vec3& dp, float* du, float* dv) const;
     /// Change of the (unit) shading normal for a world-space offset dP along the surface.
     Vec3 normal_offset(const Vec3& dp) const;
+
+    // The same in the primitive's own space (an instance's object space; else the world).
+    void local_partials(Vec3* dpdu, Vec3* dpdv) const;
+    void local_uv_offset(const Vec3& dp, float* du, float* dv) const;
+    Vec3 local_normal_offset(const Vec3& dp) const;
 };
 
 struct RenderStats;
@@ -164,7 +194,9 @@ class Scene {
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;
-    std::vector<std::unique_ptr<Primitive>> primitives;
+    std::vector<std::unique_ptr<Primitive>> primitives;  // outside objects
+    std::vector<Object> objects;                         // ObjectBegin ... ObjectEnd
+    std::vector<Instance> instances;                     // ObjectInstance
     std::map<std::string, std::unique_ptr<texture::FilteredTexture>>
         images;  // loaded once per settings
     Material default_material;
@@ -174,7 +206,8 @@ class Scene {
     bool uses_cmam = false;     // some texture's footprint comes from the CMAM
     texture::CmamOptions cmam;  // CMAM policies (the filter comes from each texture)
 
-    /// Creates the Embree scene from `primitives`; call once after filling them.
+    /// Creates the Embree scene from `primitives` and `instances` (one Embree scene per object,
+    /// shared by its instances); call once after filling them.
     void commit();
     /// Nearest hit along org + t dir, t in (tmin, tmax).
     bool intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax, SurfaceHit* hit) const;
@@ -186,6 +219,7 @@ class Scene {
   private:
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
+    std::vector<RTCScene> m_object_scenes;
 };
 
 struct BuildOptions {

@@ -113,16 +113,28 @@ TEST(Parser, NamesDeclaredInABlockEndWithIt) {
     }
 }
 
-TEST(Parser, ObjectInstancesAreFlattenedWithTheirTransforms) {
+TEST(Parser, ObjectInstancesReferToOneObjectWithTheirTransforms) {
     SceneDesc d = parse_world(
         "ObjectBegin \"ball\" Translate 0 1 0 Shape \"sphere\" ObjectEnd\n"
         "Translate 5 0 0 ObjectInstance \"ball\"\n"
-        "Translate 5 0 0 ObjectInstance \"ball\"");
-    ASSERT_EQ(d.shapes.size(), 2u);
-    EXPECT_EQ(d.shapes[0].world_from_object.apply_point({0, 0, 0}),
-              (std::array<double, 3>{5, 1, 0}));
-    EXPECT_EQ(d.shapes[1].world_from_object.apply_point({0, 0, 0}),
-              (std::array<double, 3>{10, 1, 0}));
+        "Translate 5 0 0 ObjectInstance \"ball\"\n"
+        "ObjectBegin \"ball\" Shape \"disk\" ObjectEnd ObjectInstance \"ball\"");
+    EXPECT_TRUE(d.shapes.empty());
+    ASSERT_EQ(d.objects.size(), 2u);  // a redefinition is a new object
+    ASSERT_EQ(d.objects[0].shapes.size(), 1u);
+    EXPECT_EQ(d.objects[0].name, "ball");
+    // The shape keeps the transform of its definition; the instance carries its own.
+    EXPECT_EQ(d.objects[0].shapes[0].world_from_object.apply_point({0, 0, 0}),
+              (std::array<double, 3>{0, 1, 0}));
+    ASSERT_EQ(d.instances.size(), 3u);
+    EXPECT_EQ(d.instances[0].object, 0);
+    EXPECT_EQ(d.instances[1].object, 0);
+    EXPECT_EQ(d.instances[2].object, 1);  // instances before the redefinition keep the old one
+    EXPECT_EQ(d.instances[0].world_from_instance.apply_point({0, 0, 0}),
+              (std::array<double, 3>{5, 0, 0}));
+    EXPECT_EQ(d.instances[1].world_from_instance.apply_point({0, 0, 0}),
+              (std::array<double, 3>{10, 0, 0}));
+    EXPECT_EQ(d.instances[1].loc.line, 5);
 }
 
 TEST(Parser, OptionsAndEntities) {
