@@ -88,6 +88,13 @@ RawImage decode_png(const std::string& path, const SizeCheck& check) {
     if (!s->png || !(s->info = png_create_info_struct(s->png))) throw CodecError("out of memory");
     if (setjmp(png_jmpbuf(s->png))) throw CodecError(s->message.text);
     png_init_io(s->png, f.get());
+    // Ancillary chunks other than transparency are not used: skipped unread, so that a text or
+    // profile chunk whose length claims a gigabyte allocates nothing (libpng would allocate it).
+    static const png_byte kSkipped[] =
+        "bKGD\0cHRM\0eXIf\0gAMA\0hIST\0iCCP\0iTXt\0oFFs\0pCAL\0"
+        "pHYs\0sBIT\0sCAL\0sPLT\0sRGB\0tEXt\0tIME\0zTXt";
+    png_set_keep_unknown_chunks(s->png, PNG_HANDLE_CHUNK_NEVER, kSkipped,
+                                static_cast<int>(sizeof(kSkipped) / 5));
     png_read_info(s->png, s->info);
     const int color = png_get_color_type(s->png, s->info);
     if (color == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(s->png);

@@ -84,10 +84,9 @@ for cmd in "--help" "check $work/tiny.pbrt"; do
 done
 echo
 
-# A copy of SCENE with its Sampler replaced by a stratified N×N one, beside the original.
+# Writes COPY: SCENE with its Sampler replaced by a stratified N×N one.
 with_spp() {
-  local scene=$1 n=$2 copy
-  copy="$(dirname "$scene")/.bench-$$-$n-$(basename "$scene")"
+  local scene=$1 n=$2 copy=$3
   awk -v n="$n" '
     /^[[:space:]]*Sampler/ { skip = 1; next }
     skip && /^[[:space:]]*"/ { next }
@@ -97,8 +96,6 @@ with_spp() {
       done = 1
     }
     { print }' "$scene" >"$copy"
-  made+=("$copy")
-  echo "$copy"
 }
 
 if [[ -n $PBRT ]]; then
@@ -115,7 +112,10 @@ for scene in "$ROOT"/scenes/*.pbrt "$ROOT"/scenes/paper/*.pbrt; do
   for spp in 1 64; do
     n=$([[ $spp == 1 ]] && echo 1 || echo 8)
     runs=$([[ $spp == 1 ]] && echo "$RUNS" || echo "$RUNS_64")
-    copy=$(with_spp "$scene" "$n")
+    # Beside the original, so that its relative paths resolve as they do for the original.
+    copy="$(dirname "$scene")/.bench-$$-$n-$(basename "$scene")"
+    made+=("$copy")
+    with_spp "$scene" "$n" "$copy"
     c_cmd=("$CMAM" render "$copy" --threads "$THREADS" -o "$work/cmam.exr")
     p_cmd=("$PBRT" --nthreads "$THREADS" --quiet --outfile "$work/pbrt.exr" "$copy")
     : >"$work/c"
