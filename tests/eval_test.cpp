@@ -12,19 +12,10 @@
 #include "pbrt/parser.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
+#include "temp_dir.h"
 
 using namespace cmam;
 namespace fs = std::filesystem;
-
-namespace {
-fs::path temp_dir(const std::string& name) {
-    fs::path p =
-        fs::temp_directory_path() / ("cmam_eval_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
-}  // namespace
 
 TEST(Metrics, RmsePsnrByHand) {
     std::vector<float> ref = {0, 0, 0, 1, 1, 1}, img = {0.1f, 0.1f, 0.1f, 0.9f, 0.9f, 0.9f};
@@ -58,7 +49,8 @@ TEST(Metrics, EdgeMaskMarksDisagreeingPixels) {
 }
 
 TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
-    fs::path dir = temp_dir("cache");
+    const test::TempDir tmp("cmam_eval_cache");
+    const fs::path& dir = tmp.path;
     fs::path scene = dir / "tiny.pbrt";
     std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/gravel.png";
     auto write_scene = [&](const std::string& extra) {
@@ -96,7 +88,6 @@ TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
     write_scene("# a changed scene\n");
     EXPECT_NE(eval::reference_key(scene.string(), 4), key);
     EXPECT_FALSE(eval::run_eval(o).scenes[0].reference_cached);
-    fs::remove_all(dir);
 }
 
 TEST(Eval, MethodNames) {
@@ -113,7 +104,8 @@ TEST(Eval, MethodNames) {
 // (1.25,1.75), (0,1.25) of the 2x2 texture [1 2; 3 4] (texel space). The stratified ground
 // truth (64 x 64 samples, nearest reconstruction) must match the exact average 2.4.
 TEST(GroundTruth, TGt1MatchesTheExactIntegral) {
-    fs::path dir = temp_dir("gt1");
+    const test::TempDir tmp("cmam_eval_gt1");
+    const fs::path& dir = tmp.path;
     // File rows go top to bottom; v = 0 (texel row 0: values 1, 2) is the bottom row.
     render::write_image((dir / "t.exr").string(), 2, 2, {3, 3, 3, 4, 4, 4, 1, 1, 1, 2, 2, 2});
     // Raster (x, y) in [0,1]^2 maps to texel A + x (B - A) + (1 - y) (D - A) with A = (0.5, 0.25),
@@ -138,5 +130,4 @@ TEST(GroundTruth, TGt1MatchesTheExactIntegral) {
     ro.aov = render::AovKind::Texture;
     render::Framebuffer fb = render::render(*s, ro, nullptr);
     EXPECT_NEAR(fb.rgb[0], 2.4, 0.006) << fb.rgb[0];  // RMS error about 0.002 at N = 64 (§9)
-    fs::remove_all(dir);
 }

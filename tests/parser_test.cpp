@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "temp_dir.h"
+
 using namespace cmam::pbrt;
 
 namespace {
@@ -163,7 +165,8 @@ TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
     // main.pbrt Includes sub/part.pbrt, which names "data/x.ply": pbrt-v3 reads <main>/data/x.ply.
     // A path found only beside the including file (other renderers' convention) is read there.
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("cmam_paths_" + std::to_string(::getpid()));
+    const cmam::test::TempDir tmp("cmam_paths");
+    const fs::path& dir = tmp.path;
     fs::create_directories(dir / "sub" / "only");
     fs::create_directories(dir / "data");
     std::ofstream(dir / "data" / "x.ply") << "x";
@@ -180,7 +183,6 @@ TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
     };
     EXPECT_TRUE(fs::equivalent(resolved(0), dir / "data" / "x.ply")) << resolved(0);
     EXPECT_TRUE(fs::equivalent(resolved(1), dir / "sub" / "only" / "y.ply")) << resolved(1);
-    fs::remove_all(dir);
 }
 
 TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
@@ -229,7 +231,8 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
     // pbrt-v3 reads "spectrum Kd" "file.spd" (wavelength value pairs, '#' comments) relative to
     // the main file's folder: the same RGB as the pairs written inline.
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("cmam_spd_" + std::to_string(::getpid()));
+    const cmam::test::TempDir tmp("cmam_spd");
+    const fs::path& dir = tmp.path;
     fs::create_directories(dir / "spds");
     std::ofstream(dir / "spds" / "k.spd") << "# a test\n400 0.2\n500 0.5 # mid\n600 0.9\n700 0.4\n";
     std::ofstream(dir / "main.pbrt")
@@ -252,7 +255,6 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
     const auto a = *d.materials[0].entity.params.get_rgb("Kd"),
                b = *d.materials[1].entity.params.get_rgb("Kd");
     for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(a[c], b[c]);
-    fs::remove_all(dir);
 }
 
 TEST(Parser, UnusedParameterErrorNamesEntity) {
