@@ -26,6 +26,24 @@ namespace {
 
 using namespace cmam;
 
+std::vector<double> parse_numbers(const std::string& text, const char* flag) {
+    std::vector<double> out;
+    std::size_t pos = 0;
+    while (pos <= text.size()) {
+        std::size_t comma = text.find(',', pos);
+        std::string item =
+            text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+        char* end = nullptr;
+        double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size())
+            throw std::invalid_argument(std::string(flag) + ": \"" + item + "\" is not a number");
+        out.push_back(v);
+        if (comma == std::string::npos) break;
+        pos = comma + 1;
+    }
+    return out;
+}
+
 struct RenderArgs {
     std::string scene;
     std::string output;
@@ -38,10 +56,103 @@ struct RenderArgs {
                              cmam_adjacency = "on";
     bool cmam_hull = false, cmam_2d = false;
     std::string aov;
+    std::string resolution, crop;
 };
 
+// Warnings and errors have one form: "FILE:LINE:COL: warning: ..." when they point into a scene
+// file, "cmam: warning: ..." otherwise.
 void print_warning(const std::string& w) {
-    std::cerr << w << "\n";
+    std::cerr << (w.rfind("warning: ", 0) == 0 ? "cmam: " : "") << w << "\n";
+}
+
+void warn(const std::string& message) {
+    print_warning("warning: " + message);
+}
+
+// --spp N renders a square grid of k x k strata, k = round(sqrt(N)): says so when k * k != N.
+void note_spp_rounding(int spp) {
+    if (spp <= 0) return;
+    const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(spp)))));
+    if (k * k != spp)
+        warn("--spp " + std::to_string(spp) + " renders " + std::to_string(k) + "x" +
+             std::to_string(k) + " = " + std::to_string(k * k) +
+             " samples per pixel (stratified samples form a square grid)");
+}
+
+pbrt::Param film_param(const char* type, const char* name, std::vector<double> values) {
+    pbrt::Param p;
+    p.type = std::string(type) == "integer" ? pbrt::ParamType::Integer : pbrt::ParamType::Float;
+    p.type_name = type;
+    p.name = name;
+    p.numbers = std::move(values);
+    return p;
+}
+
+// --resolution W or WxH: the film's resolution, as if the Film said so. W alone keeps the
+// scene's aspect ratio (and so the camera's framing); another aspect frames more or less of the
+// scene, as in pbrt-v3, with a warning.
+void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
+    const int xres = desc.film.params.get_int("xresolution", 640),
+              yres = desc.film.params.get_int("yresolution", 480);
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    const int n = std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra);
+    if (n == 1 && w > 0)
+        h = std::max(1, static_cast<int>(std::lround(double(w) * yres / xres)));
+    else if (!(n == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0))
+        throw std::invalid_argument("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text +
+                                    "\"");
+    if (std::abs(double(w) / h - double(xres) / yres) > 1.0 / std::min(w, h))
+        warn("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
+             " has another aspect ratio than the scene's " + std::to_string(xres) + "x" +
+             std::to_string(yres) + " film: the camera frames " +
+             (double(w) / h > double(xres) / yres ? "more" : "less") +
+             " of the scene horizontally (give the width alone to keep the aspect)");
+    desc.film.params.add(film_param("integer", "xresolution", {double(w)}));
+    desc.film.params.add(film_param("integer", "yresolution", {double(h)}));
+}
+
+// --crop x0,x1,y0,y1: the Film's cropwindow (fractions of the image, y down, as pbrt-v3); it
+// replaces the scene's.
+void override_crop(pbrt::SceneDesc& desc, const std::vector<double>& c) {
+    if (c.size() != 4) throw std::invalid_argument("--crop needs four numbers: X0,X1,Y0,Y1");
+    for (double v : c)
+        if (!(v >= 0 && v <= 1))
+            throw std::invalid_argument("--crop: values are fractions of the image, in [0, 1]");
+    if (!(c[0] < c[1] && c[2] < c[3]))
+        throw std::invalid_argument("--crop: needs X0 < X1 and Y0 < Y1");
+    desc.film.params.add(film_param("float", "cropwindow", c));
+}
+
+bool is_float_format(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".exr" || ext == ".pfm";
+}
+
+// The footprint AOV reports the footprint of image textures in texels: refuse where there is
+// none to report rather than write zeros.
+void check_footprint_aov(const render::Scene& scene, const std::string& out) {
+    if (!is_float_format(out))
+        throw std::invalid_argument(
+            "--aov footprint writes lengths in texels and MIP levels, "
+            "which need a float image: use .exr or .pfm, not \"" +
+            out + "\"");
+    bool image = false, footprint = false;
+    for (const render::TextureNode& n : scene.textures) {
+        if (n.kind != render::TextureNode::Kind::Image) continue;
+        image = true;
+        footprint = footprint || (n.lod != render::Lod::None && n.lod != render::Lod::Cmam);
+    }
+    if (!image)
+        throw std::invalid_argument(
+            "--aov footprint measures image textures, and this scene has none (procedural "
+            "textures such as checkerboard have no texel size)");
+    if (!footprint)
+        throw std::invalid_argument(
+            scene.uses_cmam ? "--aov footprint: the CMAM's region is not recorded as an AOV; use "
+                              "--lod differentials, cones or cones-aniso"
+                            : "--aov footprint: --lod none point-samples, there is no footprint");
 }
 
 std::string format_duration(double s) {
@@ -140,8 +251,11 @@ void check_output_folder(const std::string& out) {
 int run_render(const RenderArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
+    if (!a.resolution.empty()) override_resolution(desc, a.resolution);
+    if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
     render::BuildOptions bo;
     bo.spp_override = a.spp;
+    note_spp_rounding(a.spp);
     if (!a.lod.empty()) {
         bo.lod = render::parse_lod(a.lod);
         if (!bo.lod)
@@ -187,9 +301,10 @@ int run_render(const RenderArgs& a) {
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     render::RenderOptions ro;
     ro.threads = a.threads;
-    if (a.aov == "footprint")
+    if (a.aov == "footprint") {
         ro.aov = render::AovKind::Footprint;
-    else if (a.aov == "texture")
+        check_footprint_aov(*scene, out);
+    } else if (a.aov == "texture")
         ro.aov = render::AovKind::Texture;
     else if (!a.aov.empty())
         throw std::invalid_argument("--aov: unknown \"" + a.aov +
@@ -218,24 +333,6 @@ struct LookupArgs {
     double max_aniso = 8;
     bool json = false;
 };
-
-std::vector<double> parse_numbers(const std::string& text, const char* flag) {
-    std::vector<double> out;
-    std::size_t pos = 0;
-    while (pos <= text.size()) {
-        std::size_t comma = text.find(',', pos);
-        std::string item =
-            text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-        char* end = nullptr;
-        double v = std::strtod(item.c_str(), &end);
-        if (item.empty() || end != item.c_str() + item.size())
-            throw std::invalid_argument(std::string(flag) + ": \"" + item + "\" is not a number");
-        out.push_back(v);
-        if (comma == std::string::npos) break;
-        pos = comma + 1;
-    }
-    return out;
-}
 
 std::string json_escape(const std::string& s) {
     std::string out;
@@ -290,9 +387,8 @@ int run_lookup(const LookupArgs& a) {
         uv = {pt[0], pt[1]};
     }
     if (*kind == texture::FilterKind::Ewa && a.max_aniso > texture::kEwaMaxAnisotropy)
-        std::cerr << "cmam lookup: warning: --maxaniso " << a.max_aniso
-                  << " is above cmam's limit of " << texture::kEwaMaxAnisotropy
-                  << ", which is used instead\n";
+        std::cerr << "cmam: warning: --maxaniso " << a.max_aniso << " is above cmam's limit of "
+                  << texture::kEwaMaxAnisotropy << ", which is used instead\n";
     texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, *wrap));
     texture::LookupInfo info;
     texture::Texel v = tex.lookup(uv[0], uv[1], fp, {*kind, a.max_aniso}, &info);
@@ -471,13 +567,22 @@ int main(int argc, char** argv) {
     auto* render_cmd = app.add_subcommand("render", "Render a pbrt-v3 scene");
     render_cmd->add_option("scene", ra.scene, "Scene file (.pbrt)")->required();
     render_cmd->add_option("-o,--output", ra.output,
-                           "Output image (.exr, .pfm, .png); default: the Film's filename");
+                           "Output image: .exr or .pfm (float, linear), .png, .jpg or .tga (8-bit "
+                           "sRGB); default: the Film's filename");
     render_cmd
-        ->add_option("--spp", ra.spp, "Samples per pixel (rounded to a square; 1 = pixel centre)")
+        ->add_option("--spp", ra.spp,
+                     "Samples per pixel, rounded to a square grid (5 renders 2x2 = 4, with a "
+                     "warning); 1 = the pixel centre")
         ->check(CLI::Range(1, 1 << 20));
     render_cmd->add_option("--threads", ra.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
+    render_cmd->add_option("--resolution", ra.resolution,
+                           "Film resolution WxH, or W alone to keep the scene's aspect ratio (a "
+                           "quick preview of a big scene)");
+    render_cmd->add_option("--crop", ra.crop,
+                           "Render only X0,X1,Y0,Y1 of the image: the Film's cropwindow, fractions "
+                           "of the width and height from the top left (replaces the scene's)");
     render_cmd->add_flag("--stats", ra.stats, "Print texture memory and lookup counts per filter");
     render_cmd->add_option(
         "--lod", ra.lod,
@@ -486,7 +591,8 @@ int main(int argc, char** argv) {
     render_cmd->add_option(
         "--aov", ra.aov,
         "Write an AOV instead of radiance: footprint (major, minor axis in texels, MIP level; "
-        "EXR) or texture (unlit filtered texture of the first non-specular hit)");
+        ".exr or .pfm; image textures with --lod differentials, cones or cones-aniso) or texture "
+        "(unlit filtered texture of the first non-specular hit)");
     render_cmd->add_option(
         "--filter", ra.filter,
         "Filter for image textures: " + texture::filter_names() +
@@ -563,9 +669,14 @@ int main(int argc, char** argv) {
     eval_cmd->add_option("-o,--output", ea.out, "Output directory")->capture_default_str();
     eval_cmd->add_flag("--quiet", ea.quiet, "No progress bar and no summary line");
 
+    app.failure_message([](const CLI::App* a, const CLI::Error& e) {
+        return "cmam: error: " + std::string(e.what()) + "\nRun with " +
+               (a->get_help_ptr() ? a->get_help_ptr()->get_name() : std::string("--help")) +
+               " for more information.\n";
+    });
     CLI11_PARSE(app, argc, argv);
     if (*lookup_cmd && la.uv.empty() && la.points.empty()) {
-        std::cerr << "cmam lookup: error: give --uv U,V (or --points)\n";
+        std::cerr << "cmam: error: give --uv U,V (or --points)\n";
         return 2;
     }
     try {
@@ -575,7 +686,8 @@ int main(int argc, char** argv) {
         if (*compare_cmd) return run_compare(cmp_ref, cmp_img, cmp_json);
         if (*eval_cmd) return run_eval(ea);
     } catch (const pbrt::SceneError& e) {
-        std::cerr << e.what() << "\n";
+        // Located: "FILE:LINE:COL: error: ..."; otherwise "error: ...", printed as the others.
+        std::cerr << (e.loc().file ? "" : "cmam: ") << e.what() << "\n";
         return 1;
     } catch (const std::exception& e) {
         std::cerr << "cmam: error: " << e.what() << "\n";

@@ -281,8 +281,11 @@ class Builder {
                                      std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
             int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
             s.xsamples = s.ysamples = k;
-            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " +
-                            std::to_string(k) + "x" + std::to_string(k) +
+            // With --spp the count comes from there (set below), not from pixelsamples.
+            const std::string grid = m_opts.spp_override > 0
+                                         ? std::string("the --spp count of")
+                                         : std::to_string(k) + "x" + std::to_string(k);
+            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " + grid +
                             " jittered samples per pixel");
             e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
         } else {
