@@ -69,13 +69,13 @@ void warn(const std::string& message) {
     print_warning("warning: " + message);
 }
 
-// --spp N renders a square grid of k x k strata, k = round(sqrt(N)): says so when k * k != N.
-void note_spp_rounding(int spp) {
+// --spp N renders a square grid of k x k strata: says so when k * k != N.
+void note_spp_rounding(int spp, const char* flag = "--spp") {
     if (spp <= 0) return;
-    const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(spp)))));
-    if (k * k != spp)
-        warn("--spp " + std::to_string(spp) + " renders " + std::to_string(k) + "x" +
-             std::to_string(k) + " = " + std::to_string(k * k) +
+    const int n = eval::rendered_spp(spp), k = static_cast<int>(std::lround(std::sqrt(n)));
+    if (n != spp)
+        warn(std::string(flag) + " " + std::to_string(spp) + " renders " + std::to_string(k) + "x" +
+             std::to_string(k) + " = " + std::to_string(n) +
              " samples per pixel (stratified samples form a square grid)");
 }
 
@@ -484,7 +484,7 @@ int run_compare(const std::string& ref_path, const std::string& img_path, bool j
 struct EvalArgs {
     std::vector<std::string> scenes;
     std::string methods, spp = "1,4,16", out = "eval-out";
-    int reference_spp = 1024;
+    int reference_spp = 1024, timing_runs = 1;
     bool quiet = false;
 };
 
@@ -497,6 +497,18 @@ std::vector<std::string> split_list(const std::string& s) {
     return out;
 }
 
+std::string join(const std::vector<std::string>& v, const char* sep = ", ") {
+    std::string out;
+    for (const std::string& x : v) out += (out.empty() ? "" : sep) + x;
+    return out;
+}
+
+// What a method name is, from the evaluation's own tables.
+std::string method_syntax() {
+    return "none, or SOURCE+FILTER with SOURCE one of " + join(eval::method_sources()) +
+           " and FILTER one of " + join(eval::method_filters());
+}
+
 int run_eval(const EvalArgs& a) {
     eval::EvalOptions o;
     o.scenes = a.scenes;
@@ -506,10 +518,8 @@ int run_eval(const EvalArgs& a) {
          a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
         auto m = eval::parse_method(name);
         if (!m)
-            throw std::invalid_argument(
-                "--methods: unknown method \"" + name +
-                "\" (e.g. none, differentials+ewa, cones+trilinear, cones-aniso+ewa, "
-                "cmam+sat, cmam-literal+trilinear, cmam-point+ewa, cmam-pixel-hull+trilinear)");
+            throw std::invalid_argument("--methods: unknown method \"" + name + "\" (" +
+                                        method_syntax() + ")");
         o.methods.push_back(*m);
     }
     o.spp.clear();
@@ -519,10 +529,24 @@ int run_eval(const EvalArgs& a) {
         if (*end || n < 1)
             throw std::invalid_argument("--spp: \"" + v + "\" is not a positive integer");
         o.spp.push_back(static_cast<int>(n));
+        note_spp_rounding(o.spp.back());
     }
     if (o.spp.empty()) throw std::invalid_argument("--spp: give at least one sample count");
+    note_spp_rounding(a.reference_spp, "--reference-spp");
+    o.timing_runs = a.timing_runs;
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     o.progress = [&](int done, int total, const std::string&) { bar.update(done, total); };
+    // Warnings and failures interrupt the progress bar on a line of their own.
+    auto line = [&](const std::string& text) {
+        if (!a.quiet && ::isatty(STDERR_FILENO)) std::fputs("\r\033[K", stderr);
+        std::cerr << text << "\n";
+    };
+    o.warn = [&](const std::string& w) {
+        line((w.rfind("warning: ", 0) == 0 ? "cmam: " : "") + w);
+    };
+    o.scene_failed = [&](const std::string& scene, const std::string& message) {
+        line("cmam: error: " + scene + " is skipped: " + message);
+    };
     auto t0 = std::chrono::steady_clock::now();
     eval::EvalResult r = eval::run_eval(o);
     if (!a.quiet) {
@@ -534,6 +558,11 @@ int run_eval(const EvalArgs& a) {
                      a.out.c_str(), r.scenes.size(), cached, r.rows.size(),
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
                      a.out.c_str());
+    }
+    if (!r.failed.empty()) {
+        std::fprintf(stderr, "cmam: error: %zu of %zu scenes failed (listed in %s/index.html)\n",
+                     r.failed.size(), a.scenes.size(), a.out.c_str());
+        return 1;
     }
     return 0;
 }
@@ -660,13 +689,23 @@ int main(int argc, char** argv) {
         "eval", "Compare footprint methods against a ground truth; write a report");
     eval_cmd->add_option("scenes", ea.scenes, "Scene files (.pbrt)")->required();
     eval_cmd->add_option("--methods", ea.methods,
-                         "Comma-separated methods (default: every method)");
+                         "Comma-separated methods: " + method_syntax() +
+                             ". Default: " + join(eval::default_methods(), ","));
     eval_cmd->add_option("--spp", ea.spp, "Comma-separated samples per pixel")
         ->capture_default_str();
     eval_cmd->add_option("--reference-spp", ea.reference_spp, "Ground-truth samples per pixel")
         ->capture_default_str()
         ->check(CLI::Range(1, 1 << 20));
-    eval_cmd->add_option("-o,--output", ea.out, "Output directory")->capture_default_str();
+    eval_cmd
+        ->add_option("--timing-runs", ea.timing_runs,
+                     "Renders timed per method and sample count; the report gives their median "
+                     "and range (1: single runs, marked as such)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 100));
+    eval_cmd
+        ->add_option("-o,--output", ea.out,
+                     "Output directory; a report already there is replaced (its own files only)")
+        ->capture_default_str();
     eval_cmd->add_flag("--quiet", ea.quiet, "No progress bar and no summary line");
 
     app.failure_message([](const CLI::App* a, const CLI::Error& e) {
