@@ -142,7 +142,7 @@ void check_footprint_aov(const render::Scene& scene, const std::string& out) {
     for (const render::TextureNode& n : scene.textures) {
         if (n.kind != render::TextureNode::Kind::Image) continue;
         image = true;
-        footprint = footprint || (n.lod != render::Lod::None && n.lod != render::Lod::Cmam);
+        footprint = footprint || n.lod != render::Lod::None;
     }
     if (!image)
         throw std::invalid_argument(
@@ -150,9 +150,7 @@ void check_footprint_aov(const render::Scene& scene, const std::string& out) {
             "textures such as checkerboard have no texel size)");
     if (!footprint)
         throw std::invalid_argument(
-            scene.uses_cmam ? "--aov footprint: the CMAM's region is not recorded as an AOV; use "
-                              "--lod differentials, cones or cones-aniso"
-                            : "--aov footprint: --lod none point-samples, there is no footprint");
+            "--aov footprint: --lod none point-samples, there is no footprint");
 }
 
 std::string format_duration(double s) {
@@ -545,7 +543,7 @@ int run_eval(const EvalArgs& a) {
         line((w.rfind("warning: ", 0) == 0 ? "cmam: " : "") + w);
     };
     o.scene_failed = [&](const std::string& scene, const std::string& message) {
-        line("cmam: error: " + scene + " is skipped: " + message);
+        line("cmam: error: " + pbrt::printable(scene + " is skipped: " + message));
     };
     auto t0 = std::chrono::steady_clock::now();
     eval::EvalResult r = eval::run_eval(o);
@@ -620,7 +618,7 @@ int main(int argc, char** argv) {
     render_cmd->add_option(
         "--aov", ra.aov,
         "Write an AOV instead of radiance: footprint (major, minor axis in texels, MIP level; "
-        ".exr or .pfm; image textures with --lod differentials, cones or cones-aniso) or texture "
+        ".exr or .pfm; with --lod cmam the region the CMAM built) or texture "
         "(unlit filtered texture of the first non-specular hit)");
     render_cmd->add_option(
         "--filter", ra.filter,
@@ -729,7 +727,7 @@ int main(int argc, char** argv) {
         std::cerr << (e.loc().file ? "" : "cmam: ") << e.what() << "\n";
         return 1;
     } catch (const std::exception& e) {
-        std::cerr << "cmam: error: " << e.what() << "\n";
+        std::cerr << "cmam: error: " << pbrt::printable(e.what()) << "\n";
         return 1;
     }
     return 0;

@@ -13,9 +13,6 @@ std::string FileLoc::to_string() const {
     return *file + ":" + std::to_string(line) + ":" + std::to_string(col);
 }
 
-namespace {
-// Bytes a terminal would act on (control characters, bytes that are not UTF-8) as \xNN: a
-// binary file given as a scene must not echo raw bytes into the terminal.
 std::string printable(const std::string& s) {
     std::string out;
     out.reserve(s.size());
@@ -42,6 +39,7 @@ std::string printable(const std::string& s) {
     return out;
 }
 
+namespace {
 std::string located(const FileLoc& loc, const char* kind, const std::string& raw) {
     const std::string message = printable(raw);
     std::string where = printable(loc.to_string());
