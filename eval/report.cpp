@@ -341,16 +341,18 @@ std::set<std::string> previous_files(const fs::path& dir) {
     }
     std::ifstream csv(dir / "results.csv");
     if (!csv) return out;
-    std::getline(csv, line);  // header
+    std::getline(csv, line);  // the header says whether it is a results.csv of cmam eval
+    if (line.rfind("scene,method,spp,rmse,psnr,ssim,rmse_masked,", 0) != 0) return out;
     while (std::getline(csv, line)) {
         std::vector<std::string> f;
         std::stringstream ss(line);
         std::string item;
         while (std::getline(ss, item, ',')) f.push_back(item);
         if (f.size() < 16) continue;
-        out.insert(f[14]);
-        out.insert(f[15]);
-        out.insert(fs::path(f[14]).parent_path().string() + "/reference.png");
+        for (const std::string& image : {f[14], f[15]})
+            if (fs::path(image).extension() == ".png") out.insert(image);
+        if (fs::path(f[14]).has_parent_path())
+            out.insert(fs::path(f[14]).parent_path().string() + "/reference.png");
     }
     return out;
 }
@@ -455,6 +457,13 @@ th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
             h << "<li><code>" << html_escape(f.path) << "</code>: <code>" << html_escape(f.message)
               << "</code></li>\n";
         h << "</ul></div>\n";
+    }
+    if (r.scenes.size() > 1) {
+        h << "<p class=\"facts\"><b>Scenes</b> ";
+        for (std::size_t k = 0; k < r.scenes.size(); ++k)
+            h << (k ? " &middot; " : "") << "<a href=\"#" << html_escape(r.scenes[k].name) << "\">"
+              << html_escape(r.scenes[k].name) << "</a>";
+        h << "</p>\n";
     }
     for (const SceneReport& sc : r.scenes) {
         std::vector<const ResultRow*> rows;
