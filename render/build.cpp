@@ -282,11 +282,12 @@ class Builder {
             int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
             s.xsamples = s.ysamples = k;
             // With --spp the count comes from there (set below), not from pixelsamples.
-            const std::string grid = m_opts.spp_override > 0
-                                         ? std::string("the --spp count of")
-                                         : std::to_string(k) + "x" + std::to_string(k);
-            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " + grid +
-                            " jittered samples per pixel");
+            const std::string count =
+                m_opts.spp_override > 0
+                    ? std::string(", as many as --spp asks for")
+                    : " with " + std::to_string(k) + "x" + std::to_string(k) + " per pixel";
+            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" jittered samples" +
+                            count);
             e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
         } else {
             throw SceneError(e.loc, "unknown Sampler " + q(e.type));
