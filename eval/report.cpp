@@ -445,7 +445,7 @@ th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
 </style></head>
 <body data-images-ok="" data-images-broken="" data-overlaps="" data-overflow-x="">
 <h1>cmam evaluation</h1>
-<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the ground truth's mean (white). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )"
+<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the mean of the ground truth (white; of its texture AOV for the texture error). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )"
       << html_escape(timing_note(r))
       << R"( Move the mouse over an image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
 )";

@@ -280,3 +280,22 @@ TEST(Parser, KnownButUnsupportedParameterWarns) {
               "t.pbrt:3:16: warning: parameter \"alpha\" of shape \"sphere\" is not supported by "
               "cmam; ignored");
 }
+
+TEST(Errors, MessagesEscapeWhatATerminalWouldActOn) {
+    // Control bytes and bytes that are not UTF-8 become \xNN; UTF-8 text and newlines stay.
+    EXPECT_EQ(printable("a\x1b[31m\x07z"), "a\\x1b[31m\\x07z");
+    EXPECT_EQ(printable("caf\xc3\xa9 \xff\xc3"), "caf\xc3\xa9 \\xff\\xc3");
+    EXPECT_EQ(printable("two\nlines\t"), "two\nlines\\x09");
+    try {
+        parse_string(
+            "\x7f"
+            "ELF\x02\x01",
+            "bin.pbrt");
+        FAIL() << "a binary file must not parse";
+    } catch (const SceneError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.rfind("bin.pbrt:1:1: error: unknown directive \\x7fELF\\x02\\x01", 0), 0u)
+            << what;
+        for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
+    }
+}
