@@ -502,7 +502,8 @@ th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
                       "texture error versus render time")
           << "</div>\n";
         h << "<details class=\"numbers\"><summary>All numbers (" << rows.size()
-          << " rows; also in results.csv)</summary><div "
+          << (rows.size() == 1 ? " row" : " rows")
+          << "; also in results.csv)</summary><div "
              "class=\"tablewrap\"><table><tr><th>method</th><th>spp</th><th>RMSE</th><th>"
              "PSNR</th><th>SSIM</th><th>RMSE off edges</th>"
              "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)"
