@@ -1,4 +1,4 @@
-// Test helper: a folder of the test process's own in the system temporary folder, removed with
+// For tests: a folder of the test process's own in the system temporary folder, removed with
 // everything in it when the object goes out of scope (also when an assertion ends the test).
 #pragma once
 
