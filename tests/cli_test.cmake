@@ -180,4 +180,17 @@ expect_failure("garbage.pbrt:1:1: error: unknown directive .x1b " "a binary scen
 if(err MATCHES "${esc}" OR err MATCHES "${bell}")
   message(FATAL_ERROR "raw control bytes in a message: ${err}")
 endif()
+# cmam eval --help names every footprint source and filter a method may combine; an unknown
+# method is refused with the same list.
+cmam_run(eval --help)
+foreach(name differentials cones-aniso cmam-pixel-hull cmam2d trilinear sat ewa area)
+  if(NOT out MATCHES "[ ,]${name}[ ,.]")
+    message(FATAL_ERROR "eval --help must list ${name}: ${out}")
+  endif()
+endforeach()
+cmam_run(eval ${demo} --methods cmam+magic -o ${OUT}/eval)
+expect_failure("cmam: error: --methods: unknown method \"cmam\+magic\" \(none, or SOURCE\+FILTER with SOURCE one of differentials," "an unknown method")
+if(EXISTS ${OUT}/eval)
+  message(FATAL_ERROR "an unknown method must fail before anything is written")
+endif()
 file(REMOVE_RECURSE ${OUT})
