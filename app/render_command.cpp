@@ -42,6 +42,12 @@ void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
     else if (!(n == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0))
         throw std::invalid_argument("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text +
                                     "\"");
+    if (w > render::kMaxFilmSide || h > render::kMaxFilmSide ||
+        static_cast<long long>(w) * h > render::kMaxFilmPixels)
+        throw std::invalid_argument("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
+                                    " is above cmam's limits of " +
+                                    std::to_string(render::kMaxFilmSide) + " pixels a side and " +
+                                    std::to_string(render::kMaxFilmPixels) + " in all");
     if (std::abs(double(w) / h - double(xres) / yres) > 1.0 / std::min(w, h))
         warn("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
              " has another aspect ratio than the scene's " + std::to_string(xres) + "x" +

@@ -161,6 +161,8 @@ if(NOT rc EQUAL 0 OR NOT err MATCHES "res.exr: 32x20, ")
 endif()
 cmam_run(render ${demo} -o ${OUT}/res.exr --crop 0.5,0.2,0,1)
 expect_failure("cmam: error: --crop: needs X0 < X1 and Y0 < Y1" "an empty --crop")
+cmam_run(render ${demo} -o ${OUT}/res.exr --resolution 70000)
+expect_failure("cmam: error: --resolution 70000x43750 is above cmam's limits" "a --resolution above the limits")
 cmam_run(render ${demo} -o ${OUT}/res.exr --resolution 12y)
 expect_failure("cmam: error: --resolution: expected WIDTHxHEIGHT or WIDTH, got \"12y\"" "a bad --resolution")
 # One prefix: located scene errors, "cmam: error:" for everything else (command line included).
