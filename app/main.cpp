@@ -1,241 +1,33 @@
 // cmam — command-line front end: `cmam render`, `cmam check`, `cmam lookup`, `cmam compare`,
 // `cmam eval`.
-// Libraries throw; this file is the only place that prints errors.
+// Libraries throw; the app/ files are the only place that prints errors.
 #include <cmam/texture/cmam.h>
 #include <cmam/texture/ewa.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <iostream>
-#include <mutex>
-#include <sstream>
 
+#include "app/common.h"
+#include "app/eval_command.h"
+#include "app/render_command.h"
 #include "eval/evaluation.h"
 #include "eval/metrics.h"
 #include "pbrt/parser.h"
 #include "render/image_io.h"
-#include "render/integrator.h"
 #include "render/scene.h"
 
 namespace {
 
 using namespace cmam;
-
-struct RenderArgs {
-    std::string scene;
-    std::string output;
-    int spp = 0;
-    int threads = 0;
-    bool quiet = false;
-    bool stats = false;
-    std::string lod, filter, cmam_miss = "average", cmam_tags = "scanline",
-                             cmam_ellipse = "conjugate", cmam_sat_miss = "average",
-                             cmam_adjacency = "on";
-    bool cmam_hull = false, cmam_2d = false;
-    std::string aov;
-};
-
-void print_warning(const std::string& w) {
-    std::cerr << w << "\n";
-}
-
-std::string format_duration(double s) {
-    char buf[64];
-    if (s < 60)
-        std::snprintf(buf, sizeof buf, "%.1fs", s);
-    else
-        std::snprintf(buf, sizeof buf, "%dm%02ds", int(s) / 60, int(s) % 60);
-    return buf;
-}
-
-class ProgressBar {
-  public:
-    explicit ProgressBar(bool enabled)
-        : m_enabled(enabled), m_start(std::chrono::steady_clock::now()) {}
-    void update(int done, int total) {
-        if (!m_enabled) return;
-        std::lock_guard<std::mutex> lock(m_mutex);
-        double frac = double(done) / total;
-        int pct = int(frac * 100);
-        if (pct == m_last && done != total) return;
-        m_last = pct;
-        double el =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
-        double eta = frac > 0 ? el / frac - el : 0;
-        constexpr int kWidth = 40;
-        int fill = int(frac * kWidth);
-        std::string bar(fill, '=');
-        bar.resize(kWidth, ' ');
-        std::fprintf(stderr, "\r[%s] %3d%%  elapsed %s  ETA %s   ", bar.c_str(), pct,
-                     format_duration(el).c_str(), format_duration(eta).c_str());
-        if (done == total) std::fprintf(stderr, "\n");
-        std::fflush(stderr);
-    }
-
-  private:
-    bool m_enabled;
-    std::chrono::steady_clock::time_point m_start;
-    std::mutex m_mutex;
-    int m_last = -1;
-};
-
-void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
-    std::size_t level0 = 0, pyramids = 0, tables = 0, prefixes = 0;
-    for (const auto& [key, tex] : scene.images) {
-        level0 += tex->image().memory_bytes();
-        std::size_t all = tex->memory_bytes();
-        std::size_t sat = tex->sat_built() ? tex->sat().memory_bytes() : 0;
-        std::size_t rows = tex->row_prefix_bytes();
-        tables += sat;
-        prefixes += rows;
-        pyramids += all - sat - rows - tex->image().memory_bytes();
-    }
-    auto mb = [](std::size_t b) { return double(b) / (1 << 20); };
-    std::fprintf(
-        stderr,
-        "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB, "
-        "row prefix tables (area) %.2f MB\n",
-        scene.images.size(), mb(level0), mb(pyramids), mb(tables), mb(prefixes));
-    std::fprintf(stderr, "lookups: point-sampled (no footprint) %llu",
-                 (unsigned long long)stats.lookups_point_sampled);
-    for (int k = 0; k < texture::kFilterKinds; ++k)
-        std::fprintf(stderr, ", %s %llu",
-                     std::string(texture::to_string(texture::FilterKind(k))).c_str(),
-                     (unsigned long long)stats.lookups_by_filter[k]);
-    std::fprintf(stderr, "\n");
-    if (stats.lookups_non_finite)
-        std::fprintf(stderr, "lookups with a non-finite uv or footprint (texture mean): %llu\n",
-                     (unsigned long long)stats.lookups_non_finite);
-    if (stats.cmam_2d_without_above)
-        std::fprintf(stderr, "2-D CMAM lookups without a sample above: %llu\n",
-                     (unsigned long long)stats.cmam_2d_without_above);
-    if (stats.dropped_differentials)
-        std::fprintf(stderr, "ray differentials dropped (grazing or non-finite): %llu\n",
-                     (unsigned long long)stats.dropped_differentials);
-}
-
-// The image is written to a temporary beside `out` and renamed: its folder must exist and be
-// writable.
-void check_output_folder(const std::string& out) {
-    namespace fs = std::filesystem;
-    fs::path dir = fs::path(out).parent_path();
-    if (dir.empty()) dir = ".";
-    std::error_code ec;
-    if (!fs::exists(dir, ec))
-        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
-                                    "\" does not exist");
-    if (!fs::is_directory(dir, ec))
-        throw std::invalid_argument("cannot write \"" + out + "\": \"" + dir.string() +
-                                    "\" is not a folder");
-    if (::access(dir.c_str(), W_OK) != 0)
-        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
-                                    "\" is not writable");
-}
-
-int run_render(const RenderArgs& a) {
-    auto t0 = std::chrono::steady_clock::now();
-    pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
-    render::BuildOptions bo;
-    bo.spp_override = a.spp;
-    if (!a.lod.empty()) {
-        bo.lod = render::parse_lod(a.lod);
-        if (!bo.lod)
-            throw std::invalid_argument(
-                "--lod: unknown \"" + a.lod +
-                "\" (expected none, differentials, cones, cones-aniso or cmam)");
-    }
-    if (!a.filter.empty()) {
-        bo.filter = texture::parse_filter(a.filter);
-        if (!bo.filter)
-            throw std::invalid_argument("--filter: unknown \"" + a.filter + "\" (expected " +
-                                        texture::filter_names() + ")");
-    }
-    auto miss = texture::parse_cmam_miss(a.cmam_miss);
-    auto tags = render::parse_tag_policy(a.cmam_tags);
-    auto ell = texture::parse_cmam_ellipse(a.cmam_ellipse);
-    auto sat_miss = texture::parse_cmam_sat_miss(a.cmam_sat_miss);
-    if (!miss) throw std::invalid_argument("--cmam-miss: expected average or point");
-    if (!tags) throw std::invalid_argument("--cmam-tags: expected scanline or pixel");
-    if (!ell)
-        throw std::invalid_argument(
-            "--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
-    if (!sat_miss)
-        throw std::invalid_argument("--cmam-sat-miss: expected average or paper-literal");
-    if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
-        throw std::invalid_argument("--cmam-adjacency: expected on or off");
-    if (a.cmam_hull && *tags != render::TagPolicy::Pixel)
-        throw std::invalid_argument("--cmam-hull works per pixel: it needs --cmam-tags pixel");
-    bo.tags = *tags;
-    bo.cmam.miss = *miss;
-    bo.cmam.ellipse = *ell;
-    bo.cmam.sat_miss = *sat_miss;
-    bo.cmam.adjacent_only = a.cmam_adjacency == "on";
-    bo.cmam.hull = a.cmam_hull;
-    if (a.cmam_2d && *tags != render::TagPolicy::Scanline)
-        throw std::invalid_argument(
-            "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
-    bo.cmam.two_d = a.cmam_2d;
-    auto scene = render::build_scene(desc, bo, print_warning);
-    std::string out = a.output.empty() ? scene->film.filename : a.output;
-    check_output_folder(out);  // before rendering: a long render is not lost to a typo
-
-    ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
-    render::RenderOptions ro;
-    ro.threads = a.threads;
-    if (a.aov == "footprint")
-        ro.aov = render::AovKind::Footprint;
-    else if (a.aov == "texture")
-        ro.aov = render::AovKind::Texture;
-    else if (!a.aov.empty())
-        throw std::invalid_argument("--aov: unknown \"" + a.aov +
-                                    "\" (expected footprint or texture)");
-    ro.progress = [&](int done, int total) { bar.update(done, total); };
-    render::RenderStats stats;
-    auto t1 = std::chrono::steady_clock::now();
-    render::Framebuffer fb = render::render(*scene, ro, &stats);
-    auto t2 = std::chrono::steady_clock::now();
-    render::write_image(out, fb.width, fb.height, fb.rgb, fb.channel_names);
-    double render_s = std::chrono::duration<double>(t2 - t1).count();
-    double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (!a.quiet) {
-        uint64_t rays = stats.total_rays();
-        std::fprintf(stderr,
-                     "%s: %dx%d, %d spp, wall %.3fs (render %.3fs), %llu rays, %.2f Mrays/s\n",
-                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, render_s,
-                     (unsigned long long)rays, render_s > 0 ? rays / render_s / 1e6 : 0.0);
-    }
-    if (a.stats) print_stats(*scene, stats);
-    return 0;
-}
+using namespace cmam::app;
 
 struct LookupArgs {
     std::string image, uv, axes, points, filter = "ewa", wrap = "repeat";
     double max_aniso = 8;
     bool json = false;
 };
-
-std::vector<double> parse_numbers(const std::string& text, const char* flag) {
-    std::vector<double> out;
-    std::size_t pos = 0;
-    while (pos <= text.size()) {
-        std::size_t comma = text.find(',', pos);
-        std::string item =
-            text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-        char* end = nullptr;
-        double v = std::strtod(item.c_str(), &end);
-        if (item.empty() || end != item.c_str() + item.size())
-            throw std::invalid_argument(std::string(flag) + ": \"" + item + "\" is not a number");
-        out.push_back(v);
-        if (comma == std::string::npos) break;
-        pos = comma + 1;
-    }
-    return out;
-}
 
 std::string json_escape(const std::string& s) {
     std::string out;
@@ -290,9 +82,8 @@ int run_lookup(const LookupArgs& a) {
         uv = {pt[0], pt[1]};
     }
     if (*kind == texture::FilterKind::Ewa && a.max_aniso > texture::kEwaMaxAnisotropy)
-        std::cerr << "cmam lookup: warning: --maxaniso " << a.max_aniso
-                  << " is above cmam's limit of " << texture::kEwaMaxAnisotropy
-                  << ", which is used instead\n";
+        std::cerr << "cmam: warning: --maxaniso " << a.max_aniso << " is above cmam's limit of "
+                  << texture::kEwaMaxAnisotropy << ", which is used instead\n";
     texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, *wrap));
     texture::LookupInfo info;
     texture::Texel v = tex.lookup(uv[0], uv[1], fp, {*kind, a.max_aniso}, &info);
@@ -385,78 +176,34 @@ int run_compare(const std::string& ref_path, const std::string& img_path, bool j
     return 0;
 }
 
-struct EvalArgs {
-    std::vector<std::string> scenes;
-    std::string methods, spp = "1,4,16", out = "eval-out";
-    int reference_spp = 1024;
-    bool quiet = false;
-};
-
-std::vector<std::string> split_list(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    std::string item;
-    while (std::getline(ss, item, ','))
-        if (!item.empty()) out.push_back(item);
-    return out;
-}
-
-int run_eval(const EvalArgs& a) {
-    eval::EvalOptions o;
-    o.scenes = a.scenes;
-    o.reference_spp = a.reference_spp;
-    o.out_dir = a.out;
-    for (const std::string& name :
-         a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
-        auto m = eval::parse_method(name);
-        if (!m)
-            throw std::invalid_argument(
-                "--methods: unknown method \"" + name +
-                "\" (e.g. none, differentials+ewa, cones+trilinear, cones-aniso+ewa, "
-                "cmam+sat, cmam-literal+trilinear, cmam-point+ewa, cmam-pixel-hull+trilinear)");
-        o.methods.push_back(*m);
-    }
-    o.spp.clear();
-    for (const std::string& v : split_list(a.spp)) {
-        char* end = nullptr;
-        long n = std::strtol(v.c_str(), &end, 10);
-        if (*end || n < 1)
-            throw std::invalid_argument("--spp: \"" + v + "\" is not a positive integer");
-        o.spp.push_back(static_cast<int>(n));
-    }
-    if (o.spp.empty()) throw std::invalid_argument("--spp: give at least one sample count");
-    ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
-    o.progress = [&](int done, int total, const std::string&) { bar.update(done, total); };
-    auto t0 = std::chrono::steady_clock::now();
-    eval::EvalResult r = eval::run_eval(o);
-    if (!a.quiet) {
-        int cached = 0;
-        for (const auto& s : r.scenes) cached += s.reference_cached;
-        std::fprintf(stderr,
-                     "%s: %zu scenes (%d ground truths from the cache), %zu results, %.1fs; see "
-                     "%s/index.html\n",
-                     a.out.c_str(), r.scenes.size(), cached, r.rows.size(),
-                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
-                     a.out.c_str());
-    }
-    return 0;
-}
-
 int run_check(const std::string& path) {
     pbrt::SceneDesc desc = pbrt::parse_file(path, print_warning);
     auto scene = render::build_scene(desc, {}, print_warning);
+    // Triangles and quadrics as rendered: an object's count once per instance.
+    auto count = [](const std::vector<std::unique_ptr<render::Primitive>>& prims, std::size_t times,
+                    std::size_t* tris, std::size_t* quadrics) {
+        for (const auto& p : prims) {
+            if (p->kind == render::Primitive::Kind::Triangles)
+                *tris += times * (p->indices.size() / 3);
+            else
+                *quadrics += times;
+        }
+    };
     std::size_t tris = 0, quadrics = 0;
-    for (const auto& p : scene->primitives) {
-        if (p->kind == render::Primitive::Kind::Triangles)
-            tris += p->indices.size() / 3;
-        else
-            ++quadrics;
-    }
+    count(scene->primitives, 1, &tris, &quadrics);
+    for (const auto& in : scene->instances)
+        count(scene->objects[in.object].primitives, 1, &tris, &quadrics);
+    std::string instances;
+    if (!scene->instances.empty())
+        instances = " (" + std::to_string(scene->instances.size()) + " instances of " +
+                    std::to_string(scene->objects.size()) +
+                    (scene->objects.size() == 1 ? " object)" : " objects)");
     std::printf(
-        "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics, %zu lights, %zu materials, %zu "
-        "textures\n",
+        "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics%s, %zu lights, %zu materials, "
+        "%zu textures\n",
         path.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris,
-        quadrics, scene->lights.size(), scene->materials.size(), scene->textures.size());
+        quadrics, instances.c_str(), scene->lights.size(), scene->materials.size(),
+        scene->textures.size());
     return 0;
 }
 
@@ -471,13 +218,22 @@ int main(int argc, char** argv) {
     auto* render_cmd = app.add_subcommand("render", "Render a pbrt-v3 scene");
     render_cmd->add_option("scene", ra.scene, "Scene file (.pbrt)")->required();
     render_cmd->add_option("-o,--output", ra.output,
-                           "Output image (.exr, .pfm, .png); default: the Film's filename");
+                           "Output image: .exr or .pfm (float, linear), .png, .jpg or .tga (8-bit "
+                           "sRGB); default: the Film's filename");
     render_cmd
-        ->add_option("--spp", ra.spp, "Samples per pixel (rounded to a square; 1 = pixel centre)")
+        ->add_option("--spp", ra.spp,
+                     "Samples per pixel, rounded to a square grid (5 renders 2x2 = 4, with a "
+                     "warning); 1 = the pixel centre")
         ->check(CLI::Range(1, 1 << 20));
     render_cmd->add_option("--threads", ra.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
+    render_cmd->add_option("--resolution", ra.resolution,
+                           "Film resolution WxH, or W alone to keep the scene's aspect ratio (a "
+                           "quick preview of a big scene)");
+    render_cmd->add_option("--crop", ra.crop,
+                           "Render only X0,X1,Y0,Y1 of the image: the Film's cropwindow, fractions "
+                           "of the width and height from the top left (replaces the scene's)");
     render_cmd->add_flag("--stats", ra.stats, "Print texture memory and lookup counts per filter");
     render_cmd->add_option(
         "--lod", ra.lod,
@@ -486,7 +242,8 @@ int main(int argc, char** argv) {
     render_cmd->add_option(
         "--aov", ra.aov,
         "Write an AOV instead of radiance: footprint (major, minor axis in texels, MIP level; "
-        "EXR) or texture (unlit filtered texture of the first non-specular hit)");
+        ".exr or .pfm; with --lod cmam the region the CMAM built) or texture "
+        "(unlit filtered texture of the first non-specular hit)");
     render_cmd->add_option(
         "--filter", ra.filter,
         "Filter for image textures: " + texture::filter_names() +
@@ -554,18 +311,33 @@ int main(int argc, char** argv) {
         "eval", "Compare footprint methods against a ground truth; write a report");
     eval_cmd->add_option("scenes", ea.scenes, "Scene files (.pbrt)")->required();
     eval_cmd->add_option("--methods", ea.methods,
-                         "Comma-separated methods (default: every method)");
+                         "Comma-separated methods: " + method_syntax() +
+                             ". Default: " + join(eval::default_methods(), ","));
     eval_cmd->add_option("--spp", ea.spp, "Comma-separated samples per pixel")
         ->capture_default_str();
     eval_cmd->add_option("--reference-spp", ea.reference_spp, "Ground-truth samples per pixel")
         ->capture_default_str()
         ->check(CLI::Range(1, 1 << 20));
-    eval_cmd->add_option("-o,--output", ea.out, "Output directory")->capture_default_str();
+    eval_cmd
+        ->add_option("--timing-runs", ea.timing_runs,
+                     "Renders timed per method and sample count; the report gives their median "
+                     "and range (1: single runs, marked as such)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 100));
+    eval_cmd
+        ->add_option("-o,--output", ea.out,
+                     "Output directory; a report already there is replaced (its own files only)")
+        ->capture_default_str();
     eval_cmd->add_flag("--quiet", ea.quiet, "No progress bar and no summary line");
 
+    app.failure_message([](const CLI::App* a, const CLI::Error& e) {
+        return "cmam: error: " + std::string(e.what()) + "\nRun with " +
+               (a->get_help_ptr() ? a->get_help_ptr()->get_name() : std::string("--help")) +
+               " for more information.\n";
+    });
     CLI11_PARSE(app, argc, argv);
     if (*lookup_cmd && la.uv.empty() && la.points.empty()) {
-        std::cerr << "cmam lookup: error: give --uv U,V (or --points)\n";
+        std::cerr << "cmam: error: give --uv U,V (or --points)\n";
         return 2;
     }
     try {
@@ -575,10 +347,11 @@ int main(int argc, char** argv) {
         if (*compare_cmd) return run_compare(cmp_ref, cmp_img, cmp_json);
         if (*eval_cmd) return run_eval(ea);
     } catch (const pbrt::SceneError& e) {
-        std::cerr << e.what() << "\n";
+        // Located: "FILE:LINE:COL: error: ..."; otherwise "error: ...", printed as the others.
+        std::cerr << (e.loc().file ? "" : "cmam: ") << e.what() << "\n";
         return 1;
     } catch (const std::exception& e) {
-        std::cerr << "cmam: error: " << e.what() << "\n";
+        std::cerr << "cmam: error: " << pbrt::printable(e.what()) << "\n";
         return 1;
     }
     return 0;

@@ -1,5 +1,6 @@
 #include "eval/evaluation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -20,6 +21,48 @@ const char* renderer_version() {
     return "cmam-0.1.0/eval-1";
 }
 
+namespace {
+
+// The footprint sources of method names: "SOURCE+FILTER".
+struct Source {
+    const char* name;
+    render::Lod lod;
+    void (*adjust)(render::BuildOptions&);  // may be null
+};
+const Source kSources[] = {
+    {"differentials", render::Lod::Differentials, nullptr},
+    {"cones", render::Lod::Cones, nullptr},
+    {"cones-aniso", render::Lod::ConesAniso, nullptr},
+    // Paper mode: scanline tags, average on a miss, conjugate ellipse.
+    {"cmam", render::Lod::Cmam, nullptr},
+    {"cmam-literal", render::Lod::Cmam,
+     [](render::BuildOptions& b) { b.cmam.adjacent_only = false; }},
+    {"cmam-point", render::Lod::Cmam,
+     [](render::BuildOptions& b) { b.cmam.miss = texture::CmamMiss::Point; }},
+    {"cmam-pixel-hull", render::Lod::Cmam,
+     [](render::BuildOptions& b) {
+         b.tags = render::TagPolicy::Pixel;
+         b.cmam.hull = true;
+     }},
+    {"cmam2d", render::Lod::Cmam, [](render::BuildOptions& b) { b.cmam.two_d = true; }},
+};
+
+}  // namespace
+
+std::vector<std::string> method_sources() {
+    std::vector<std::string> out;
+    for (const Source& s : kSources) out.push_back(s.name);
+    return out;
+}
+
+std::vector<std::string> method_filters() {
+    std::vector<std::string> out;
+    for (int k = 0; k < texture::kFilterKinds; ++k)
+        if (texture::FilterKind(k) != texture::FilterKind::Nearest)
+            out.emplace_back(texture::to_string(texture::FilterKind(k)));
+    return out;
+}
+
 std::optional<Method> parse_method(const std::string& name) {
     Method m;
     m.name = name;
@@ -33,29 +76,13 @@ std::optional<Method> parse_method(const std::string& name) {
     auto f = texture::parse_filter(filter);
     if (!f || *f == texture::FilterKind::Nearest) return std::nullopt;
     m.build.filter = *f;
-    if (source == "differentials")
-        m.build.lod = render::Lod::Differentials;
-    else if (source == "cones")
-        m.build.lod = render::Lod::Cones;
-    else if (source == "cones-aniso")
-        m.build.lod = render::Lod::ConesAniso;
-    else if (source.rfind("cmam", 0) == 0) {
-        m.build.lod = render::Lod::Cmam;
-        if (source == "cmam-literal")
-            m.build.cmam.adjacent_only = false;
-        else if (source == "cmam-point")
-            m.build.cmam.miss = texture::CmamMiss::Point;
-        else if (source == "cmam2d")
-            m.build.cmam.two_d = true;
-        else if (source == "cmam-pixel-hull") {
-            m.build.tags = render::TagPolicy::Pixel;
-            m.build.cmam.hull = true;
-        } else if (source != "cmam")
-            return std::nullopt;
-    } else {
-        return std::nullopt;
-    }
-    return m;
+    for (const Source& s : kSources)
+        if (source == s.name) {
+            m.build.lod = s.lod;
+            if (s.adjust) s.adjust(m.build);
+            return m;
+        }
+    return std::nullopt;
 }
 
 std::vector<std::string> default_methods() {
@@ -102,9 +129,9 @@ struct Rendered {
 };
 
 Rendered render_with(const pbrt::SceneDesc& desc, render::BuildOptions bo, int spp,
-                     render::AovKind aov) {
+                     render::AovKind aov, const pbrt::WarningSink& warn) {
     bo.spp_override = spp;
-    auto scene = render::build_scene(desc, bo, {});
+    auto scene = render::build_scene(desc, bo, warn);
     render::RenderOptions ro;
     ro.aov = aov;
     render::RenderStats stats;
@@ -153,21 +180,36 @@ std::string reference_key(const std::string& scene_path, int reference_spp) {
     return buf;
 }
 
-EvalResult run_eval(const EvalOptions& o) {
-    EvalResult result;
-    fs::create_directories(fs::path(o.out_dir) / "cache");
-    const int per_scene =
-        3 + static_cast<int>(o.spp.size()) * (1 + 2 * static_cast<int>(o.methods.size()));
-    const int total = per_scene * static_cast<int>(o.scenes.size());
-    int done = 0;
-    auto step = [&](const std::string& what) {
-        ++done;
-        if (o.progress) o.progress(done, total, what);
-    };
-    for (const std::string& scene_path : o.scenes) {
-        pbrt::SceneDesc desc = pbrt::parse_file(scene_path);
+int rendered_spp(int spp) {
+    const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(spp)))));
+    return k * k;
+}
+
+namespace {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n == 0 ? 0 : n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
+}
+
+// Evaluates one scene: ground truth (cached), then every method at every sample count. Appends
+// its rows and the files it wrote (relative to out_dir) to `result`; throws on failure.
+class SceneEvaluation {
+  public:
+    SceneEvaluation(const EvalOptions& o, std::function<void(const std::string&)> step)
+        : o(o), step(std::move(step)) {}
+
+    SceneReport run(const std::string& scene_path) {
         SceneReport sr;
+        sr.path = scene_path;
         sr.name = safe_name(fs::path(scene_path).stem().string());
+        const pbrt::WarningSink warn = [&](const std::string& w) {
+            if (std::find(sr.warnings.begin(), sr.warnings.end(), w) != sr.warnings.end()) return;
+            sr.warnings.push_back(w);
+            if (o.warn) o.warn(w);
+        };
+        pbrt::SceneDesc desc = pbrt::parse_file(scene_path, warn);
         fs::path dir = fs::path(o.out_dir) / sr.name;
         fs::create_directories(dir);
         // Ground truth: point-sampled textures (bilinear at level 0), jittered strata; cached.
@@ -179,23 +221,26 @@ EvalResult run_eval(const EvalOptions& o) {
         render::BuildOptions gt_opts;
         gt_opts.lod = render::Lod::None;
         gt_opts.filter = texture::FilterKind::Bilinear;
+        sr.reference_spp = rendered_spp(o.reference_spp);
         sr.reference_cached =
             fs::exists(gt_beauty) && fs::exists(gt_texture) && fs::exists(gt_untextured);
         if (!sr.reference_cached) {
-            Rendered b = render_with(desc, gt_opts, o.reference_spp, render::AovKind::None);
+            Rendered b = render_with(desc, gt_opts, o.reference_spp, render::AovKind::None, warn);
             render::write_image(gt_beauty.string(), b.image.width, b.image.height, b.image.rgb);
             step(sr.name + ": ground truth");
-            Rendered t = render_with(desc, gt_opts, o.reference_spp, render::AovKind::Texture);
+            Rendered t =
+                render_with(desc, gt_opts, o.reference_spp, render::AovKind::Texture, warn);
             render::write_image(gt_texture.string(), t.image.width, t.image.height, t.image.rgb);
             step(sr.name + ": ground truth texture");
             render::BuildOptions un = gt_opts;
             un.untextured = true;
-            Rendered u = render_with(desc, un, o.reference_spp, render::AovKind::None);
+            Rendered u = render_with(desc, un, o.reference_spp, render::AovKind::None, warn);
             render::write_image(gt_untextured.string(), u.image.width, u.image.height, u.image.rgb);
             step(sr.name + ": untextured ground truth");
         } else {
-            done += 3;
-            if (o.progress) o.progress(done, total, sr.name + ": ground truth (cached)");
+            // The warnings of building, which a cached ground truth did not show.
+            render::build_scene(desc, gt_opts, warn);
+            for (int k = 0; k < 3; ++k) step(sr.name + ": ground truth (cached)");
         }
         const std::vector<float> ref = read_rgb(gt_beauty.string()),
                                  ref_tex = read_rgb(gt_texture.string()),
@@ -204,22 +249,29 @@ EvalResult run_eval(const EvalOptions& o) {
         sr.width = dims.width;
         sr.height = dims.height;
         sr.reference_image = sr.name + "/reference.png";
-        render::write_png8((fs::path(o.out_dir) / sr.reference_image).string(), sr.width, sr.height,
-                           to_srgb8(ref));
-        double ref_mean = compare(ref, ref).reference_mean;
-        const double heat_scale = std::max(1e-3, ref_mean);
+        sr.reference_texture = sr.name + "/reference-texture.png";
+        write_png(sr.reference_image, sr.width, sr.height, to_srgb8(ref));
+        write_png(sr.reference_texture, sr.width, sr.height, to_srgb8(ref_tex));
+        const double heat_scale = std::max(1e-3, compare(ref, ref).reference_mean);
+        const double tex_heat_scale = std::max(1e-3, compare(ref_tex, ref_tex).reference_mean);
         for (int spp : o.spp) {
             render::BuildOptions un = gt_opts;
             un.untextured = true;
-            Rendered u = render_with(desc, un, spp, render::AovKind::None);
+            Rendered u = render_with(desc, un, spp, render::AovKind::None, warn);
             step(sr.name + ": untextured at " + std::to_string(spp) + " spp");
             std::vector<bool> mask = edge_mask(ref_un, u.image.rgb);
             double kept = 0;
             for (bool b : mask) kept += b;
+            sr.off_edge_fraction.emplace_back(spp, kept / mask.size());
             for (const Method& m : o.methods) {
-                Rendered b = render_with(desc, m.build, spp, render::AovKind::None);
-                step(sr.name + ": " + m.name + " at " + std::to_string(spp) + " spp");
-                Rendered t = render_with(desc, m.build, spp, render::AovKind::Texture);
+                Rendered b;
+                std::vector<double> seconds;
+                for (int run = 0; run < std::max(1, o.timing_runs); ++run) {
+                    b = render_with(desc, m.build, spp, render::AovKind::None, warn);
+                    seconds.push_back(b.seconds);
+                    step(sr.name + ": " + m.name + " at " + std::to_string(spp) + " spp");
+                }
+                Rendered t = render_with(desc, m.build, spp, render::AovKind::Texture, warn);
                 step(sr.name + ": " + m.name + " texture at " + std::to_string(spp) + " spp");
                 ResultRow row;
                 row.scene = sr.name;
@@ -237,19 +289,72 @@ EvalResult run_eval(const EvalOptions& o) {
                 ErrorStats tex = compare(ref_tex, t.image.rgb);
                 row.texture_rmse = tex.rmse;
                 row.texture_psnr = tex.psnr;
-                row.seconds = b.seconds;
-                row.rays_per_second = b.seconds > 0 ? b.rays / b.seconds : 0;
+                row.seconds = median(seconds);
+                row.seconds_min = *std::min_element(seconds.begin(), seconds.end());
+                row.seconds_max = *std::max_element(seconds.begin(), seconds.end());
+                row.timing_runs = static_cast<int>(seconds.size());
+                row.rays_per_second = row.seconds > 0 ? b.rays / row.seconds : 0;
                 std::string base = safe_name(m.name) + "-spp" + std::to_string(spp);
                 row.image = sr.name + "/" + base + ".png";
                 row.heatmap = sr.name + "/" + base + "-error.png";
-                render::write_png8((fs::path(o.out_dir) / row.image).string(), sr.width, sr.height,
-                                   to_srgb8(b.image.rgb));
-                render::write_png8((fs::path(o.out_dir) / row.heatmap).string(), sr.width,
-                                   sr.height, error_heatmap(ref, b.image.rgb, heat_scale));
-                result.rows.push_back(row);
+                row.texture_heatmap = sr.name + "/" + base + "-texture-error.png";
+                write_png(row.image, sr.width, sr.height, to_srgb8(b.image.rgb));
+                write_png(row.heatmap, sr.width, sr.height,
+                          error_heatmap(ref, b.image.rgb, heat_scale));
+                write_png(row.texture_heatmap, sr.width, sr.height,
+                          error_heatmap(ref_tex, t.image.rgb, tex_heat_scale));
+                rows.push_back(row);
             }
         }
-        result.scenes.push_back(sr);
+        return sr;
+    }
+
+    std::vector<ResultRow> rows;     // of this scene
+    std::vector<std::string> files;  // written for this scene
+
+  private:
+    void write_png(const std::string& rel, int w, int h, const std::vector<unsigned char>& rgb) {
+        render::write_png8((fs::path(o.out_dir) / rel).string(), w, h, rgb);
+        files.push_back(rel);
+    }
+
+    const EvalOptions& o;
+    std::function<void(const std::string&)> step;
+};
+
+}  // namespace
+
+EvalResult run_eval(const EvalOptions& o) {
+    EvalResult result;
+    fs::create_directories(fs::path(o.out_dir) / "cache");
+    const int per_scene =
+        3 + static_cast<int>(o.spp.size()) *
+                (1 + (std::max(1, o.timing_runs) + 1) * static_cast<int>(o.methods.size()));
+    const int total = per_scene * static_cast<int>(o.scenes.size());
+    int done = 0;
+    for (const std::string& scene_path : o.scenes) {
+        const int done_before = done;
+        SceneEvaluation ev(o, [&](const std::string& what) {
+            ++done;
+            if (o.progress) o.progress(done, total, what);
+        });
+        try {
+            SceneReport sr = ev.run(scene_path);
+            result.rows.insert(result.rows.end(), ev.rows.begin(), ev.rows.end());
+            result.files.insert(result.files.end(), ev.files.begin(), ev.files.end());
+            result.scenes.push_back(sr);
+        } catch (const std::exception& e) {
+            // Skipped: its images go, the other scenes go on.
+            std::error_code ec;
+            for (const std::string& f : ev.files) fs::remove(fs::path(o.out_dir) / f, ec);
+            const fs::path scene_dir =
+                fs::path(o.out_dir) / safe_name(fs::path(scene_path).stem().string());
+            if (fs::is_empty(scene_dir, ec)) fs::remove(scene_dir, ec);
+            result.failed.push_back({scene_path, e.what()});
+            if (o.scene_failed) o.scene_failed(scene_path, e.what());
+            done = done_before + per_scene;
+            if (o.progress) o.progress(done, total, scene_path + ": failed");
+        }
     }
     write_reports(o, result);
     return result;

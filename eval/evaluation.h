@@ -26,6 +26,10 @@ struct Method {
 std::optional<Method> parse_method(const std::string& name);
 /// The default list of the evaluation.
 std::vector<std::string> default_methods();
+/// The footprint sources a method name may start with (before "+FILTER"), in the order of
+/// parse_method's table, and the filters it may end with.
+std::vector<std::string> method_sources();
+std::vector<std::string> method_filters();
 
 struct EvalOptions {
     std::vector<std::string> scenes;
@@ -33,8 +37,15 @@ struct EvalOptions {
     std::vector<int> spp = {1, 4, 16};
     int reference_spp = 1024;
     std::string out_dir = "eval-out";
+    /// Renders timed per method and sample count: the report gives their median and range
+    /// (1: a single run, marked as such).
+    int timing_runs = 1;
     /// Called after each render with (renders done, renders total, what was rendered).
     std::function<void(int, int, const std::string&)> progress;
+    /// Receives each distinct warning of a scene (parsing and building), once.
+    std::function<void(const std::string&)> warn;
+    /// Receives the message of a scene that failed; the evaluation goes on with the others.
+    std::function<void(const std::string& scene, const std::string& message)> scene_failed;
 };
 
 struct ResultRow {
@@ -43,22 +54,44 @@ struct ResultRow {
     double rmse = 0, psnr = 0, ssim = 0;  // full image
     double rmse_masked = 0, psnr_masked = 0, ssim_masked = 0, masked_fraction = 0;
     double texture_rmse = 0, texture_psnr = 0;  // texture AOV
-    double seconds = 0, rays_per_second = 0;
-    std::string image, heatmap;  // relative to out_dir
+    double seconds = 0, rays_per_second = 0;    // seconds: median of the timed runs
+    std::string image, heatmap;                 // relative to out_dir
+    double seconds_min = 0, seconds_max = 0;    // range of the timed runs
+    int timing_runs = 1;
+    std::string texture_heatmap;  // error of the texture AOV, relative to out_dir
 };
 
 struct SceneReport {
     std::string name, reference_image;
     bool reference_cached = false;
     int width = 0, height = 0;
+    std::string path;                   // the scene file as given
+    int reference_spp = 0;              // samples per pixel of the ground truth, as rendered
+    std::string reference_texture;      // the ground truth's texture AOV (relative to out_dir)
+    std::vector<std::string> warnings;  // distinct warnings of parsing and building
+    /// Per sample count: the fraction of pixels kept as off edges (what the "off edges"
+    /// metrics average over).
+    std::vector<std::pair<int, double>> off_edge_fraction;
+};
+
+struct FailedScene {
+    std::string path, message;
 };
 
 struct EvalResult {
     std::vector<ResultRow> rows;
     std::vector<SceneReport> scenes;
+    std::vector<FailedScene> failed;  // scenes that could not be evaluated (skipped)
+    std::vector<std::string> files;   // every file the report wrote, relative to out_dir
 };
 
-/// Runs the evaluation and writes results.csv, results.md and index.html into out_dir.
+/// The samples per pixel a request of `spp` renders: a square grid of round(sqrt(spp))^2.
+int rendered_spp(int spp);
+
+/// Runs the evaluation and writes results.csv, results.md and index.html into out_dir. A scene
+/// that fails is reported through scene_failed, listed in EvalResult::failed and skipped. Files
+/// of an earlier report in out_dir that this one does not write again are removed (the report
+/// lists what it wrote in out_dir/report-files.txt; the ground-truth cache is kept).
 EvalResult run_eval(const EvalOptions& options);
 
 /// Key of a scene's ground truth: a hash of every file it reads (scene files, textures, PLY),

@@ -17,9 +17,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
+constexpr const char* kFileList = "report-files.txt";
+
 void write_atomic(const fs::path& path, const std::string& text) {
-    fs::path tmp =
-        path.parent_path() / ("." + path.filename().string() + ".tmp" + std::to_string(::getpid()));
+    std::string name(1, '.');
+    name += path.filename().string();
+    name += ".tmp";
+    name += std::to_string(::getpid());
+    const fs::path tmp = path.parent_path() / name;
     {
         std::ofstream out(tmp, std::ios::binary);
         out << text;
@@ -52,76 +57,241 @@ std::string html_escape(const std::string& s) {
     return o;
 }
 
-const char* kColors[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02",
-                         "#a6761d", "#666666", "#1f78b4", "#b2df8a", "#fb9a99", "#cab2d6"};
+// Plot styles: a colour, a marker, a fill and a dash pattern per method. The marker, fill and
+// dash together differ for the first 48 methods, so the plot reads in grey as well.
+const char* kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
+                         "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#393b79",
+                         "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d",
+                         "#31a354", "#756bb1", "#636363", "#a55194", "#8c6d31"};
+constexpr int kColorCount = sizeof kColors / sizeof kColors[0];
+const char* kDashes[] = {"", "6 3", "2 2"};
 
-// Error (RMSE, log) against render time (log), one polyline per method across spp.
-std::string svg_plot(const std::vector<const ResultRow*>& rows,
-                     const std::vector<std::string>& methods) {
-    const int W = 640, H = 360, L = 70, R = 190, T = 20, B = 50;
-    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
-    for (const ResultRow* r : rows) {
-        tmin = std::min(tmin, std::max(r->seconds, 1e-4));
-        tmax = std::max(tmax, std::max(r->seconds, 1e-4));
-        emin = std::min(emin, std::max(r->rmse, 1e-6));
-        emax = std::max(emax, std::max(r->rmse, 1e-6));
-    }
-    double lt0 = std::floor(std::log10(tmin) * 2) / 2,
-           lt1 = std::ceil(std::log10(tmax) * 2) / 2 + 1e-9;
-    double le0 = std::floor(std::log10(emin) * 4) / 4,
-           le1 = std::ceil(std::log10(emax) * 4) / 4 + 1e-9;
-    auto X = [&](double t) {
-        return L + (std::log10(std::max(t, 1e-4)) - lt0) / (lt1 - lt0) * (W - L - R);
+struct Style {
+    const char* color;
+    int marker;  // 0 circle, 1 square, 2 triangle up, 3 diamond, 4 triangle down, 5 plus,
+                 // 6 cross, 7 star
+    bool hollow;
+    const char* dash;
+};
+
+Style style_of(std::size_t m) {
+    return {kColors[m % kColorCount], static_cast<int>(m % 8), (m / 8) % 2 == 1,
+            kDashes[(m / 16) % 3]};
+}
+
+std::string marker_svg(const Style& st, double x, double y, const std::string& title) {
+    const double r = 4.5;
+    std::ostringstream s;
+    const std::string paint =
+        st.hollow ? std::string("fill=\"#fff\" stroke=\"") + st.color + "\" stroke-width=\"1.6\""
+                  : std::string("fill=\"") + st.color + "\" stroke=\"" + st.color +
+                        "\" stroke-width=\"1\"";
+    auto poly = [&](std::initializer_list<std::pair<double, double>> pts) {
+        s << "<polygon " << paint << " points=\"";
+        for (auto [dx, dy] : pts) s << x + dx * r << "," << y + dy * r << " ";
+        s << "\">";
     };
+    switch (st.marker) {
+        case 0:
+            s << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"" << r << "\" " << paint << ">";
+            break;
+        case 1:
+            poly({{-0.85, -0.85}, {0.85, -0.85}, {0.85, 0.85}, {-0.85, 0.85}});
+            break;
+        case 2:
+            poly({{0, -1.1}, {1, 0.75}, {-1, 0.75}});
+            break;
+        case 3:
+            poly({{0, -1.15}, {1.15, 0}, {0, 1.15}, {-1.15, 0}});
+            break;
+        case 4:
+            poly({{0, 1.1}, {1, -0.75}, {-1, -0.75}});
+            break;
+        case 5:
+            poly({{-0.3, -1},
+                  {0.3, -1},
+                  {0.3, -0.3},
+                  {1, -0.3},
+                  {1, 0.3},
+                  {0.3, 0.3},
+                  {0.3, 1},
+                  {-0.3, 1},
+                  {-0.3, 0.3},
+                  {-1, 0.3},
+                  {-1, -0.3},
+                  {-0.3, -0.3}});
+            break;
+        case 6:
+            poly({{-1, -0.6},
+                  {-0.6, -1},
+                  {0, -0.4},
+                  {0.6, -1},
+                  {1, -0.6},
+                  {0.4, 0},
+                  {1, 0.6},
+                  {0.6, 1},
+                  {0, 0.4},
+                  {-0.6, 1},
+                  {-1, 0.6},
+                  {-0.4, 0}});
+            break;
+        default:
+            poly({{0, -1.2},
+                  {0.3, -0.4},
+                  {1.15, -0.37},
+                  {0.48, 0.15},
+                  {0.71, 0.97},
+                  {0, 0.5},
+                  {-0.71, 0.97},
+                  {-0.48, 0.15},
+                  {-1.15, -0.37},
+                  {-0.3, -0.4}});
+    }
+    s << "<title>" << html_escape(title) << "</title>"
+      << (st.marker == 0 ? "</circle>" : "</polygon>") << "\n";
+    return s.str();
+}
+
+std::string tick_label(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
+
+// Ticks of a log axis over [lo, hi] (values, lo > 0): the densest of 10^d, {1,2,5} 10^d and
+// {1..9} 10^d whose labels keep `gap` pixels apart at `pixels_per_decade`; evenly spaced values
+// when that leaves fewer than three in a narrow range.
+std::vector<double> log_ticks(double lo, double hi, double pixels_per_decade, double gap) {
+    std::vector<std::vector<double>> sets;
+    for (auto mults : {std::vector<double>{1}, std::vector<double>{1, 2, 5},
+                       std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8, 9}}) {
+        std::vector<double> t;
+        for (double d = std::floor(std::log10(lo)); d <= std::ceil(std::log10(hi)); d += 1)
+            for (double k : mults) {
+                double v = k * std::pow(10, d);
+                if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9)) t.push_back(v);
+            }
+        sets.push_back(t);
+    }
+    auto fits = [&](const std::vector<double>& t) {
+        for (std::size_t i = 1; i < t.size(); ++i)
+            if (std::log10(t[i] / t[i - 1]) * pixels_per_decade < gap) return false;
+        return true;
+    };
+    std::vector<double> best = sets[0];
+    for (const auto& t : sets)
+        if (fits(t)) best = t;
+    if (best.size() >= 3) return best;
+    // A narrow range: a round linear step giving about five values.
+    double step = std::pow(10, std::floor(std::log10((hi - lo) / 5)));
+    for (double k : {1.0, 2.0, 5.0, 10.0})
+        if ((hi - lo) / (step * k) <= 6) {
+            step *= k;
+            break;
+        }
+    std::vector<double> t;
+    for (double v = std::ceil(lo / step) * step; v <= hi * (1 + 1e-9); v += step) t.push_back(v);
+    return t.size() >= 2 && fits(t) ? t : best;
+}
+
+struct Series {
+    double x, y;
+    int spp;
+};
+
+// One log-log plot: y (an error) against render time, one polyline per method across spp.
+std::string svg_plot(const std::vector<const ResultRow*>& rows,
+                     const std::vector<std::string>& methods, double ResultRow::*error,
+                     const std::string& ylabel, const std::string& xlabel,
+                     const std::string& aria) {
+    const int W = 600, L = 64, R = 210, T = 14, B = 46;
+    const int H = std::max(340, T + 18 * static_cast<int>(methods.size()) + 24);
+    // Errors of exactly 0 (an image equal to the ground truth) have no place on a log axis: they
+    // sit on a line of their own below it, labelled 0.
+    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
+    bool zeros = false;
+    for (const ResultRow* r : rows) {
+        const double t = std::max(r->seconds, 1e-4), e = r->*error;
+        tmin = std::min({tmin, t, std::max(r->seconds_min, 1e-4)});
+        tmax = std::max({tmax, t, r->seconds_max});
+        if (e > 0) {
+            emin = std::min(emin, e);
+            emax = std::max(emax, e);
+        } else {
+            zeros = true;
+        }
+    }
+    if (tmax == 0) tmin = 0.1, tmax = 1;
+    if (emax == 0) emin = 0.01, emax = 0.1;
+    // A margin of 8% of the span (at least a tenth of a decade) on each side.
+    auto pad = [](double& lo, double& hi) {
+        double a = std::log10(lo), b = std::log10(hi);
+        double m = std::max(0.1, 0.08 * (b - a));
+        lo = std::pow(10, a - m);
+        hi = std::pow(10, b + m);
+    };
+    pad(tmin, tmax);
+    pad(emin, emax);
+    const int zero_band = zeros ? 22 : 0;
+    const double pw = W - L - R, ph = H - T - B - zero_band;
+    const double lt0 = std::log10(tmin), lt1 = std::log10(tmax), le0 = std::log10(emin),
+                 le1 = std::log10(emax);
+    auto X = [&](double t) { return L + (std::log10(std::max(t, 1e-4)) - lt0) / (lt1 - lt0) * pw; };
     auto Y = [&](double e) {
-        return H - B - (std::log10(std::max(e, 1e-6)) - le0) / (le1 - le0) * (H - T - B);
+        if (!(e > 0)) return T + ph + zero_band * 0.6;
+        return T + ph - (std::log10(e) - le0) / (le1 - le0) * ph;
     };
     std::ostringstream s;
     s << "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\""
-      << H << "\" viewBox=\"0 0 " << W << " " << H
-      << "\" role=\"img\" aria-label=\"error versus render time\">\n";
-    s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << (W - L - R) << "\" height=\""
-      << (H - T - B) << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
-    // Ticks at 1, 2 and 5 times the powers of ten inside the ranges.
-    for (double d = std::floor(lt0); d <= lt1; d += 1)
-        for (double k : {1.0, 2.0, 5.0}) {
-            double v = k * std::pow(10, d);
-            if (std::log10(v) < lt0 || std::log10(v) > lt1) continue;
-            s << "<text x=\"" << X(v) << "\" y=\"" << (H - B + 16)
-              << "\" font-size=\"11\" text-anchor=\"middle\">" << fmt("%g", v) << "</text>\n";
-        }
-    for (double d = std::floor(le0); d <= le1; d += 1)
-        for (double k : {1.0, 2.0, 5.0}) {
-            double v = k * std::pow(10, d);
-            if (std::log10(v) < le0 || std::log10(v) > le1) continue;
-            s << "<line x1=\"" << L << "\" x2=\"" << (W - R) << "\" y1=\"" << Y(v) << "\" y2=\""
-              << Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 6) << "\" y=\"" << Y(v) + 4
-              << "\" font-size=\"11\" text-anchor=\"end\">" << fmt("%g", v) << "</text>\n";
-        }
-    s << "<text x=\"" << (L + (W - L - R) / 2) << "\" y=\"" << (H - 12)
-      << "\" font-size=\"12\" text-anchor=\"middle\">render time (s, log)</text>\n";
-    s << "<text x=\"14\" y=\"" << (T + (H - T - B) / 2)
-      << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
-      << (T + (H - T - B) / 2) << ")\">RMSE vs ground truth (log)</text>\n";
+      << H << "\" viewBox=\"0 0 " << W << " " << H << "\" role=\"img\" aria-label=\""
+      << html_escape(aria) << "\" font-family=\"system-ui,sans-serif\">\n";
+    s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << pw << "\" height=\""
+      << ph + zero_band << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
+    if (zeros)
+        s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << (T + ph) << "\" y2=\""
+          << (T + ph) << "\" stroke=\"#999\" stroke-dasharray=\"3 3\"/><text x=\"" << (L - 5)
+          << "\" y=\"" << Y(0) + 4 << "\" font-size=\"11\" text-anchor=\"end\">0</text>\n";
+    for (double v : log_ticks(tmin, tmax, pw / (lt1 - lt0), 44))
+        s << "<line x1=\"" << X(v) << "\" x2=\"" << X(v) << "\" y1=\"" << T << "\" y2=\""
+          << (T + ph + zero_band) << "\" stroke=\"#e4e4e4\"/><text x=\"" << X(v) << "\" y=\""
+          << (T + ph + zero_band + 15) << "\" font-size=\"11\" text-anchor=\"middle\">"
+          << tick_label(v) << "</text>\n";
+    for (double v : log_ticks(emin, emax, ph / (le1 - le0), 14))
+        s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << Y(v) << "\" y2=\""
+          << Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 5) << "\" y=\"" << Y(v) + 4
+          << "\" font-size=\"11\" text-anchor=\"end\">" << tick_label(v) << "</text>\n";
+    s << "<text x=\"" << (L + pw / 2) << "\" y=\"" << (H - 8)
+      << "\" font-size=\"12\" text-anchor=\"middle\">" << html_escape(xlabel) << "</text>\n";
+    s << "<text x=\"13\" y=\"" << (T + ph / 2)
+      << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 13 " << (T + ph / 2)
+      << ")\">" << html_escape(ylabel) << "</text>\n";
     for (std::size_t m = 0; m < methods.size(); ++m) {
-        const char* col = kColors[m % 12];
+        const Style st = style_of(m);
         std::vector<const ResultRow*> pts;
         for (const ResultRow* r : rows)
             if (r->method == methods[m]) pts.push_back(r);
         std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->spp < b->spp; });
-        s << "<polyline fill=\"none\" stroke=\"" << col << "\" stroke-width=\"2\" points=\"";
-        for (auto* p : pts) s << X(p->seconds) << "," << Y(p->rmse) << " ";
+        s << "<polyline fill=\"none\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
+        if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
+        s << " points=\"";
+        for (auto* p : pts) s << X(p->seconds) << "," << Y(p->*error) << " ";
         s << "\"/>\n";
-        for (auto* p : pts)
-            s << "<circle cx=\"" << X(p->seconds) << "\" cy=\"" << Y(p->rmse)
-              << "\" r=\"3.5\" fill=\"" << col << "\"><title>" << html_escape(p->method) << ", "
-              << p->spp << " spp: RMSE " << fmt("%.5f", p->rmse) << ", " << fmt("%.3f", p->seconds)
-              << " s</title></circle>\n";
-        double ly = T + 10 + 16 * m;
-        s << "<line x1=\"" << (W - R + 12) << "\" y1=\"" << ly << "\" x2=\"" << (W - R + 30)
-          << "\" y2=\"" << ly << "\" stroke=\"" << col << "\" stroke-width=\"2\"/><text x=\""
-          << (W - R + 34) << "\" y=\"" << (ly + 4) << "\" font-size=\"11\">"
-          << html_escape(methods[m]) << "</text>\n";
+        for (auto* p : pts) {
+            if (p->timing_runs > 1)  // the range of the timed runs
+                s << "<line x1=\"" << X(p->seconds_min) << "\" x2=\"" << X(p->seconds_max)
+                  << "\" y1=\"" << Y(p->*error) << "\" y2=\"" << Y(p->*error) << "\" stroke=\""
+                  << st.color << "\" stroke-width=\"1\"/>\n";
+            s << marker_svg(st, X(p->seconds), Y(p->*error),
+                            p->method + ", " + std::to_string(p->spp) + " spp: " +
+                                fmt("%.5f", p->*error) + ", " + fmt("%.3f", p->seconds) + " s");
+        }
+        const double ly = T + 9 + 18 * m, lx = L + pw + 12;
+        s << "<line x1=\"" << lx << "\" y1=\"" << ly << "\" x2=\"" << (lx + 26) << "\" y2=\"" << ly
+          << "\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
+        if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
+        s << "/>" << marker_svg(st, lx + 13, ly, methods[m]) << "<text x=\"" << (lx + 32)
+          << "\" y=\"" << (ly + 4) << "\" font-size=\"11\">" << html_escape(methods[m])
+          << "</text>\n";
     }
     s << "</svg>\n";
     return s.str();
@@ -143,13 +313,75 @@ std::string results_markdown(const EvalResult& r) {
     return s.str();
 }
 
+namespace {
+
+std::string timing_note(const EvalResult& r) {
+    int lo = 1 << 30, hi = 0;
+    for (const ResultRow& x : r.rows) {
+        lo = std::min(lo, x.timing_runs);
+        hi = std::max(hi, x.timing_runs);
+    }
+    if (hi <= 1)
+        return "Times are single runs (cmam eval --timing-runs N gives the median of N): they "
+               "vary from run to run, by up to 2x on a busy machine.";
+    return "Times are the median of " + std::to_string(lo) +
+           " runs, with their range (min-max) in the tables and as bars in the plots.";
+}
+
+// The files of an earlier report in `dir`: its list, or, for a report written before the list
+// existed, what its results.csv names (images, heat maps) and each scene's reference image.
+std::set<std::string> previous_files(const fs::path& dir) {
+    std::set<std::string> out;
+    std::ifstream list(dir / kFileList);
+    std::string line;
+    if (list) {
+        while (std::getline(list, line))
+            if (!line.empty()) out.insert(line);
+        return out;
+    }
+    std::ifstream csv(dir / "results.csv");
+    if (!csv) return out;
+    std::getline(csv, line);  // the header says whether it is a results.csv of cmam eval
+    if (line.rfind("scene,method,spp,rmse,psnr,ssim,rmse_masked,", 0) != 0) return out;
+    while (std::getline(csv, line)) {
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        std::string item;
+        while (std::getline(ss, item, ',')) f.push_back(item);
+        if (f.size() < 16) continue;
+        for (const std::string& image : {f[14], f[15]})
+            if (fs::path(image).extension() == ".png") out.insert(image);
+        if (fs::path(f[14]).has_parent_path())
+            out.insert(fs::path(f[14]).parent_path().string() + "/reference.png");
+    }
+    return out;
+}
+
+// Removes the files of the earlier report that this one did not write again, and the scene
+// folders they leave empty. Only relative paths inside `dir` are touched.
+void remove_stale(const fs::path& dir, const std::set<std::string>& old,
+                  const std::set<std::string>& now) {
+    for (const std::string& f : old) {
+        fs::path rel(f);
+        if (now.count(f) || rel.is_absolute() || f.find("..") != std::string::npos) continue;
+        std::error_code ec;
+        fs::remove(dir / rel, ec);
+        if (rel.has_parent_path() && fs::is_empty(dir / rel.parent_path(), ec))
+            fs::remove(dir / rel.parent_path(), ec);
+    }
+}
+
+}  // namespace
+
 void write_reports(const EvalOptions& o, const EvalResult& r) {
     const fs::path dir(o.out_dir);
-    // CSV
+    const std::set<std::string> old = previous_files(dir);
+    // CSV (columns are only ever added at the end)
     std::ostringstream csv;
     csv << "scene,method,spp,rmse,psnr,ssim,rmse_masked,psnr_masked,ssim_masked,masked_fraction,"
            "texture_rmse,"
-           "texture_psnr,seconds,rays_per_second,image,heatmap\n";
+           "texture_psnr,seconds,rays_per_second,image,heatmap,seconds_min,seconds_max,"
+           "timing_runs,texture_heatmap\n";
     for (const ResultRow& x : r.rows)
         csv << x.scene << "," << x.method << "," << x.spp << "," << fmt("%.8g", x.rmse) << ","
             << fmt("%.6g", x.psnr) << "," << fmt("%.6g", x.ssim) << ","
@@ -157,7 +389,9 @@ void write_reports(const EvalOptions& o, const EvalResult& r) {
             << fmt("%.6g", x.ssim_masked) << "," << fmt("%.4f", x.masked_fraction) << ","
             << fmt("%.8g", x.texture_rmse) << "," << fmt("%.6g", x.texture_psnr) << ","
             << fmt("%.6f", x.seconds) << "," << fmt("%.6g", x.rays_per_second) << "," << x.image
-            << "," << x.heatmap << "\n";
+            << "," << x.heatmap << "," << fmt("%.6f", x.seconds_min) << ","
+            << fmt("%.6f", x.seconds_max) << "," << x.timing_runs << "," << x.texture_heatmap
+            << "\n";
     write_atomic(dir / "results.csv", csv.str());
 
     std::ostringstream md;
@@ -166,32 +400,71 @@ void write_reports(const EvalOptions& o, const EvalResult& r) {
           "Errors are in linear RGB; \"off edges\" keeps the pixels where an untextured render at "
           "the same "
           "spp agrees with the untextured ground truth; \"texture\" compares the unlit texture "
-          "AOV.\n\n"
+          "AOV. "
+       << timing_note(r) << "\n\n"
        << results_markdown(r);
+    for (const FailedScene& f : r.failed)
+        md << "\nFailed, skipped: `" << f.path << "`: " << f.message << "\n";
     write_atomic(dir / "results.md", md.str());
 
     std::vector<std::string> methods;
     for (const Method& m : o.methods) methods.push_back(m.name);
+    const bool single = timing_note(r).rfind("Times are single", 0) == 0;
+    const std::string time_axis =
+        single ? "render time (s, log; single runs)" : "render time (s, log; median of runs)";
     std::ostringstream h;
     h << R"(<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>cmam evaluation</title>
+<meta name="viewport" content="width=device-width, initial-scale=1">
 <style>
-body{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fff}
-h1{margin-top:0} section{margin-bottom:48px}
-.grid{display:grid;gap:10px;align-items:start}
-figure{margin:0} figcaption{font-size:12px;margin:2px 0 6px}
-.zoom{overflow:hidden;border:1px solid #ccc;cursor:crosshair;line-height:0}
-.zoom img{display:block;width:100%;image-rendering:pixelated;transition:transform .05s}
-table{border-collapse:collapse;font-size:12px;margin-top:12px} td,th{border:1px solid #ddd;padding:3px 6px;text-align:right}
-th{background:#f3f3f3} td:first-child,td:nth-child(2){text-align:left}
-.note{font-size:13px;color:#555;max-width:900px}
+body{font-family:system-ui,sans-serif;margin:24px;color:#222;background:#fff;max-width:1400px}
+h1{margin-top:0} section.scene{margin-bottom:56px;border-top:2px solid #ddd;padding-top:8px}
+.note{font-size:13px;color:#444;max-width:980px;line-height:1.45}
+.facts{font-size:13px;margin:4px 0 10px;line-height:1.5}
+.facts b{font-weight:600}
+.failed{background:#fff0f0;border:1px solid #e0a0a0;padding:8px 12px;font-size:13px;max-width:980px}
+.failed code{white-space:pre-wrap;word-break:break-all}
+details.warnings{font-size:12px;margin:4px 0 10px;max-width:980px}
+details.numbers{font-size:13px;margin:10px 0}
+details.warnings li{word-break:break-all}
+.chooser{font-size:13px;margin:6px 0 10px}
+.chooser label{margin-right:14px;cursor:pointer}
+.rows{display:grid;grid-template-columns:minmax(170px,210px) repeat(3,var(--img-w));gap:8px 10px;align-items:start}
+.rows .head{font-size:12px;font-weight:600;color:#555;align-self:end}
+.cap{font-size:12px;line-height:1.35;overflow-wrap:anywhere}
+.cap b{font-size:13px}
+.cap .num{font-variant-numeric:tabular-nums}
+.zoom{overflow:hidden;border:1px solid #ccc;cursor:crosshair;line-height:0;width:var(--img-w)}
+.zoom img{display:block;width:100%;height:auto;image-rendering:pixelated;transition:transform .05s}
+.empty{width:var(--img-w)}
+.plots{display:flex;flex-wrap:wrap;gap:16px;margin-top:14px}
+.tablewrap{overflow-x:auto;max-width:100%}
+table{border-collapse:collapse;font-size:12px;margin-top:12px} td,th{border:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}
+th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
+.ramp{display:inline-block;width:120px;height:10px;vertical-align:middle;border:1px solid #999;background:linear-gradient(to right,#000005,#57106e,#cc4033,#fcb31a,#fff)}
 </style></head>
-<body data-images-ok="" data-images-broken="">
+<body data-images-ok="" data-images-broken="" data-overlaps="" data-overflow-x="">
 <h1>cmam evaluation</h1>
-<p class="note">Ground truth: )"
-      << o.reference_spp
-      << R"( stratified jittered samples per pixel with point-sampled textures. Each row shows one sample count: the ground truth, then every method, with its error heat map (|luminance difference|, black = 0, white = the ground truth's mean) below. Move the mouse over any image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
+<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the mean of the ground truth (white; of its texture AOV for the texture error). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )"
+      << html_escape(timing_note(r))
+      << R"( Move the mouse over an image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
 )";
+    if (!r.failed.empty()) {
+        h << "<div class=\"failed\"><b>" << r.failed.size()
+          << (r.failed.size() == 1 ? " scene" : " scenes") << " failed and "
+          << (r.failed.size() == 1 ? "is" : "are") << " not in this report:</b><ul>\n";
+        for (const FailedScene& f : r.failed)
+            h << "<li><code>" << html_escape(f.path) << "</code>: <code>" << html_escape(f.message)
+              << "</code></li>\n";
+        h << "</ul></div>\n";
+    }
+    if (r.scenes.size() > 1) {
+        h << "<p class=\"facts\"><b>Scenes</b> ";
+        for (std::size_t k = 0; k < r.scenes.size(); ++k)
+            h << (k ? " &middot; " : "") << "<a href=\"#" << html_escape(r.scenes[k].name) << "\">"
+              << html_escape(r.scenes[k].name) << "</a>";
+        h << "</p>\n";
+    }
     for (const SceneReport& sc : r.scenes) {
         std::vector<const ResultRow*> rows;
         std::set<int> spps;
@@ -200,38 +473,107 @@ th{background:#f3f3f3} td:first-child,td:nth-child(2){text-align:left}
                 rows.push_back(&x);
                 spps.insert(x.spp);
             }
-        h << "<section class=\"scene\" id=\"" << html_escape(sc.name) << "\">\n<h2>"
-          << html_escape(sc.name) << "</h2>\n";
-        h << "<div class=\"grid\" style=\"grid-template-columns:repeat(" << (methods.size() + 1)
-          << ",minmax(120px,1fr))\">\n";
-        for (int spp : spps) {
-            h << "<figure><figcaption><b>ground truth</b></figcaption><div class=\"zoom\"><img "
-                 "src=\""
-              << html_escape(sc.reference_image) << "\" alt=\"ground truth\"></div></figure>\n";
-            for (const std::string& m : methods)
-                for (const ResultRow* x : rows)
-                    if (x->method == m && x->spp == spp)
-                        h << "<figure><figcaption><b>" << html_escape(m) << "</b>, " << spp
-                          << " spp, RMSE " << fmt("%.4f", x->rmse)
-                          << "</figcaption><div class=\"zoom\"><img src=\"" << html_escape(x->image)
-                          << "\" alt=\"" << html_escape(m)
-                          << "\"></div><div class=\"zoom\"><img src=\"" << html_escape(x->heatmap)
-                          << "\" alt=\"error of " << html_escape(m) << "\"></div></figure>\n";
+        // Every image of the scene at one width: up to 320 px for landscape images (less for
+        // portrait ones), and narrower in a narrow window, so that a row always fits.
+        const int img_w = sc.width >= sc.height ? 320 : std::max(140, 320 * sc.width / sc.height);
+        h << "<section class=\"scene\" id=\"" << html_escape(sc.name) << "\" style=\"--img-w:min("
+          << img_w << "px, calc((100vw - 300px) / 3))\">\n<h2>" << html_escape(sc.name)
+          << "</h2>\n";
+        h << "<div class=\"facts\"><b>File</b> <code>" << html_escape(sc.path)
+          << "</code> &middot; " << sc.width << "&times;" << sc.height
+          << " pixels &middot; <b>ground truth</b> " << sc.reference_spp << " spp"
+          << (sc.reference_cached ? " (from the cache)" : "")
+          << " &middot; <b>pixels off edges</b> ";
+        for (std::size_t k = 0; k < sc.off_edge_fraction.size(); ++k)
+            h << (k ? ", " : "") << fmt("%.1f%%", 100 * sc.off_edge_fraction[k].second) << " at "
+              << sc.off_edge_fraction[k].first << " spp";
+        h << "</div>\n";
+        if (!sc.warnings.empty()) {
+            h << "<details class=\"warnings\"><summary>" << sc.warnings.size()
+              << (sc.warnings.size() == 1 ? " warning" : " warnings")
+              << " about this scene</summary><ul>\n";
+            for (const std::string& w : sc.warnings) h << "<li>" << html_escape(w) << "</li>\n";
+            h << "</ul></details>\n";
         }
-        h << "</div>\n" << svg_plot(rows, methods);
-        h << "<table><tr><th>method</th><th>spp</th><th>RMSE</th><th>PSNR</th><th>SSIM</"
-             "th><th>RMSE off edges</th>"
-             "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)</th><th>Mrays/s</th></tr>\n";
-        for (const ResultRow* x : rows)
+        h << "<div class=\"plots\">\n"
+          << svg_plot(rows, methods, &ResultRow::rmse, "image RMSE vs ground truth (log)",
+                      time_axis, "image error versus render time")
+          << svg_plot(rows, methods, &ResultRow::texture_rmse, "texture AOV RMSE (log)", time_axis,
+                      "texture error versus render time")
+          << "</div>\n";
+        h << "<details class=\"numbers\"><summary>All numbers (" << rows.size()
+          << (rows.size() == 1 ? " row" : " rows")
+          << "; also in results.csv)</summary><div "
+             "class=\"tablewrap\"><table><tr><th>method</th><th>spp</th><th>RMSE</th><th>"
+             "PSNR</th><th>SSIM</th><th>RMSE off edges</th>"
+             "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)"
+          << (single ? ", single run" : ", median [min&ndash;max]")
+          << "</th><th>Mrays/s</th></tr>\n";
+        for (const ResultRow* x : rows) {
+            std::string t = fmt("%.3f", x->seconds);
+            if (x->timing_runs > 1)
+                t += " [" + fmt("%.3f", x->seconds_min) + "&ndash;" + fmt("%.3f", x->seconds_max) +
+                     "]";
             h << "<tr><td>" << html_escape(x->method) << "</td><td>" << x->spp << "</td><td>"
               << fmt("%.5f", x->rmse) << "</td><td>" << fmt("%.2f", x->psnr) << "</td><td>"
               << fmt("%.4f", x->ssim) << "</td><td>" << fmt("%.5f", x->rmse_masked) << "</td><td>"
               << fmt("%.4f", x->ssim_masked) << "</td><td>" << fmt("%.5f", x->texture_rmse)
-              << "</td><td>" << fmt("%.3f", x->seconds) << "</td><td>"
-              << fmt("%.2f", x->rays_per_second / 1e6) << "</td></tr>\n";
-        h << "</table>\n</section>\n";
+              << "</td><td>" << t << "</td><td>" << fmt("%.2f", x->rays_per_second / 1e6)
+              << "</td></tr>\n";
+        }
+        h << "</table></div></details>\n";
+        if (spps.size() > 1) {
+            h << "<div class=\"chooser\">Samples per pixel: ";
+            bool first = true;
+            for (int spp : spps) {
+                h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
+                  << "\" value=\"" << spp << "\"" << (first ? " checked" : "") << "> " << spp
+                  << "</label>";
+                first = false;
+            }
+            h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
+              << "\" value=\"all\"> all</label></div>\n";
+        }
+        h << "<div class=\"rows\">\n<div class=\"head\"></div><div class=\"head\">image</div><div "
+             "class=\"head\">image error</div><div class=\"head\">texture AOV error</div>\n";
+        h << "<div class=\"cap\"><b>ground truth</b><br>" << sc.reference_spp
+          << " spp; right: its texture AOV</div><div class=\"zoom\"><img src=\""
+          << html_escape(sc.reference_image)
+          << "\" alt=\"ground truth\"></div><div class=\"empty\"></div><div class=\"zoom\"><img "
+             "src=\""
+          << html_escape(sc.reference_texture) << "\" alt=\"ground truth texture AOV\"></div>\n";
+        for (int spp : spps)
+            for (const std::string& m : methods)
+                for (const ResultRow* x : rows)
+                    if (x->method == m && x->spp == spp) {
+                        const std::string cls = " data-spp=\"" + std::to_string(spp) + "\"";
+                        h << "<div class=\"cap\"" << cls << "><b>" << html_escape(m) << "</b><br>"
+                          << spp << " spp<br><span class=\"num\">RMSE " << fmt("%.4f", x->rmse)
+                          << "<br>off edges " << fmt("%.4f", x->rmse_masked) << "<br>texture "
+                          << fmt("%.4f", x->texture_rmse) << "<br>" << fmt("%.3f", x->seconds)
+                          << " s" << (x->timing_runs > 1 ? " (median)" : " (single run)")
+                          << "</span></div>";
+                        h << "<div class=\"zoom\"" << cls << "><img src=\"" << html_escape(x->image)
+                          << "\" alt=\"" << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
+                          << "><img src=\"" << html_escape(x->heatmap) << "\" alt=\"image error of "
+                          << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
+                          << "><img src=\"" << html_escape(x->texture_heatmap)
+                          << "\" alt=\"texture error of " << html_escape(m) << "\"></div>\n";
+                    }
+        h << "</div>\n";
+        h << "</section>\n";
     }
     h << R"(<script>
+// The sample-count chooser: shows the rows of one sample count (or all).
+document.querySelectorAll('section.scene').forEach(function (sec) {
+  function show(v) {
+    sec.querySelectorAll('[data-spp]').forEach(function (el) { el.style.display = (v === 'all' || el.dataset.spp === v) ? '' : 'none'; });
+  }
+  sec.querySelectorAll('.chooser input').forEach(function (inp) {
+    inp.addEventListener('change', function () { show(inp.value); });
+    if (inp.checked) show(inp.value);
+  });
+});
 // Synchronized zoom: the same point of every image of a scene, magnified.
 document.querySelectorAll('section.scene').forEach(function (sec) {
   var zoom = 4;
@@ -245,17 +587,53 @@ document.querySelectorAll('section.scene').forEach(function (sec) {
     box.addEventListener('wheel', function (e) { e.preventDefault(); zoom = Math.min(32, Math.max(1, zoom * (e.deltaY < 0 ? 1.25 : 0.8))); var r = box.getBoundingClientRect(); apply((e.clientX - r.left) / r.width, (e.clientY - r.top) / r.height, zoom); }, {passive: false});
   });
 });
-// Record whether every image loaded (read by the report test).
+// Self-check of the layout, read by the report test: whether every image loaded, how many pairs
+// of visible boxes (captions, images, plot labels, tables) overlap, and how far the page is wider
+// than the window.
 window.addEventListener('load', function () {
   var ok = 0, broken = 0;
   document.querySelectorAll('img').forEach(function (im) { if (im.complete && im.naturalWidth > 0) ok++; else broken++; });
   document.body.dataset.imagesOk = ok;
   document.body.dataset.imagesBroken = broken;
+  var boxes = [];
+  document.querySelectorAll('h1, h2, p, .facts, .chooser, .cap, .zoom, .head, svg.plot, svg text, .tablewrap, .failed, details').forEach(function (el) {
+    var closed = el.parentElement && el.parentElement.closest('details:not([open])');
+    if (closed && !el.closest('summary')) return;  // folded away
+    var r = el.getBoundingClientRect();
+    if (r.width > 0 && r.height > 0) boxes.push({el: el, r: r});
+  });
+  var overlaps = 0, first = '';
+  for (var i = 0; i < boxes.length; i++)
+    for (var j = i + 1; j < boxes.length; j++) {
+      var a = boxes[i], b = boxes[j];
+      if (a.el.contains(b.el) || b.el.contains(a.el)) continue;
+      var w = Math.min(a.r.right, b.r.right) - Math.max(a.r.left, b.r.left);
+      var h = Math.min(a.r.bottom, b.r.bottom) - Math.max(a.r.top, b.r.top);
+      if (w > 0.5 && h > 0.5) { if (!overlaps) first = (a.el.textContent || a.el.tagName).slice(0, 40) + ' / ' + (b.el.textContent || b.el.tagName).slice(0, 40); overlaps++; }
+    }
+  // Text wider than its own box spills over its neighbours without moving them.
+  boxes.forEach(function (b) {
+    if (b.el instanceof HTMLElement && b.el.matches('.cap, .head, .facts') && b.el.scrollWidth > b.el.clientWidth + 1) {
+      if (!overlaps) first = (b.el.textContent || '').slice(0, 40) + ' / (wider than its box)';
+      overlaps++;
+    }
+  });
+  document.body.dataset.overlaps = overlaps;
+  document.body.dataset.firstOverlap = first;
+  document.body.dataset.overflowX = Math.max(0, document.documentElement.scrollWidth - window.innerWidth);
 });
 </script>
 </body></html>
 )";
     write_atomic(dir / "index.html", h.str());
+
+    // What this report owns, so that the next one into the same folder replaces it cleanly.
+    std::set<std::string> now(r.files.begin(), r.files.end());
+    for (const char* f : {"results.csv", "results.md", "index.html"}) now.insert(f);
+    remove_stale(dir, old, now);
+    std::ostringstream list;
+    for (const std::string& f : now) list << f << "\n";
+    write_atomic(dir / kFileList, list.str());
 }
 
 }  // namespace cmam::eval

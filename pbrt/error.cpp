@@ -1,6 +1,7 @@
 #include "pbrt/error.h"
 
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <sstream>
 
@@ -12,9 +13,36 @@ std::string FileLoc::to_string() const {
     return *file + ":" + std::to_string(line) + ":" + std::to_string(col);
 }
 
+std::string printable(const std::string& s) {
+    std::string out;
+    out.reserve(s.size());
+    for (std::size_t i = 0; i < s.size();) {
+        const auto c = static_cast<unsigned char>(s[i]);
+        std::size_t n = c < 0x80         ? 1
+                        : (c >> 5) == 6  ? 2
+                        : (c >> 4) == 14 ? 3
+                        : (c >> 3) == 30 ? 4
+                                         : 0;
+        bool ok = n > 0 && i + n <= s.size() && (n > 1 || (c >= 0x20 && c != 0x7f) || c == '\n');
+        for (std::size_t k = 1; ok && k < n; ++k)
+            ok = (static_cast<unsigned char>(s[i + k]) & 0xc0) == 0x80;
+        if (ok) {
+            out.append(s, i, n);
+            i += n;
+            continue;
+        }
+        char buf[8];
+        std::snprintf(buf, sizeof buf, "\\x%02x", c);
+        out += buf;
+        ++i;
+    }
+    return out;
+}
+
 namespace {
-std::string located(const FileLoc& loc, const char* kind, const std::string& message) {
-    std::string where = loc.to_string();
+std::string located(const FileLoc& loc, const char* kind, const std::string& raw) {
+    const std::string message = printable(raw);
+    std::string where = printable(loc.to_string());
     return where.empty() ? std::string(kind) + ": " + message
                          : where + ": " + kind + ": " + message;
 }
@@ -24,7 +52,7 @@ SceneError::SceneError(const FileLoc& loc, const std::string& message)
     : std::runtime_error(located(loc, "error", message)), m_loc(loc), m_message(message) {}
 
 SceneError::SceneError(const std::string& message)
-    : std::runtime_error("error: " + message), m_message(message) {}
+    : std::runtime_error(located({}, "error", message)), m_message(message) {}
 
 std::string format_warning(const FileLoc& loc, const std::string& message) {
     return located(loc, "warning", message);

@@ -35,6 +35,11 @@ class SceneError : public std::runtime_error {
 /// Receives located warnings ("file:line:col: warning: message").
 using WarningSink = std::function<void(const std::string&)>;
 
+/// `s` with the bytes a terminal would act on (control characters, bytes that are not UTF-8) as
+/// \xNN: a binary file given as a scene must not echo raw bytes into the terminal. Errors and
+/// warnings are formatted through it.
+std::string printable(const std::string& s);
+
 /// Formats a warning the same way errors are formatted.
 std::string format_warning(const FileLoc& loc, const std::string& message);
 

@@ -284,9 +284,13 @@ class Builder {
                                      std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
             int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
             s.xsamples = s.ysamples = k;
-            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" with " +
-                            std::to_string(k) + "x" + std::to_string(k) +
-                            " jittered samples per pixel");
+            // With --spp the count comes from there (set below), not from pixelsamples.
+            const std::string count =
+                m_opts.spp_override > 0
+                    ? std::string(", as many as --spp asks for")
+                    : " with " + std::to_string(k) + "x" + std::to_string(k) + " per pixel";
+            warn(e.loc, "Sampler " + q(e.type) + " is rendered as \"stratified\" jittered samples" +
+                            count);
             e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
         } else {
             throw SceneError(e.loc, "unknown Sampler " + q(e.type));

@@ -363,9 +363,10 @@ std::vector<std::string> exr_channels(const Imf::ChannelList& list) {
     throw CodecError("the file has no channels");
 }
 
-// Walks the (first) header's attributes before OpenEXR does: an attribute that claims more bytes
-// than the file holds is refused here (OpenEXR would allocate them first), and the data window
-// is checked against the size limit before OpenEXR allocates its tables.
+// Walks the (first) header's attributes before OpenEXR does, so that what OpenEXR would
+// allocate from them is bounded first: an attribute claiming more bytes than the file holds is
+// refused, the data window must be there, every channel's sampling must be sane, and the data
+// window times the number of channels is checked against the size limit.
 void precheck_exr(const std::string& path, const SizeCheck& check) {
     std::ifstream in(path, std::ios::binary);
     in.seekg(0, std::ios::end);
@@ -374,42 +375,62 @@ void precheck_exr(const std::string& path, const SizeCheck& check) {
     std::uint32_t version = 0;
     in.read(reinterpret_cast<char*>(&version), 4);
     const std::size_t max_name = (version & 0x400) ? 255 : 31;  // the "long names" flag
-    auto read_string = [&](std::string& out) {
+    auto read_string = [&](std::string& out, std::size_t max) {
         out.clear();
         for (char c; in.get(c);) {
             if (c == '\0') return true;
-            if (out.size() == max_name) return false;
+            if (out.size() == max) return false;
             out += c;
         }
         return false;
     };
+    auto corrupt = [](const std::string& why) {
+        return CodecError("corrupt OpenEXR header" + (why.empty() ? "" : ": " + why));
+    };
     std::string name, type;
+    bool have_window = false;
+    std::int64_t w = 0, h = 0, channels = -1;
     while (in) {
-        if (!read_string(name)) throw CodecError("corrupt OpenEXR header");
-        if (name.empty()) return;  // end of the header
+        if (!read_string(name, max_name)) throw corrupt("");
+        if (name.empty()) break;  // end of the header
         std::int32_t size = -1;
-        if (!read_string(type) || !in.read(reinterpret_cast<char*>(&size), 4))
-            throw CodecError("corrupt OpenEXR header");
+        if (!read_string(type, max_name) || !in.read(reinterpret_cast<char*>(&size), 4))
+            throw corrupt("");
         const std::int64_t at = in.tellg();
         if (size < 0 || at + size > file_size)
-            throw CodecError("corrupt OpenEXR header: attribute \"" + name + "\" claims " +
-                             std::to_string(size) + " bytes");
+            throw corrupt("attribute \"" + name + "\" claims " + std::to_string(size) + " bytes");
         if (name == "dataWindow" && type == "box2i" && size == 16) {
             std::int32_t box[4];
             in.read(reinterpret_cast<char*>(box), 16);
-            const std::int64_t w = std::int64_t(box[2]) - box[0] + 1;
-            const std::int64_t h = std::int64_t(box[3]) - box[1] + 1;
-            if (w <= 0 || h <= 0) throw CodecError("empty image");
-            if (w > 0x7fffffff || h > 0x7fffffff) throw CodecError("image too large");
-            RawImage img;
-            img.width = static_cast<int>(w);
-            img.height = static_cast<int>(h);
-            img.channels = 1;
-            check(img);
+            w = std::int64_t(box[2]) - box[0] + 1;
+            h = std::int64_t(box[3]) - box[1] + 1;
+            have_window = true;
+        } else if (name == "channels" && type == "chlist") {
+            // name, pixel type (int), pLinear and 3 reserved bytes, x and y sampling (ints).
+            channels = 0;
+            std::string ch;
+            while (in.tellg() < at + size) {
+                if (!read_string(ch, max_name)) throw corrupt("channel list");
+                if (ch.empty()) break;
+                std::int32_t f[4];
+                if (!in.read(reinterpret_cast<char*>(f), 16)) throw corrupt("channel list");
+                if (f[0] < 0 || f[0] > 2 || f[2] < 1 || f[2] > 64 || f[3] < 1 || f[3] > 64)
+                    throw corrupt("channel \"" + ch + "\"");
+                ++channels;
+            }
         }
         in.seekg(at + size);
     }
-    throw CodecError("corrupt OpenEXR header");
+    if (!in) throw corrupt("");
+    if (!have_window || channels < 0)
+        throw corrupt(!have_window ? "no data window" : "no channel list");
+    if (w <= 0 || h <= 0 || channels == 0) throw CodecError("empty image");
+    if (w > 0x7fffffff || h > 0x7fffffff) throw CodecError("image too large");
+    RawImage img;
+    img.width = static_cast<int>(w);
+    img.height = static_cast<int>(h);
+    img.channels = static_cast<int>(std::min<std::int64_t>(channels, 1 << 20));
+    check(img);
 }
 
 RawImage decode_exr(const std::string& path, const SizeCheck& check) {

@@ -188,6 +188,9 @@ struct Tracer {
                 cone_uv_axes(ray.cone, ray.dir, h, ax);
                 ctx.cone_aniso = texture::Footprint::axes({ax[0], ax[1]}, {ax[2], ax[3]});
             }
+            CmamRecord cmam_record;  // the footprint AOV of a CMAM texture
+            if (aov && !aov->recorded && aov->kind == AovKind::Footprint && scene.uses_cmam)
+                ctx.cmam_record = record_cmam_of(m, &cmam_record);
             Bsdf bsdf;
             Vec3 wo = -ray.dir;
             if (!make_bsdf(scene, m, h, ctx, &bsdf)) {
@@ -254,6 +257,7 @@ struct Tracer {
     // --- AOVs: the first non-specular hit along the specular chain ---
     Aov* aov = nullptr;
     void record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& bsdf);
+    CmamRecord* record_cmam_of(const Material& m, CmamRecord* record) const;
 };
 
 // The first image texture feeding a material's diffuse (or reflective) input.
@@ -285,6 +289,18 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     // Footprint: semi-axis lengths in level-0 texels of the first image texture, and its level.
     const TextureNode* n = first_image(scene, m.kd);
     if (!n) return;
+    if (n->lod == Lod::Cmam) {
+        // The region the CMAM built from its matching samples (level-0 texels; none on a
+        // miss) and the MIP level its filter read.
+        const CmamRecord* r = ctx.cmam_record;
+        if (!r || !r->filled) return;
+        const double la = std::hypot(r->region.a[0], r->region.a[1]),
+                     lb = std::hypot(r->region.b[0], r->region.b[1]);
+        aov->v[0] = float(std::max(la, lb));
+        aov->v[1] = float(std::min(la, lb));
+        aov->v[2] = float(std::max(0.0, r->info.lambda));
+        return;
+    }
     const texture::Footprint fp = node_footprint(*n, ctx);  // in the node's (s,t) units
     if (fp.kind != texture::Footprint::Kind::Axes) return;
     const double W = n->image->image().width(), H = n->image->image().height();
@@ -297,6 +313,15 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     aov->v[0] = float(major);
     aov->v[1] = float(minor);
     aov->v[2] = float(std::max(0.0, lambda));
+}
+
+// The footprint AOV of a material whose first image texture is filtered by the CMAM: where its
+// lookup records what it filtered (null for other materials).
+CmamRecord* Tracer::record_cmam_of(const Material& m, CmamRecord* record) const {
+    const TextureNode* n = first_image(scene, m.kd);
+    if (!n || n->lod != Lod::Cmam) return nullptr;
+    record->node = static_cast<int>(n - scene.textures.data());
+    return record;
 }
 
 uint64_t mix_seed(uint64_t a, uint64_t b) {

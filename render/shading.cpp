@@ -59,16 +59,19 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 texture::CmamOptions o = scene.cmam;
                 o.filter = n.filter.kind;
                 o.max_aniso = n.filter.max_aniso;
-                texture::LookupInfo info;
-                texture::CmamRegion region;
+                CmamRecord own;
+                CmamRecord* rec =
+                    ctx.cmam_record && ctx.cmam_record->node == in.node ? ctx.cmam_record : &own;
+                const bool want = ctx.counts || rec != &own;
                 x = texture::cmam_lookup(
                     *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node), ctx.path),
-                    ctx.tag, s, t, o, ctx.counts ? &info : nullptr,
-                    ctx.counts && o.two_d ? &region : nullptr);
+                    ctx.tag, s, t, o, want ? &rec->info : nullptr,
+                    want && (o.two_d || rec != &own) ? &rec->region : nullptr);
+                rec->filled = true;
                 if (ctx.counts) {
                     ++ctx.counts->by_filter[static_cast<int>(o.filter)];
-                    ctx.counts->non_finite += info.fallback;
-                    ctx.counts->cmam_2d_without_above += o.two_d && !region.used_above;
+                    ctx.counts->non_finite += rec->info.fallback;
+                    ctx.counts->cmam_2d_without_above += o.two_d && !rec->region.used_above;
                 }
             } else {
                 if (n.filter.kind == texture::FilterKind::Area && n.lod == Lod::Differentials &&

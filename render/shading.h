@@ -15,6 +15,15 @@ struct LookupCounts {
     uint64_t cmam_2d_without_above = 0;  // 2-D CMAM lookups that had no sample above
 };
 
+/// What the CMAM lookup of one texture node filtered (the footprint AOV): filled by that lookup
+/// when a TexContext points here.
+struct CmamRecord {
+    int node = -1;  // the texture node to record
+    bool filled = false;
+    texture::CmamRegion region;
+    texture::LookupInfo info;
+};
+
 /// The CMAM caches of one strip of the image: one per (textured object, texture, ray path).
 /// A strip is traced top to bottom, each row left to right (with scanline tags, one row of
 /// sample strata at a time), so samples reach the caches in scan order. The path (which
@@ -66,7 +75,8 @@ struct TexContext {
     // The ray's path: 1 for camera rays, then 2p for the reflected and 2p + 1 for the refracted
     // child of path p (the CMAM keeps a cache per path).
     uint64_t path = 1;
-    CmamRowState* cmam = nullptr;  // the row's CMAM caches (null: no CMAM)
+    CmamRowState* cmam = nullptr;       // the row's CMAM caches (null: no CMAM)
+    CmamRecord* cmam_record = nullptr;  // optional: what a CMAM lookup filtered
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the

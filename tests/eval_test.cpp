@@ -12,19 +12,10 @@
 #include "pbrt/parser.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
+#include "temp_dir.h"
 
 using namespace cmam;
 namespace fs = std::filesystem;
-
-namespace {
-fs::path temp_dir(const std::string& name) {
-    fs::path p =
-        fs::temp_directory_path() / ("cmam_eval_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
-}  // namespace
 
 TEST(Metrics, RmsePsnrByHand) {
     std::vector<float> ref = {0, 0, 0, 1, 1, 1}, img = {0.1f, 0.1f, 0.1f, 0.9f, 0.9f, 0.9f};
@@ -58,7 +49,8 @@ TEST(Metrics, EdgeMaskMarksDisagreeingPixels) {
 }
 
 TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
-    fs::path dir = temp_dir("cache");
+    const test::TempDir tmp("cmam_eval_cache");
+    const fs::path& dir = tmp.path;
     fs::path scene = dir / "tiny.pbrt";
     std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/gravel.png";
     auto write_scene = [&](const std::string& extra) {
@@ -96,13 +88,81 @@ TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
     write_scene("# a changed scene\n");
     EXPECT_NE(eval::reference_key(scene.string(), 4), key);
     EXPECT_FALSE(eval::run_eval(o).scenes[0].reference_cached);
-    fs::remove_all(dir);
+}
+
+// A scene that fails is reported and skipped; the others give their rows and the report. Each
+// warning of a scene arrives once, however many renders build it. A second report into the same
+// folder removes the images of methods it no longer has, and nothing else.
+TEST(Eval, FailingSceneIsSkippedWarningsOnceAndReportsReplaceCleanly) {
+    const test::TempDir tmp("cmam_eval_skip");
+    const fs::path& dir = tmp.path;
+    std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/gravel.png";
+    std::ofstream(dir / "good.pbrt")  // no Integrator: one warning
+        << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50\n"
+        << "Film \"image\" \"integer xresolution\" 12 \"integer yresolution\" 8\nWorldBegin\n"
+        << "LightSource \"distant\" \"point from\" [0 1 -1]\n"
+        << "Texture \"g\" \"spectrum\" \"imagemap\" \"string filename\" \"" << tex << "\"\n"
+        << "Material \"matte\" \"texture Kd\" \"g\"\n"
+        << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+        << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5] \"point2 uv\" [0 0 8 0 8 8 0 8]\nWorldEnd\n";
+    std::ofstream(dir / "bad.pbrt")
+        << "Camera \"perspective\"\nWorldBegin\nShape \"nope\"\nWorldEnd\n";
+    eval::EvalOptions o;
+    o.scenes = {(dir / "bad.pbrt").string(), (dir / "good.pbrt").string()};
+    o.methods = {*eval::parse_method("none"), *eval::parse_method("differentials+ewa")};
+    o.spp = {1, 4};
+    o.reference_spp = 4;
+    o.timing_runs = 3;
+    o.out_dir = (dir / "out").string();
+    std::vector<std::string> warnings, failed;
+    o.warn = [&](const std::string& w) { warnings.push_back(w); };
+    o.scene_failed = [&](const std::string& s, const std::string&) { failed.push_back(s); };
+    eval::EvalResult r = eval::run_eval(o);
+    ASSERT_EQ(r.failed.size(), 1u);
+    EXPECT_EQ(failed, std::vector<std::string>{(dir / "bad.pbrt").string()});
+    EXPECT_NE(r.failed[0].message.find("bad.pbrt:3:"), std::string::npos) << r.failed[0].message;
+    ASSERT_EQ(r.scenes.size(), 1u);
+    EXPECT_EQ(r.rows.size(), 4u);
+    EXPECT_EQ(r.scenes[0].reference_spp, 4);
+    ASSERT_EQ(r.scenes[0].off_edge_fraction.size(), 2u);
+    EXPECT_GT(r.scenes[0].off_edge_fraction[0].second, 0.5);
+    for (const eval::ResultRow& row : r.rows) {
+        EXPECT_EQ(row.timing_runs, 3);
+        EXPECT_LE(row.seconds_min, row.seconds);
+        EXPECT_LE(row.seconds, row.seconds_max);
+        EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / row.texture_heatmap));
+    }
+    std::vector<std::string> good;  // the warnings about good.pbrt
+    for (const std::string& w : warnings)
+        if (w.find("good.pbrt") != std::string::npos) good.push_back(w);
+    ASSERT_EQ(good.size(), 1u);
+    EXPECT_NE(good[0].find("Integrator"), std::string::npos) << good[0];
+    EXPECT_EQ(r.scenes[0].warnings, good);
+    std::ifstream html(fs::path(o.out_dir) / "index.html");
+    std::string page((std::istreambuf_iterator<char>(html)), {});
+    EXPECT_NE(page.find("bad.pbrt"), std::string::npos);  // the failure is in the report
+    EXPECT_FALSE(fs::exists(fs::path(o.out_dir) / "bad"));
+
+    const fs::path ewa = fs::path(o.out_dir) / "good" / "differentials_ewa-spp1.png";
+    const fs::path own = fs::path(o.out_dir) / "good" / "notes.txt";
+    ASSERT_TRUE(fs::exists(ewa));
+    std::ofstream(own) << "not the report's";
+    o.scenes = {(dir / "good.pbrt").string()};
+    o.methods = {*eval::parse_method("none")};
+    eval::EvalResult again = eval::run_eval(o);
+    EXPECT_TRUE(again.failed.empty());
+    EXPECT_FALSE(fs::exists(ewa));
+    EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / "good" / "none-spp1.png"));
+    EXPECT_TRUE(fs::exists(own));
 }
 
 TEST(Eval, MethodNames) {
     for (const std::string& m : eval::default_methods()) EXPECT_TRUE(eval::parse_method(m)) << m;
     EXPECT_FALSE(eval::parse_method("cmam+nearest"));
     EXPECT_FALSE(eval::parse_method("magic+ewa"));
+    for (const std::string& source : eval::method_sources())
+        for (const std::string& filter : eval::method_filters())
+            EXPECT_TRUE(eval::parse_method(source + "+" + filter)) << source << "+" << filter;
     auto hull = eval::parse_method("cmam-pixel-hull+trilinear");
     ASSERT_TRUE(hull);
     EXPECT_TRUE(hull->build.cmam.hull);
@@ -113,7 +173,8 @@ TEST(Eval, MethodNames) {
 // (1.25,1.75), (0,1.25) of the 2x2 texture [1 2; 3 4] (texel space). The stratified ground
 // truth (64 x 64 samples, nearest reconstruction) must match the exact average 2.4.
 TEST(GroundTruth, TGt1MatchesTheExactIntegral) {
-    fs::path dir = temp_dir("gt1");
+    const test::TempDir tmp("cmam_eval_gt1");
+    const fs::path& dir = tmp.path;
     // File rows go top to bottom; v = 0 (texel row 0: values 1, 2) is the bottom row.
     render::write_image((dir / "t.exr").string(), 2, 2, {3, 3, 3, 4, 4, 4, 1, 1, 1, 2, 2, 2});
     // Raster (x, y) in [0,1]^2 maps to texel A + x (B - A) + (1 - y) (D - A) with A = (0.5, 0.25),
@@ -138,5 +199,4 @@ TEST(GroundTruth, TGt1MatchesTheExactIntegral) {
     ro.aov = render::AovKind::Texture;
     render::Framebuffer fb = render::render(*s, ro, nullptr);
     EXPECT_NEAR(fb.rgb[0], 2.4, 0.006) << fb.rgb[0];  // RMS error about 0.002 at N = 64 (§9)
-    fs::remove_all(dir);
 }

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "scene_util.h"
+#include "temp_dir.h"
 
 using namespace cmam;
 using render::SurfaceHit;
@@ -97,8 +98,8 @@ TEST(Triangle, ShadingNormalsOrientTheGeometricNormal) {
 }
 
 TEST(PlyMesh, IntersectsWithItsUv) {
-    std::filesystem::path p = std::filesystem::temp_directory_path() /
-                              ("cmam_quad_" + std::to_string(::getpid()) + ".ply");
+    const test::TempDir dir("cmam_quad");
+    const std::filesystem::path p = dir.path / "quad.ply";
     std::ofstream(p)
         << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
            "property float z\nproperty float s\nproperty float t\nelement face 1\n"

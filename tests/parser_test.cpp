@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "temp_dir.h"
+
 using namespace cmam::pbrt;
 
 namespace {
@@ -175,7 +177,8 @@ TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
     // main.pbrt Includes sub/part.pbrt, which names "data/x.ply": pbrt-v3 reads <main>/data/x.ply.
     // A path found only beside the including file (other renderers' convention) is read there.
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("cmam_paths_" + std::to_string(::getpid()));
+    const cmam::test::TempDir tmp("cmam_paths");
+    const fs::path& dir = tmp.path;
     fs::create_directories(dir / "sub" / "only");
     fs::create_directories(dir / "data");
     std::ofstream(dir / "data" / "x.ply") << "x";
@@ -192,7 +195,6 @@ TEST(Parser, RelativePathsResolveAgainstTheMainFilesFolderAsInPbrtV3) {
     };
     EXPECT_TRUE(fs::equivalent(resolved(0), dir / "data" / "x.ply")) << resolved(0);
     EXPECT_TRUE(fs::equivalent(resolved(1), dir / "sub" / "only" / "y.ply")) << resolved(1);
-    fs::remove_all(dir);
 }
 
 TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
@@ -241,7 +243,8 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
     // pbrt-v3 reads "spectrum Kd" "file.spd" (wavelength value pairs, '#' comments) relative to
     // the main file's folder: the same RGB as the pairs written inline.
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("cmam_spd_" + std::to_string(::getpid()));
+    const cmam::test::TempDir tmp("cmam_spd");
+    const fs::path& dir = tmp.path;
     fs::create_directories(dir / "spds");
     std::ofstream(dir / "spds" / "k.spd") << "# a test\n400 0.2\n500 0.5 # mid\n600 0.9\n700 0.4\n";
     std::ofstream(dir / "main.pbrt")
@@ -264,7 +267,6 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
     const auto a = *d.materials[0].entity.params.get_rgb("Kd"),
                b = *d.materials[1].entity.params.get_rgb("Kd");
     for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(a[c], b[c]);
-    fs::remove_all(dir);
 }
 
 TEST(Parser, UnusedParameterErrorNamesEntity) {
@@ -289,4 +291,23 @@ TEST(Parser, KnownButUnsupportedParameterWarns) {
     EXPECT_EQ(w[0],
               "t.pbrt:3:16: warning: parameter \"alpha\" of shape \"sphere\" is not supported by "
               "cmam; ignored");
+}
+
+TEST(Errors, MessagesEscapeWhatATerminalWouldActOn) {
+    // Control bytes and bytes that are not UTF-8 become \xNN; UTF-8 text and newlines stay.
+    EXPECT_EQ(printable("a\x1b[31m\x07z"), "a\\x1b[31m\\x07z");
+    EXPECT_EQ(printable("caf\xc3\xa9 \xff\xc3"), "caf\xc3\xa9 \\xff\\xc3");
+    EXPECT_EQ(printable("two\nlines\t"), "two\nlines\\x09");
+    try {
+        parse_string(
+            "\x7f"
+            "ELF\x02\x01",
+            "bin.pbrt");
+        FAIL() << "a binary file must not parse";
+    } catch (const SceneError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.rfind("bin.pbrt:1:1: error: unknown directive \\x7fELF\\x02\\x01", 0), 0u)
+            << what;
+        for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
+    }
 }

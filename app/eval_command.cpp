@@ -1,0 +1,80 @@
+#include "app/eval_command.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <stdexcept>
+
+#include "app/common.h"
+#include "eval/evaluation.h"
+#include "pbrt/error.h"
+
+namespace cmam::app {
+
+std::string method_syntax() {
+    return "none, or SOURCE+FILTER with SOURCE one of " + join(eval::method_sources()) +
+           " and FILTER one of " + join(eval::method_filters());
+}
+
+int run_eval(const EvalArgs& a) {
+    eval::EvalOptions o;
+    o.scenes = a.scenes;
+    o.reference_spp = a.reference_spp;
+    o.out_dir = a.out;
+    for (const std::string& name :
+         a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
+        auto m = eval::parse_method(name);
+        if (!m)
+            throw std::invalid_argument("--methods: unknown method \"" + name + "\" (" +
+                                        method_syntax() + ")");
+        o.methods.push_back(*m);
+    }
+    o.spp.clear();
+    for (const std::string& v : split_list(a.spp)) {
+        char* end = nullptr;
+        long n = std::strtol(v.c_str(), &end, 10);
+        if (*end || n < 1)
+            throw std::invalid_argument("--spp: \"" + v + "\" is not a positive integer");
+        o.spp.push_back(static_cast<int>(n));
+        note_spp_rounding(o.spp.back());
+    }
+    if (o.spp.empty()) throw std::invalid_argument("--spp: give at least one sample count");
+    note_spp_rounding(a.reference_spp, "--reference-spp");
+    o.timing_runs = a.timing_runs;
+    ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
+    o.progress = [&](int done, int total, const std::string&) { bar.update(done, total); };
+    // Warnings and failures interrupt the progress bar on a line of their own.
+    auto line = [&](const std::string& text) {
+        if (!a.quiet && ::isatty(STDERR_FILENO)) std::fputs("\r\033[K", stderr);
+        std::cerr << text << "\n";
+    };
+    o.warn = [&](const std::string& w) {
+        line((w.rfind("warning: ", 0) == 0 ? "cmam: " : "") + w);
+    };
+    o.scene_failed = [&](const std::string& scene, const std::string& message) {
+        line("cmam: error: " + pbrt::printable(scene + " is skipped: " + message));
+    };
+    auto t0 = std::chrono::steady_clock::now();
+    eval::EvalResult r = eval::run_eval(o);
+    if (!a.quiet) {
+        int cached = 0;
+        for (const auto& s : r.scenes) cached += s.reference_cached;
+        std::fprintf(stderr,
+                     "%s: %zu scenes (%d ground truths from the cache), %zu results, %.1fs; see "
+                     "%s/index.html\n",
+                     a.out.c_str(), r.scenes.size(), cached, r.rows.size(),
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                     a.out.c_str());
+    }
+    if (!r.failed.empty()) {
+        std::fprintf(stderr, "cmam: error: %zu of %zu scenes failed (listed in %s/index.html)\n",
+                     r.failed.size(), a.scenes.size(), a.out.c_str());
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace cmam::app

@@ -1,0 +1,237 @@
+#include "app/render_command.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "app/common.h"
+#include "pbrt/parser.h"
+#include "render/image_io.h"
+#include "render/integrator.h"
+#include "render/scene.h"
+
+namespace cmam::app {
+
+namespace {
+
+pbrt::Param film_param(const char* type, const char* name, std::vector<double> values) {
+    pbrt::Param p;
+    p.type = std::string(type) == "integer" ? pbrt::ParamType::Integer : pbrt::ParamType::Float;
+    p.type_name = type;
+    p.name = name;
+    p.numbers = std::move(values);
+    return p;
+}
+
+// --resolution W or WxH: the film's resolution, as if the Film said so. W alone keeps the
+// scene's aspect ratio (and so the camera's framing); another aspect frames more or less of the
+// scene, as in pbrt-v3, with a warning.
+void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
+    const int xres = desc.film.params.get_int("xresolution", 640),
+              yres = desc.film.params.get_int("yresolution", 480);
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    const int n = std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra);
+    if (n == 1 && w > 0)
+        h = std::max(1, static_cast<int>(std::lround(double(w) * yres / xres)));
+    else if (!(n == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0))
+        throw std::invalid_argument("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text +
+                                    "\"");
+    if (w > render::kMaxFilmSide || h > render::kMaxFilmSide ||
+        static_cast<long long>(w) * h > render::kMaxFilmPixels)
+        throw std::invalid_argument("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
+                                    " is above cmam's limits of " +
+                                    std::to_string(render::kMaxFilmSide) + " pixels a side and " +
+                                    std::to_string(render::kMaxFilmPixels) + " in all");
+    if (std::abs(double(w) / h - double(xres) / yres) > 1.0 / std::min(w, h))
+        warn("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
+             " has another aspect ratio than the scene's " + std::to_string(xres) + "x" +
+             std::to_string(yres) + " film: the camera frames " +
+             (double(w) / h > double(xres) / yres ? "more" : "less") +
+             " of the scene horizontally (give the width alone to keep the aspect)");
+    desc.film.params.add(film_param("integer", "xresolution", {double(w)}));
+    desc.film.params.add(film_param("integer", "yresolution", {double(h)}));
+}
+
+// --crop x0,x1,y0,y1: the Film's cropwindow (fractions of the image, y down, as pbrt-v3); it
+// replaces the scene's.
+void override_crop(pbrt::SceneDesc& desc, const std::vector<double>& c) {
+    if (c.size() != 4) throw std::invalid_argument("--crop needs four numbers: X0,X1,Y0,Y1");
+    for (double v : c)
+        if (!(v >= 0 && v <= 1))
+            throw std::invalid_argument("--crop: values are fractions of the image, in [0, 1]");
+    if (!(c[0] < c[1] && c[2] < c[3]))
+        throw std::invalid_argument("--crop: needs X0 < X1 and Y0 < Y1");
+    desc.film.params.add(film_param("float", "cropwindow", c));
+}
+
+bool is_float_format(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".exr" || ext == ".pfm";
+}
+
+// The footprint AOV reports the footprint of image textures in texels: refuse where there is
+// none to report rather than write zeros.
+void check_footprint_aov(const render::Scene& scene, const std::string& out) {
+    if (!is_float_format(out))
+        throw std::invalid_argument(
+            "--aov footprint writes lengths in texels and MIP levels, "
+            "which need a float image: use .exr or .pfm, not \"" +
+            out + "\"");
+    bool image = false, footprint = false;
+    for (const render::TextureNode& n : scene.textures) {
+        if (n.kind != render::TextureNode::Kind::Image) continue;
+        image = true;
+        footprint = footprint || n.lod != render::Lod::None;
+    }
+    if (!image)
+        throw std::invalid_argument(
+            "--aov footprint measures image textures, and this scene has none (procedural "
+            "textures such as checkerboard have no texel size)");
+    if (!footprint)
+        throw std::invalid_argument(
+            "--aov footprint: --lod none point-samples, there is no footprint");
+}
+
+void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
+    std::size_t level0 = 0, pyramids = 0, tables = 0, prefixes = 0;
+    for (const auto& [key, tex] : scene.images) {
+        level0 += tex->image().memory_bytes();
+        std::size_t all = tex->memory_bytes();
+        std::size_t sat = tex->sat_built() ? tex->sat().memory_bytes() : 0;
+        std::size_t rows = tex->row_prefix_bytes();
+        tables += sat;
+        prefixes += rows;
+        pyramids += all - sat - rows - tex->image().memory_bytes();
+    }
+    auto mb = [](std::size_t b) { return double(b) / (1 << 20); };
+    std::fprintf(
+        stderr,
+        "textures: %zu images, level 0 %.2f MB, MIP pyramids %.2f MB, summed-area tables %.2f MB, "
+        "row prefix tables (area) %.2f MB\n",
+        scene.images.size(), mb(level0), mb(pyramids), mb(tables), mb(prefixes));
+    std::fprintf(stderr, "lookups: point-sampled (no footprint) %llu",
+                 (unsigned long long)stats.lookups_point_sampled);
+    for (int k = 0; k < texture::kFilterKinds; ++k)
+        std::fprintf(stderr, ", %s %llu",
+                     std::string(texture::to_string(texture::FilterKind(k))).c_str(),
+                     (unsigned long long)stats.lookups_by_filter[k]);
+    std::fprintf(stderr, "\n");
+    if (stats.lookups_non_finite)
+        std::fprintf(stderr, "lookups with a non-finite uv or footprint (texture mean): %llu\n",
+                     (unsigned long long)stats.lookups_non_finite);
+    if (stats.cmam_2d_without_above)
+        std::fprintf(stderr, "2-D CMAM lookups without a sample above: %llu\n",
+                     (unsigned long long)stats.cmam_2d_without_above);
+    if (stats.dropped_differentials)
+        std::fprintf(stderr, "ray differentials dropped (grazing or non-finite): %llu\n",
+                     (unsigned long long)stats.dropped_differentials);
+}
+
+// The image is written to a temporary beside `out` and renamed: its folder must exist and be
+// writable.
+void check_output_folder(const std::string& out) {
+    namespace fs = std::filesystem;
+    fs::path dir = fs::path(out).parent_path();
+    if (dir.empty()) dir = ".";
+    std::error_code ec;
+    if (!fs::exists(dir, ec))
+        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                                    "\" does not exist");
+    if (!fs::is_directory(dir, ec))
+        throw std::invalid_argument("cannot write \"" + out + "\": \"" + dir.string() +
+                                    "\" is not a folder");
+    if (::access(dir.c_str(), W_OK) != 0)
+        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                                    "\" is not writable");
+}
+
+}  // namespace
+
+int run_render(const RenderArgs& a) {
+    auto t0 = std::chrono::steady_clock::now();
+    pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
+    if (!a.resolution.empty()) override_resolution(desc, a.resolution);
+    if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
+    render::BuildOptions bo;
+    bo.spp_override = a.spp;
+    note_spp_rounding(a.spp);
+    if (!a.lod.empty()) {
+        bo.lod = render::parse_lod(a.lod);
+        if (!bo.lod)
+            throw std::invalid_argument(
+                "--lod: unknown \"" + a.lod +
+                "\" (expected none, differentials, cones, cones-aniso or cmam)");
+    }
+    if (!a.filter.empty()) {
+        bo.filter = texture::parse_filter(a.filter);
+        if (!bo.filter)
+            throw std::invalid_argument("--filter: unknown \"" + a.filter + "\" (expected " +
+                                        texture::filter_names() + ")");
+    }
+    auto miss = texture::parse_cmam_miss(a.cmam_miss);
+    auto tags = render::parse_tag_policy(a.cmam_tags);
+    auto ell = texture::parse_cmam_ellipse(a.cmam_ellipse);
+    auto sat_miss = texture::parse_cmam_sat_miss(a.cmam_sat_miss);
+    if (!miss) throw std::invalid_argument("--cmam-miss: expected average or point");
+    if (!tags) throw std::invalid_argument("--cmam-tags: expected scanline or pixel");
+    if (!ell)
+        throw std::invalid_argument(
+            "--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
+    if (!sat_miss)
+        throw std::invalid_argument("--cmam-sat-miss: expected average or paper-literal");
+    if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
+        throw std::invalid_argument("--cmam-adjacency: expected on or off");
+    if (a.cmam_hull && *tags != render::TagPolicy::Pixel)
+        throw std::invalid_argument("--cmam-hull works per pixel: it needs --cmam-tags pixel");
+    bo.tags = *tags;
+    bo.cmam.miss = *miss;
+    bo.cmam.ellipse = *ell;
+    bo.cmam.sat_miss = *sat_miss;
+    bo.cmam.adjacent_only = a.cmam_adjacency == "on";
+    bo.cmam.hull = a.cmam_hull;
+    if (a.cmam_2d && *tags != render::TagPolicy::Scanline)
+        throw std::invalid_argument(
+            "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
+    bo.cmam.two_d = a.cmam_2d;
+    auto scene = render::build_scene(desc, bo, print_warning);
+    std::string out = a.output.empty() ? scene->film.filename : a.output;
+    check_output_folder(out);  // before rendering: a long render is not lost to a typo
+
+    ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
+    render::RenderOptions ro;
+    ro.threads = a.threads;
+    if (a.aov == "footprint") {
+        ro.aov = render::AovKind::Footprint;
+        check_footprint_aov(*scene, out);
+    } else if (a.aov == "texture")
+        ro.aov = render::AovKind::Texture;
+    else if (!a.aov.empty())
+        throw std::invalid_argument("--aov: unknown \"" + a.aov +
+                                    "\" (expected footprint or texture)");
+    ro.progress = [&](int done, int total) { bar.update(done, total); };
+    render::RenderStats stats;
+    auto t1 = std::chrono::steady_clock::now();
+    render::Framebuffer fb = render::render(*scene, ro, &stats);
+    auto t2 = std::chrono::steady_clock::now();
+    render::write_image(out, fb.width, fb.height, fb.rgb, fb.channel_names);
+    double render_s = std::chrono::duration<double>(t2 - t1).count();
+    double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!a.quiet) {
+        uint64_t rays = stats.total_rays();
+        std::fprintf(stderr,
+                     "%s: %dx%d, %d spp, wall %.3fs (render %.3fs), %llu rays, %.2f Mrays/s\n",
+                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, render_s,
+                     (unsigned long long)rays, render_s > 0 ? rays / render_s / 1e6 : 0.0);
+    }
+    if (a.stats) print_stats(*scene, stats);
+    return 0;
+}
+
+}  // namespace cmam::app
