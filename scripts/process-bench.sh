@@ -5,7 +5,8 @@
 #
 # With PBRT set to a pbrt-v3 binary, the renders run with it as well, the two programs in turn
 # (cmam, pbrt, cmam, pbrt, ...), on the same scene file with the same sampler and thread count,
-# and the table adds the ratio of the medians (cmam / pbrt; below 1: cmam is faster).
+# and the table adds the ratios of the medians (cmam / pbrt; below 1: cmam is faster). On a
+# machine shared with other work, read CPU time: wall time then includes waiting for a core.
 #
 # usage: scripts/process-bench.sh CMAM      (env: RUNS=5 RUNS_64=3 THREADS=nproc PBRT=)
 set -euo pipefail
@@ -99,10 +100,10 @@ with_spp() {
 }
 
 if [[ -n $PBRT ]]; then
-  printf '| %-22s | %4s | %9s | %9s | %9s | %9s | %8s | %8s | %11s |\n' scene spp "cmam wall" "pbrt wall" \
-    "cmam CPU" "pbrt CPU" "cmam MB" "pbrt MB" "wall c/p"
-  printf '|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n' ------------------------ ------ ----------- ----------- \
-    ----------- ----------- ---------- ---------- -------------
+  printf '| %-22s | %4s | %9s | %9s | %9s | %9s | %8s | %8s | %8s | %8s |\n' scene spp "cmam wall" \
+    "pbrt wall" "cmam CPU" "pbrt CPU" "cmam MB" "pbrt MB" "wall c/p" "CPU c/p"
+  printf '|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n' ------------------------ ------ ----------- ----------- \
+    ----------- ----------- ---------- ---------- ---------- ----------
 else
   printf '| %-22s | %4s | %9s | %9s | %8s |\n' scene spp "wall s" "CPU s" "peak MB"
   printf '|%s|%s|%s|%s|%s|\n' ------------------------ ------ ----------- ----------- ----------
@@ -130,8 +131,9 @@ for scene in "$ROOT"/scenes/*.pbrt "$ROOT"/scenes/paper/*.pbrt; do
     if [[ -n $PBRT ]]; then
       read -r pw pc pm < <(medians <"$work/p")
       ratio=$(awk -v a="$cw" -v b="$pw" 'BEGIN { printf "%.2f", a / b }')
-      printf '| %-22s | %4s | %9s | %9s | %9s | %9s | %8s | %8s | %11s |\n' "$name" "$spp" "$cw" "$pw" \
-        "$cc" "$pc" "$cm" "$pm" "$ratio"
+      cpu_ratio=$(awk -v a="$cc" -v b="$pc" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }')
+      printf '| %-22s | %4s | %9s | %9s | %9s | %9s | %8s | %8s | %8s | %8s |\n' "$name" "$spp" "$cw" \
+        "$pw" "$cc" "$pc" "$cm" "$pm" "$ratio" "$cpu_ratio"
     else
       printf '| %-22s | %4s | %9s | %9s | %8s |\n' "$name" "$spp" "$cw" "$cc" "$cm"
     fi
