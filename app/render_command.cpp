@@ -221,14 +221,19 @@ int run_render(const RenderArgs& a) {
     render::Framebuffer fb = render::render(*scene, ro, &stats);
     auto t2 = std::chrono::steady_clock::now();
     render::write_image(out, fb.width, fb.height, fb.rgb, fb.channel_names);
+    // Load: parsing, images and acceleration structures (pyramids and tables are built on
+    // first use, inside the render).
+    double load_s = std::chrono::duration<double>(t1 - t0).count();
     double render_s = std::chrono::duration<double>(t2 - t1).count();
     double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!a.quiet) {
         uint64_t rays = stats.total_rays();
         std::fprintf(stderr,
-                     "%s: %dx%d, %d spp, wall %.3fs (render %.3fs), %llu rays, %.2f Mrays/s\n",
-                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, render_s,
-                     (unsigned long long)rays, render_s > 0 ? rays / render_s / 1e6 : 0.0);
+                     "%s: %dx%d, %d spp, wall %.3fs (load %.3fs, render %.3fs), %llu rays, "
+                     "%.2f Mrays/s\n",
+                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, load_s,
+                     render_s, (unsigned long long)rays,
+                     render_s > 0 ? rays / render_s / 1e6 : 0.0);
     }
     if (a.stats) print_stats(*scene, stats);
     return 0;
