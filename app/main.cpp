@@ -228,6 +228,9 @@ int main(int argc, char** argv) {
     render_cmd->add_option("--threads", ra.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 4096));
     render_cmd->add_flag("--quiet", ra.quiet, "No progress bar and no summary line");
+    render_cmd->add_option("--max-memory", ra.max_memory,
+                           "Refuse, before rendering, a render that would take the process over "
+                           "this size (8G, 512M; default: the machine's memory)");
     render_cmd->add_option("--resolution", ra.resolution,
                            "Film resolution WxH, or W alone to keep the scene's aspect ratio (a "
                            "quick preview of a big scene)");
@@ -349,6 +352,10 @@ int main(int argc, char** argv) {
     } catch (const pbrt::SceneError& e) {
         // Located: "FILE:LINE:COL: error: ..."; otherwise "error: ...", printed as the others.
         std::cerr << (e.loc().file ? "" : "cmam: ") << e.what() << "\n";
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "cmam: error: out of memory (the scene, its textures or the film need more "
+                     "than this machine or process may use)\n";
         return 1;
     } catch (const std::exception& e) {
         std::cerr << "cmam: error: " << pbrt::printable(e.what()) << "\n";

@@ -13,6 +13,7 @@
 #include "pbrt/parser.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
+#include "render/memory.h"
 #include "render/scene.h"
 
 namespace cmam::app {
@@ -203,6 +204,11 @@ int run_render(const RenderArgs& a) {
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
     check_output_folder(out);  // before rendering: a long render is not lost to a typo
+    std::optional<std::size_t> max_memory;
+    if (!a.max_memory.empty() && !(max_memory = render::parse_bytes(a.max_memory)))
+        throw std::invalid_argument("--max-memory: expected a size such as 8G or 512M, not \"" +
+                                    a.max_memory + "\"");
+    render::check_render_memory(*scene, max_memory);  // before rendering, with the sizes
 
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     render::RenderOptions ro;

@@ -18,6 +18,7 @@ struct RenderArgs {
     bool cmam_hull = false, cmam_2d = false;
     std::string aov;
     std::string resolution, crop;
+    std::string max_memory;  // empty: the machine's memory (render::memory_limit())
 };
 
 int run_render(const RenderArgs& args);

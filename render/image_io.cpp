@@ -14,6 +14,7 @@
 #include <mutex>
 
 #include "render/image_codecs.h"
+#include "render/memory.h"
 
 namespace cmam::render {
 
@@ -21,13 +22,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::size_t physical_memory() {
-    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    if (pages <= 0 || page <= 0) return std::size_t(1) << 34;
-    return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);
-}
-
-std::atomic<std::size_t> g_image_memory_limit{physical_memory()};
+// What the process may use (memory.h): the machine, its cgroup and ulimit -v.
+std::atomic<std::size_t> g_image_memory_limit{memory_limit()};
 
 }  // namespace
 

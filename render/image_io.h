@@ -33,7 +33,7 @@ struct RawImage {
 /// before anything is allocated.
 RawImage read_image(const std::string& path);
 
-/// The image memory limit in bytes (default: the machine's physical memory); for tests and
+/// The image memory limit in bytes (default: memory_limit() of memory.h); for tests and
 /// fuzzing, which keep hostile sizes small.
 void set_image_memory_limit(std::size_t bytes);
 

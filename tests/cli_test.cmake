@@ -195,4 +195,16 @@ expect_failure("cmam: error: --methods: unknown method \"cmam\+magic\" \(none, o
 if(EXISTS ${OUT}/eval)
   message(FATAL_ERROR "an unknown method must fail before anything is written")
 endif()
+# A render that needs more memory than allowed is refused before rendering, with its sizes; a
+# size --max-memory cannot read is an error naming it.
+file(WRITE ${OUT}/huge.pbrt "Film \"image\" \"integer xresolution\" 16384 \"integer yresolution\" 16384\nSampler \"stratified\" \"integer xsamples\" 1 \"integer ysamples\" 1\nCamera \"perspective\"\nWorldBegin\nShape \"sphere\"\nWorldEnd\n")
+cmam_run(render ${OUT}/huge.pbrt -o ${OUT}/huge.exr --max-memory 1G --quiet)
+if(rc EQUAL 0 OR NOT err MATCHES "the render needs about 3.0 GiB more \\(film 3.0 GiB, "
+   OR NOT err MATCHES "over the limit of 1.0 GiB set by --max-memory" OR EXISTS ${OUT}/huge.exr)
+  message(FATAL_ERROR "a render over --max-memory must be refused before rendering: ${rc} ${err}")
+endif()
+cmam_run(render ${OUT}/huge.pbrt -o ${OUT}/huge.exr --max-memory lots --quiet)
+if(rc EQUAL 0 OR NOT err MATCHES "--max-memory: expected a size such as 8G or 512M, not \"lots\"")
+  message(FATAL_ERROR "an unreadable --max-memory must be an error: ${rc} ${err}")
+endif()
 file(REMOVE_RECURSE ${OUT})
