@@ -40,6 +40,7 @@ struct GraphicsState {
     Mat4 ctm = Mat4::identity();
     bool reverse_orientation = false;
     int material = -1;
+    int area_light = -1;  // the AreaLightSource in effect (index into SceneDesc::area_lights)
 };
 
 // The named textures and materials visible at the current point of the file: one table each,
@@ -112,7 +113,8 @@ const char* kSupportedDirectives =
     "LookAt, Translate, Rotate, Scale, Transform, ConcatTransform, Identity, CoordinateSystem, "
     "CoordSysTransform, ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
     "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, Texture, "
-    "Shape, LightSource, Camera, Film, Sampler, PixelFilter, Integrator, Accelerator, "
+    "Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, Integrator, "
+    "Accelerator, "
     "ObjectBegin, ObjectEnd, ObjectInstance";
 
 class Parser {
@@ -533,6 +535,13 @@ class Parser {
             s.world_from_object = m_gs.ctm;
             s.reverse_orientation = m_gs.reverse_orientation;
             s.material = m_gs.material;
+            s.area_light = m_gs.area_light;
+            if (m_in_object && s.area_light >= 0) {
+                warn(dir.loc,
+                     "this shape is inside an object definition: pbrt-v3 does not make instanced "
+                     "shapes area lights, so it does not emit");
+                s.area_light = -1;
+            }
             if (m_in_object)
                 m_instances[m_object_name].push_back(std::move(s));
             else
@@ -581,9 +590,9 @@ class Parser {
                 m_desc.shapes.push_back(std::move(c));
             }
         } else if (d == "AreaLightSource") {
-            throw SceneError(dir.loc,
-                             "AreaLightSource is not supported (cmam's Whitted integrator "
-                             "supports point, spot, distant and infinite lights)");
+            need_world(dir, true);
+            m_gs.area_light = static_cast<int>(m_desc.area_lights.size());
+            m_desc.area_lights.push_back(entity(dir));
         } else if (d == "ActiveTransform") {
             Token t = expect_any(dir, "All, StartTime or EndTime");
             warn(dir.loc, "ActiveTransform " + t.text + " ignored: cmam renders no motion blur");

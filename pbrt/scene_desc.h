@@ -47,7 +47,8 @@ struct ShapeDesc {
     Entity entity;
     Mat4 world_from_object;
     bool reverse_orientation = false;
-    int material = -1;  // index into SceneDesc::materials; -1 is the default matte
+    int material = -1;    // index into SceneDesc::materials; -1 is the default matte
+    int area_light = -1;  // index into SceneDesc::area_lights; -1: the shape does not emit
 };
 
 struct LightDesc {
@@ -62,6 +63,7 @@ struct SceneDesc {
     std::vector<MaterialDesc> materials;
     std::vector<ShapeDesc> shapes;
     std::vector<LightDesc> lights;
+    std::vector<Entity> area_lights;   // AreaLightSource directives (each shape in scope emits)
     std::vector<std::string> sources;  // every scene file read (the main file, then Includes)
     std::string base_dir;  // directory of the main file, which relative paths resolve against
                            // (pbrt-v3), Included files' too (resolve_path())

@@ -51,9 +51,10 @@ class Builder {
                                                    names_of(m_desc.accelerator));
         for (std::size_t i = 0; i < m_desc.textures.size(); ++i) texture(m_desc.textures[i]);
         for (const auto& m : m_desc.materials) m_scene->materials.push_back(material(m));
+        for (const auto& a : m_desc.area_lights) m_area_lights.push_back(area_light(a));
         for (const auto& s : m_desc.shapes) shape(s);
         for (const auto& l : m_desc.lights) light(l);
-        if (m_desc.lights.empty() && !m_desc.shapes.empty() && m_warn)
+        if (m_scene->lights.empty() && !m_desc.shapes.empty() && m_warn)
             m_warn(pbrt::format_warning(m_desc.camera.loc,
                                         "the scene has no lights; it will render black"));
         m_scene->commit();
@@ -65,6 +66,7 @@ class Builder {
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;
     std::unique_ptr<Scene> m_scene;
+    std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
 
     void warn(const pbrt::FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(pbrt::format_warning(loc, msg));
@@ -771,7 +773,43 @@ class Builder {
                            " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
         }
         prim->id = static_cast<uint32_t>(m_scene->primitives.size());
+        if (s.area_light >= 0) {
+            // pbrt-v3 makes every shape in an AreaLightSource's scope emit; one light per shape
+            // here, sampled uniformly by area over all its triangles.
+            Light l = m_area_lights[static_cast<std::size_t>(s.area_light)];
+            l.prim = static_cast<int>(prim->id);
+            if (prim->kind == Primitive::Kind::Triangles) {
+                prim->area_cdf.assign(1, 0.0);
+                for (std::size_t t = 0; t < prim->indices.size(); t += 3) {
+                    const Vec3 a = prim->positions[prim->indices[t]],
+                               b = prim->positions[prim->indices[t + 1]],
+                               c = prim->positions[prim->indices[t + 2]];
+                    prim->area_cdf.push_back(prim->area_cdf.back() +
+                                             0.5 * double(length(cross(b - a, c - a))));
+                }
+            }
+            if (!l.intensity.is_black()) {
+                prim->area_light = static_cast<int>(m_scene->lights.size());
+                m_scene->lights.push_back(l);
+            }
+        }
         m_scene->primitives.push_back(std::move(prim));
+    }
+
+    // pbrt-v3's "diffuse" area light: radiance L (times scale) leaving the surface.
+    Light area_light(const Entity& e) {
+        if (e.type != "diffuse")
+            throw SceneError(
+                e.loc, "unsupported AreaLightSource " + q(e.type) + " (supported: \"diffuse\")");
+        Light l;
+        l.type = Light::Type::Area;
+        Rgb scale(1);
+        if (auto sc = e.params.get_rgb("scale")) scale = to_rgb(finite_values(e, "scale", *sc));
+        auto L = e.params.get_rgb("L");
+        l.intensity = (L ? to_rgb(finite_values(e, "L", *L)) : Rgb(1)) * scale;
+        l.two_sided = e.params.get_bool("twosided", false);
+        e.params.check_unused("AreaLightSource \"diffuse\"", m_warn, {"nsamples", "samples"});
+        return l;
     }
 
     // --- lights ---------------------------------------------------------------------------
@@ -779,6 +817,31 @@ class Builder {
         return Vec3(float(a[0]), float(a[1]), float(a[2]));
     }
     static Rgb to_rgb(const pbrt::Rgb& c) { return Rgb(c[0], c[1], c[2]); }
+
+    // pbrt-v3's infinite light image: a lat-long map in the light's frame, read as its imagemap
+    // reads images (8-bit files decoded from sRGB); theta = 0 is the file's top row.
+    std::shared_ptr<const EnvironmentMap> environment_map(const Entity& e, const pbrt::Param& p,
+                                                          const Mat4& world_from_light) {
+        const std::string path =
+            pbrt::resolve_path(m_desc.base_dir, p.loc, e.params.get_string("mapname", ""));
+        texture::Image level0;
+        try {
+            level0 = load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat);
+        } catch (const ImageIoError& err) {
+            throw SceneError(p.loc, err.what());
+        }
+        Mat4 inv;
+        try {
+            inv = world_from_light.inverse();
+        } catch (const std::domain_error&) {
+            throw SceneError(e.loc, "the light's transform is singular");
+        }
+        std::array<float, 9> lw{};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) lw[3 * i + j] = float(inv.m[i][j]);
+        return std::make_shared<const EnvironmentMap>(
+            std::make_unique<texture::FilteredTexture>(std::move(level0)), lw);
+    }
 
     void light(const pbrt::LightDesc& d) {
         const Entity& e = d.entity;
@@ -827,11 +890,8 @@ class Builder {
             l.direction = normalize(w);
         } else if (e.type == "infinite") {
             l.type = Light::Type::Infinite;
-            if (const auto* mp = e.params.find("mapname"))
-                throw SceneError(mp->loc,
-                                 "infinite light environment maps are not supported (give a "
-                                 "constant \"rgb L\")");
             l.intensity = intensity("L");
+            if (const auto* mp = e.params.find("mapname")) l.env = environment_map(e, *mp, m);
             e.params.get_int("samples",
                              1);  // pbrt-v3's sample count hint; one sample per lookup here
         } else {

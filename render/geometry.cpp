@@ -1,5 +1,6 @@
 // render — Embree set-up, analytic quadrics (pbrt-v3 sphere and disk) as user geometry, and
 // the construction of oriented surface hits.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -300,6 +301,66 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
     h.ng = n;
     h.ns = n;
     return true;
+}
+
+void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const {
+    *pdf = 0;
+    if (kind == Kind::Triangles) {
+        // A triangle by area (area_cdf), then a point uniform in it; u1 is reused within the
+        // chosen triangle's span.
+        const double total = area_cdf.empty() ? 0 : area_cdf.back();
+        if (!(total > 0)) return;
+        const double x = double(u1) * total;
+        const auto it = std::upper_bound(area_cdf.begin(), area_cdf.end(), x);
+        const std::size_t ntri = area_cdf.size() - 1;
+        const std::size_t t = std::min(ntri - 1, static_cast<std::size_t>(std::max<std::ptrdiff_t>(
+                                                     0, (it - area_cdf.begin()) - 1)));
+        const double span = area_cdf[t + 1] - area_cdf[t];
+        const float r = span > 0 ? float(std::clamp((x - area_cdf[t]) / span, 0.0, 1.0)) : 0.5f;
+        const float su = std::sqrt(r), b0 = 1 - su, b1 = u2 * su, b2 = 1 - b0 - b1;
+        const uint32_t i0 = indices[3 * t], i1 = indices[3 * t + 1], i2 = indices[3 * t + 2];
+        const Vec3 &p0 = positions[i0], &p1 = positions[i1], &p2 = positions[i2];
+        *p = b0 * p0 + b1 * p1 + b2 * p2;
+        Vec3 ng = normalize(cross(p0 - p2, p1 - p2));
+        if (flip) ng = -ng;
+        if (!normals.empty()) {  // oriented as intersect() orients hits
+            const Vec3 ns = b0 * normals[i0] + b1 * normals[i1] + b2 * normals[i2];
+            if (length(ns) > 0) ng = faceforward(ng, flip ? -ns : ns);
+        }
+        *n = ng;
+        *pdf = float(1 / total);
+        return;
+    }
+    // Quadrics: (u1,u2) map to a point uniform by object-space area (Archimedes' z for the
+    // sphere, r^2 for the disk, phi for both). The world-space area element is |dP/du1 x
+    // dP/du2| after the transform, det(M) M^-T applied to the object-space one, so the density
+    // is exact under any transform.
+    const double phi = double(u2) * phi_max;
+    D3 po, cross_obj;
+    if (kind == Kind::Sphere) {
+        const double z = zmin + double(u1) * (zmax - zmin);
+        const double rho = std::sqrt(std::max(0.0, radius * radius - z * z));
+        po = {rho * std::cos(phi), rho * std::sin(phi), z};
+        const double k = (zmax - zmin) * phi_max;
+        cross_obj = {k * po[0], k * po[1], k * po[2]};  // outwards, |.| = k * radius
+    } else {
+        const double r2 = inner_radius * inner_radius +
+                          double(u1) * (radius * radius - inner_radius * inner_radius);
+        const double rho = std::sqrt(r2);
+        po = {rho * std::cos(phi), rho * std::sin(phi), height};
+        cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
+    }
+    const auto& m = world_from_object;
+    const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+                       m[2] * (m[4] * m[9] - m[5] * m[8]);
+    const D3 cw = xform_normal(object_from_world, cross_obj);
+    const double area_element =
+        std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
+    if (!(area_element > 0) || !std::isfinite(area_element)) return;
+    *p = to_vec(xform_point(world_from_object, po));
+    Vec3 nw = normalize(to_vec(cw));
+    *n = flip ? -nw : nw;
+    *pdf = float(1 / area_element);
 }
 
 void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {

@@ -75,11 +75,20 @@ struct Tracer {
     // offset at every hit of the path, mapped to uv by that hit's differentials.
     float to_stratum_x = 0, to_stratum_y = 0;
 
-    Rgb escaped() const {
+    Rgb escaped(const Vec3& dir) const {
         Rgb l{};
         for (const Light& light : scene.lights)
-            if (light.type == Light::Type::Infinite) l += light.intensity;
+            if (light.type == Light::Type::Infinite)
+                l += light.env ? light.intensity * light.env->radiance(dir) : light.intensity;
         return l;
+    }
+
+    // What an area light's surface emits towards w (pbrt-v3: along its oriented normal only,
+    // unless two-sided).
+    Rgb emitted(const SurfaceHit& h, const Vec3& w) const {
+        if (h.prim->area_light < 0) return {};
+        const Light& l = scene.lights[static_cast<std::size_t>(h.prim->area_light)];
+        return l.two_sided || dot(h.ng, w) > 0 ? l.intensity : Rgb();
     }
 
     bool visible(const SurfaceHit& h, const Vec3& wi, float dist) {
@@ -89,6 +98,17 @@ struct Tracer {
         return !scene.occluded(o, wi, 0, tmax);
     }
 
+    // Whether the segment from the hit (offset along wi's side) to the point p on an area
+    // light is clear, short of the light's own surface by its ray epsilon.
+    bool visible_point(const SurfaceHit& h, const Vec3& wi, const Vec3& p) {
+        if (counts) ++counts->shadow;
+        Vec3 o = offset_origin(h, wi);
+        Vec3 d = p - o;
+        float len = length(d);
+        float tmax = len - ray_epsilon(p);
+        return tmax <= 0 || !scene.occluded(o, d / len, 0, tmax);
+    }
+
     Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
         Rgb L{};
         for (const Light& light : scene.lights) {
@@ -96,6 +116,7 @@ struct Tracer {
             Rgb li;
             float dist = std::numeric_limits<float>::infinity();
             float pdf = 1;
+            Vec3 target;  // area lights: the point sampled on the light
             switch (light.type) {
                 case Light::Type::Point:
                 case Light::Type::Spot: {
@@ -120,6 +141,12 @@ struct Tracer {
                     li = light.intensity;
                     break;
                 case Light::Type::Infinite: {
+                    if (light.env) {  // by the map's luminance
+                        float u1 = rng.next_float(), u2 = rng.next_float();
+                        li = light.intensity * light.env->sample(u1, u2, &wi, &pdf);
+                        if (pdf == 0) continue;
+                        break;
+                    }
                     // Cosine-weighted about the geometric normal on wo's side: the same expected
                     // value as pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
                     float u1 = rng.next_float(), u2 = rng.next_float();
@@ -133,11 +160,32 @@ struct Tracer {
                     li = light.intensity;
                     break;
                 }
+                case Light::Type::Area: {
+                    // One point uniform by area; its density converted to solid angle.
+                    const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
+                    float u1 = rng.next_float(), u2 = rng.next_float(), pdf_area;
+                    Vec3 p, n;
+                    prim.sample_area(u1, u2, &p, &n, &pdf_area);
+                    if (pdf_area == 0) continue;
+                    Vec3 d = p - h.p;
+                    float d2 = dot(d, d);
+                    if (d2 == 0) continue;
+                    dist = std::sqrt(d2);
+                    wi = d / dist;
+                    float cos_l = dot(n, -wi);
+                    if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
+                    pdf = pdf_area * d2 / std::abs(cos_l);
+                    target = p;
+                    li = light.intensity;
+                    break;
+                }
             }
             if (li.is_black()) continue;
             Rgb fv = bsdf.f(wo, wi);
             if (fv.is_black()) continue;
-            if (!visible(h, wi, dist)) continue;
+            if (light.type == Light::Type::Area ? !visible_point(h, wi, target)
+                                                : !visible(h, wi, dist))
+                continue;
             L += fv * li * (absdot(wi, h.ns) / pdf);
         }
         return L;
@@ -155,7 +203,7 @@ struct Tracer {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             SurfaceHit h;
             if (!scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), &h))
-                return escaped();
+                return escaped(ray.dir);
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
             texture::RayTag t = tag;
@@ -200,7 +248,7 @@ struct Tracer {
                 continue;
             }
             if (aov) record_aov(ctx, h, bsdf);
-            Rgb L{};
+            Rgb L = emitted(h, wo);
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
                 L += specular_reflect(ray, h, hd, bsdf, wo, depth);

@@ -18,6 +18,7 @@
 
 #include "pbrt/error.h"
 #include "pbrt/scene_desc.h"
+#include "render/envmap.h"
 #include "render/math.h"
 
 namespace cmam::render {
@@ -98,12 +99,15 @@ struct Material {
 };
 
 struct Light {
-    enum class Type { Point, Spot, Distant, Infinite };
+    enum class Type { Point, Spot, Distant, Infinite, Area };
     Type type = Type::Point;
-    Rgb intensity{};   // I for point/spot, L for distant/infinite (scale applied)
+    Rgb intensity{};   // I for point/spot, L for distant/infinite/area (scale applied)
     Vec3 position{};   // point, spot
     Vec3 direction{};  // distant: towards the light; spot: axis (from -> to)
     float cos_total = 0, cos_falloff_start = 0;
+    std::shared_ptr<const EnvironmentMap> env;  // infinite: its map ("mapname"), times intensity
+    int prim = -1;           // area: the emitting primitive (index in Scene::primitives)
+    bool two_sided = false;  // area: emits on both sides (otherwise along its normal only)
 };
 
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).
@@ -121,6 +125,14 @@ struct Primitive {
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
     double height = 0, inner_radius = 0;
+    // Area light ("AreaLightSource" in the shape's scope): its index in Scene::lights, and for
+    // triangles the cumulative areas that pick one by area.
+    int area_light = -1;
+    std::vector<double> area_cdf;
+
+    /// A point on the surface, uniform by area, from uniform numbers in [0,1): its position,
+    /// oriented geometric normal and density with respect to area (0 when none).
+    void sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
 };
 
 /// A surface hit, in world space, oriented as pbrt-v3 orients it.
