@@ -377,17 +377,43 @@ class Builder {
         return {-1, Rgb(float(finite_float(e, name, def, positive)))};
     }
 
-    void uv_mapping(const Entity& e, TextureNode* n) {
+    // pbrt-v3's 2-D texture mappings ("mapping": uv, spherical, cylindrical, planar).
+    void uv_mapping(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n) {
         std::string mapping = e.params.get_string("mapping", "uv");
-        if (mapping != "uv") {
+        if (mapping == "uv") {
+            n->su = float(e.params.get_float("uscale", 1));
+            n->sv = float(e.params.get_float("vscale", 1));
+            n->du = float(e.params.get_float("udelta", 0));
+            n->dv = float(e.params.get_float("vdelta", 0));
+        } else if (mapping == "spherical" || mapping == "cylindrical") {
+            n->mapping = mapping == "spherical" ? TextureNode::Mapping::Spherical
+                                                : TextureNode::Mapping::Cylindrical;
+            texture_space(e, t, n);
+        } else if (mapping == "planar") {
+            n->mapping = TextureNode::Mapping::Planar;
+            n->v1 = to_vec(finite_values(e, "v1", e.params.get_point3("v1", {1, 0, 0})));
+            n->v2 = to_vec(finite_values(e, "v2", e.params.get_point3("v2", {0, 1, 0})));
+            n->du = float(finite_float(e, "udelta", 0));
+            n->dv = float(finite_float(e, "vdelta", 0));
+        } else {
             const auto* p = e.params.find("mapping");
             throw SceneError(p ? p->loc : e.loc,
-                             "unsupported texture mapping " + q(mapping) + " (supported: \"uv\")");
+                             "unknown texture mapping " + q(mapping) +
+                                 " (expected \"uv\", \"spherical\", \"cylindrical\" or "
+                                 "\"planar\")");
         }
-        n->su = float(e.params.get_float("uscale", 1));
-        n->sv = float(e.params.get_float("vscale", 1));
-        n->du = float(e.params.get_float("udelta", 0));
-        n->dv = float(e.params.get_float("vdelta", 0));
+    }
+    // World -> texture space: the inverse of the transform where the texture was declared.
+    void texture_space(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n) {
+        finite_transform(t.world_from_texture, e.loc, "texture");
+        Mat4 inv;
+        try {
+            inv = t.world_from_texture.inverse();
+        } catch (const std::domain_error&) {
+            throw SceneError(e.loc, "the texture's transform is singular");
+        }
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 4; ++j) n->texture_from_world[4 * i + j] = float(inv.m[i][j]);
     }
 
     const texture::FilteredTexture* load_image(const Entity& e, bool is_float) {
@@ -434,7 +460,7 @@ class Builder {
         };
         if (e.type == "imagemap") {
             n.kind = TextureNode::Kind::Image;
-            uv_mapping(e, &n);
+            uv_mapping(e, t, &n);
             n.image = load_image(e, t.is_float);
             if (m_opts.untextured) {
                 const texture::Texel& mean = n.image->image().mean();
@@ -481,13 +507,19 @@ class Builder {
         } else if (e.type == "constant") {
             n.kind = TextureNode::Kind::Constant;
             n.constant = input("value", 1).value;
+        } else if (e.type == "checkerboard" && e.params.get_int("dimension", 2) == 3) {
+            n.kind = TextureNode::Kind::Checkerboard3D;
+            texture_space(e, t, &n);
+            n.tex1 = input("tex1", 1);
+            n.tex2 = input("tex2", 0);
         } else if (e.type == "checkerboard") {
             n.kind = TextureNode::Kind::Checkerboard;
             int dim = e.params.get_int("dimension", 2);
             if (dim != 2)
-                throw SceneError(e.params.find("dimension")->loc,
-                                 "only 2-D checkerboards are supported");
-            uv_mapping(e, &n);
+                throw SceneError(
+                    e.params.find("dimension")->loc,
+                    "checkerboard dimension must be 2 or 3, got " + std::to_string(dim));
+            uv_mapping(e, t, &n);
             n.tex1 = input("tex1", 1);
             n.tex2 = input("tex2", 0);
             std::string aa = e.params.get_string("aamode", "closedform");
@@ -515,11 +547,62 @@ class Builder {
             n.tex1 = input("tex1", 0);
             n.tex2 = input("tex2", 1);
             n.amount = float_input(e, t.scope, "amount", 0.5f);
+        } else if (e.type == "bilerp") {
+            n.kind = TextureNode::Kind::Bilerp;
+            uv_mapping(e, t, &n);
+            const char* names[4] = {"v00", "v01", "v10", "v11"};
+            const float defs[4] = {0, 1, 0, 1};
+            for (int k = 0; k < 4; ++k) {
+                if (t.is_float)
+                    n.corners[k] = Rgb(float(finite_float(e, names[k], defs[k])));
+                else if (auto c = e.params.get_rgb(names[k]))
+                    n.corners[k] = to_rgb(finite_values(e, names[k], *c));
+                else
+                    n.corners[k] = Rgb(defs[k]);
+            }
+        } else if (e.type == "uv") {
+            n.kind = TextureNode::Kind::Uv;
+            uv_mapping(e, t, &n);
+            if (t.is_float)
+                warn(e.loc, "pbrt-v3 has no float \"uv\" texture; cmam gives its s coordinate");
+        } else if (e.type == "dots") {
+            n.kind = TextureNode::Kind::Dots;
+            uv_mapping(e, t, &n);
+            n.tex1 = input("inside", 1);
+            n.tex2 = input("outside", 0);
+        } else if (e.type == "fbm" || e.type == "wrinkled" || e.type == "windy" ||
+                   e.type == "marble") {
+            n.kind = e.type == "fbm"        ? TextureNode::Kind::Fbm
+                     : e.type == "wrinkled" ? TextureNode::Kind::Wrinkled
+                     : e.type == "windy"    ? TextureNode::Kind::Windy
+                                            : TextureNode::Kind::Marble;
+            texture_space(e, t, &n);
+            if (e.type != "windy") {
+                n.octaves = std::clamp(e.params.get_int("octaves", 8), 0, 64);
+                n.omega = float(finite_float(e, "roughness", 0.5));
+            }
+            if (e.type == "marble") {
+                n.scale = float(finite_float(e, "scale", 1));
+                n.variation = float(finite_float(e, "variation", 0.2));
+                if (t.is_float)
+                    warn(e.loc,
+                         "pbrt-v3 has no float \"marble\" texture; cmam gives the "
+                         "luminance of its colour");
+            }
+            // Their octaves follow the footprint, as in pbrt-v3: ray differentials are traced.
+            m_scene->needs_differentials = true;
         } else {
             throw SceneError(e.loc, "unsupported texture class " + q(e.type) +
                                         " (supported: \"imagemap\", \"checkerboard\", "
-                                        "\"constant\", \"scale\", \"mix\")");
+                                        "\"constant\", \"scale\", \"mix\", \"bilerp\", "
+                                        "\"uv\", \"dots\", \"fbm\", \"wrinkled\", "
+                                        "\"windy\", \"marble\")");
         }
+        // Non-uv mappings take their footprints from dP/dx and dP/dy.
+        if (n.mapping != TextureNode::Mapping::Uv &&
+            (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
+            n.lod == Lod::Differentials)
+            m_scene->needs_differentials = true;
         e.params.check_unused(what, m_warn);
         if (n.kind == TextureNode::Kind::Image ||
             (n.kind == TextureNode::Kind::Checkerboard && n.closed_form)) {

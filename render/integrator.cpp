@@ -216,10 +216,13 @@ struct Tracer {
             ctx.object = h.prim->id;
             ctx.cmam = cmam;
             ctx.path = ray.path;
+            ctx.p = h.p;
             HitDifferential hd;
             if (scene.needs_differentials) {
                 hd = transfer(ray.diff, ray.dir, h);
                 if (hd.valid) {
+                    ctx.dpdx = hd.dpdx;
+                    ctx.dpdy = hd.dpdy;
                     ctx.footprint =
                         texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
                     ctx.stratum_offset = {hd.dudx * to_stratum_x + hd.dudy * to_stratum_y,

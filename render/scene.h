@@ -78,11 +78,36 @@ struct TexInput {
 };
 
 struct TextureNode {
-    enum class Kind { Constant, Image, Checkerboard, Scale, Mix };
+    enum class Kind {
+        Constant,
+        Image,
+        Checkerboard,
+        Scale,
+        Mix,
+        Bilerp,
+        Uv,
+        Dots,
+        Checkerboard3D,
+        Fbm,
+        Wrinkled,
+        Windy,
+        Marble
+    };
+    /// pbrt-v3's 2-D texture mappings: (u,v) scaled and offset; the direction from the texture
+    /// space origin as (theta / pi, phi / 2 pi) or as (angle, height) around z; or projections
+    /// of the world-space point on two vectors.
+    enum class Mapping { Uv, Spherical, Cylindrical, Planar };
     Kind kind = Kind::Constant;
     bool is_float = false;
     Rgb constant{};
-    float su = 1, sv = 1, du = 0, dv = 0;             // uv mapping
+    Mapping mapping = Mapping::Uv;
+    float su = 1, sv = 1, du = 0, dv = 0;  // uv mapping (du, dv: planar's offsets too)
+    Vec3 v1{1, 0, 0}, v2{0, 1, 0};         // planar mapping
+    // Spherical and cylindrical mappings and the 3-D textures: world -> texture space (3x4).
+    std::array<float, 12> texture_from_world{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    Rgb corners[4]{};                                 // Bilerp: v00, v01, v10, v11
+    int octaves = 8;                                  // Fbm, Wrinkled, Marble
+    float omega = 0.5f, scale = 1, variation = 0.2f;  // Fbm, Wrinkled (omega), Marble
     const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
     texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
     Lod lod = Lod::Differentials;                     // Image, Checkerboard: footprint source

@@ -67,6 +67,9 @@ struct TexContext {
     // child of path p (the CMAM keeps a cache per path).
     uint64_t path = 1;
     CmamRowState* cmam = nullptr;  // the row's CMAM caches (null: no CMAM)
+    // The hit in world space and, with ray differentials, its screen derivatives (zero
+    // without): what 3-D textures and the non-uv mappings read.
+    Vec3 p{}, dpdx{}, dpdy{};
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the
