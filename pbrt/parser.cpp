@@ -526,8 +526,11 @@ class Parser {
             std::string name = expect_string(dir, "a quoted material name");
             auto it = m_names.materials.find(name);
             if (it == m_names.materials.end())
-                throw SceneError(dir.loc, "named material " + q(name) + " is not defined");
-            m_gs.material = it->second;
+                warn(dir.loc, "named material " + q(name) +
+                                  " is not defined; the current material is kept (as pbrt-v3 "
+                                  "does)");
+            else
+                m_gs.material = it->second;
         } else if (d == "Shape") {
             need_world(dir, true);
             ShapeDesc s;

@@ -11,6 +11,7 @@
 #include "pbrt/ply.h"
 #include "render/image_io.h"
 #include "render/scene.h"
+#include "render/tessellate.h"
 
 namespace cmam::render {
 
@@ -759,11 +760,19 @@ class Builder {
                                      "innerradius must be in [0, radius)");
             }
             e.params.check_unused("shape " + q(e.type), m_warn, ignored);
-        } else if (e.type == "trianglemesh" || e.type == "plymesh") {
+        } else if (e.type == "trianglemesh" || e.type == "plymesh" || e.type == "loopsubdiv" ||
+                   is_tessellated_quadric(e.type)) {
             prim->kind = Primitive::Kind::Triangles;
             std::vector<float> P, N, UV;
             std::vector<int> idx;
-            if (e.type == "plymesh") {
+            if (is_tessellated_quadric(e.type)) {
+                QuadricMesh mesh = tessellate(e.type, quadric_params(e));
+                P = std::move(mesh.positions);
+                N = std::move(mesh.normals);
+                UV = std::move(mesh.uvs);
+                idx = std::move(mesh.indices);
+                e.params.check_unused("shape " + q(e.type), m_warn, ignored);
+            } else if (e.type == "plymesh") {
                 const auto* fp = e.params.find("filename");
                 if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
                 std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc,
@@ -781,8 +790,17 @@ class Builder {
                 e.params.check_unused("shape \"plymesh\"", m_warn,
                                       {"alpha", "shadowalpha", "displacement", "edgelength"});
             } else {
+                const std::string what = q(e.type);
+                if (e.type == "loopsubdiv") {
+                    // The control mesh stands for the limit surface (close for fine meshes).
+                    warn(e.loc,
+                         "shape \"loopsubdiv\" is rendered as its control mesh, not "
+                         "subdivided");
+                    (void)e.params.get_int("levels", 3);
+                    (void)e.params.get_int("nlevels", 3);  // pbrt-v3 reads either name
+                }
                 auto p = e.params.get_point3s("P");
-                if (!p) throw SceneError(e.loc, "trianglemesh needs a \"point3 P\" parameter");
+                if (!p) throw SceneError(e.loc, what + " needs a \"point3 P\" parameter");
                 for (double x : finite_values(e, "P", *p)) P.push_back(float(x));
                 std::size_t nv = P.size() / 3;
                 if (auto i = e.params.get_ints("indices")) {
@@ -790,7 +808,7 @@ class Builder {
                 } else if (nv == 3) {
                     idx = {0, 1, 2};
                 } else {
-                    throw SceneError(e.loc, "trianglemesh needs an \"integer indices\" parameter");
+                    throw SceneError(e.loc, what + " needs an \"integer indices\" parameter");
                 }
                 if (idx.size() % 3 != 0)
                     throw SceneError(
@@ -815,7 +833,7 @@ class Builder {
                             std::string(uvname) + " must have one (u,v) pair per vertex of P");
                     for (double x : finite_values(e, uvname, *uv)) UV.push_back(float(x));
                 }
-                e.params.check_unused("shape \"trianglemesh\"", m_warn,
+                e.params.check_unused("shape " + what, m_warn,
                                       {"alpha", "shadowalpha", "S", "faceIndices"});
             }
             std::size_t nv = P.size() / 3;
@@ -850,10 +868,14 @@ class Builder {
                                                            uint32_t(idx[t + 2])});
             }
             if (prim->indices.empty()) return;
+        } else if (e.type == "curve") {
+            warn(e.loc, "shape \"curve\" is not rendered (cmam has no curves); it is skipped");
+            return;
         } else {
-            throw SceneError(
-                e.loc, "unsupported shape " + q(e.type) +
-                           " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
+            throw SceneError(e.loc, "unsupported shape " + q(e.type) +
+                                        " (supported: \"sphere\", \"disk\", \"cylinder\", "
+                                        "\"cone\", \"paraboloid\", \"hyperboloid\", "
+                                        "\"trianglemesh\", \"plymesh\", \"loopsubdiv\")");
         }
         prim->id = static_cast<uint32_t>(m_scene->primitives.size());
         if (s.area_light >= 0) {
@@ -879,13 +901,40 @@ class Builder {
         m_scene->primitives.push_back(std::move(prim));
     }
 
+    QuadricParams quadric_params(const Entity& e) {
+        QuadricParams p;
+        if (e.type == "hyperboloid") {
+            auto a = finite_values(e, "p1", e.params.get_point3("p1", {0, 0, 0}));
+            auto b = finite_values(e, "p2", e.params.get_point3("p2", {1, 1, 1}));
+            std::copy(a.begin(), a.end(), p.p1);
+            std::copy(b.begin(), b.end(), p.p2);
+            if (a[2] == b[2]) throw SceneError(e.loc, "hyperboloid p1 and p2 must differ in z");
+        } else {
+            p.radius = finite_float(e, "radius", 1, true);
+        }
+        if (e.type == "cone") p.height = finite_float(e, "height", 1, true);
+        if (e.type == "cylinder" || e.type == "paraboloid") {
+            p.zmin = finite_float(e, "zmin", e.type == "cylinder" ? -1 : 0);
+            p.zmax = finite_float(e, "zmax", 1);
+            if (p.zmin == p.zmax) throw SceneError(e.loc, e.type + " has zmin == zmax");
+            if (e.type == "paraboloid" &&
+                (std::min(p.zmin, p.zmax) < 0 || std::max(p.zmin, p.zmax) <= 0))
+                throw SceneError(e.loc, "paraboloid zmin and zmax must be at least 0");
+        }
+        p.phimax = finite_float(e, "phimax", 360);
+        return p;
+    }
+
     // pbrt-v3's "diffuse" area light: radiance L (times scale) leaving the surface.
     Light area_light(const Entity& e) {
-        if (e.type != "diffuse")
-            throw SceneError(
-                e.loc, "unsupported AreaLightSource " + q(e.type) + " (supported: \"diffuse\")");
         Light l;
         l.type = Light::Type::Area;
+        if (e.type != "diffuse" && e.type != "area") {  // pbrt-v3 warns and goes on
+            warn(e.loc, "unknown AreaLightSource " + q(e.type) +
+                            " (pbrt-v3 has \"diffuse\", also named \"area\"): the shapes in "
+                            "its scope do not emit");
+            return l;  // black: no light is made
+        }
         Rgb scale(1);
         if (auto sc = e.params.get_rgb("scale")) scale = to_rgb(finite_values(e, "scale", *sc));
         auto L = e.params.get_rgb("L");
