@@ -1,6 +1,6 @@
 // render — pbrt-v3's "infinite" light with an environment map: a lat-long image around the
 // scene, seen by rays that escape and importance-sampled for direct lighting by a
-// piecewise-constant 2-D distribution of its luminance (algorithms.md §8).
+// piecewise-constant 2-D distribution of its luminance (algorithms.md §13).
 #pragma once
 
 #include <cmam/texture/filter.h>

@@ -1,5 +1,5 @@
 // render — Perlin's improved gradient noise and the sums of octaves pbrt-v3's procedural
-// textures are made of (fbm, wrinkled, windy, marble, dots). algorithms.md §9.
+// textures are made of (fbm, wrinkled, windy, marble, dots). algorithms.md §14.
 #pragma once
 
 #include "render/math.h"

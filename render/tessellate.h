@@ -1,6 +1,6 @@
 // render — pbrt-v3's cylinder, cone, paraboloid and hyperboloid as triangle meshes, made when
 // the scene is built: vertices on the exact surface with its (u,v) and normals, on a grid fine
-// enough that the facets do not show at ordinary sizes. algorithms.md §10.
+// enough that the facets do not show at ordinary sizes. algorithms.md §15.
 #pragma once
 
 #include <string>
