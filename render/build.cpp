@@ -971,8 +971,10 @@ class Builder {
         std::array<float, 9> lw{};
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) lw[3 * i + j] = float(inv.m[i][j]);
-        return std::make_shared<const EnvironmentMap>(
+        auto env = std::make_shared<EnvironmentMap>(
             std::make_unique<texture::FilteredTexture>(std::move(level0)), lw);
+        if (m_opts.filter) env->set_filter({*m_opts.filter});
+        return env;
     }
 
     void light(const pbrt::LightDesc& d) {
@@ -1023,7 +1025,14 @@ class Builder {
         } else if (e.type == "infinite") {
             l.type = Light::Type::Infinite;
             l.intensity = intensity("L");
-            if (const auto* mp = e.params.find("mapname")) l.env = environment_map(e, *mp, m);
+            if (const auto* mp = e.params.find("mapname")) {
+                l.env = environment_map(e, *mp, m);
+                // Escaping rays filter the map over their ray differentials' footprint, with
+                // the image textures' filter (EWA unless overridden); other footprint sources
+                // point-sample it as pbrt-v3 does.
+                l.env_footprint = !m_opts.lod || *m_opts.lod == Lod::Differentials;
+                if (l.env_footprint) m_scene->needs_differentials = true;
+            }
             e.params.get_int("samples",
                              1);  // pbrt-v3's sample count hint; one sample per lookup here
         } else {

@@ -3,6 +3,7 @@
 #include <cmam/texture/filters.h>
 
 #include <algorithm>
+#include <numbers>
 
 namespace cmam::render {
 
@@ -133,12 +134,30 @@ Rgb EnvironmentMap::at(float s, float theta_over_pi) const {
     return {x[0], x[1], x[2]};
 }
 
-Rgb EnvironmentMap::radiance(const Vec3& dir) const {
-    const Vec3 w = normalize(transform3(m_light_from_world, dir));
+Rgb EnvironmentMap::radiance(const Vec3& dir, const Vec3* dddx, const Vec3* dddy) const {
+    const Vec3 q = transform3(m_light_from_world, dir);
+    const float len = length(q);
+    const Vec3 w = q / len;
     const float theta = std::acos(std::clamp(w.z, -1.0f, 1.0f));
     float phi = std::atan2(w.y, w.x);
     if (phi < 0) phi += 2 * kPi;
-    return at(phi / (2 * kPi), theta / kPi);
+    const float rho2 = w.x * w.x + w.y * w.y;
+    if (!dddx || !dddy || !(rho2 > 1e-12f)) return at(phi / (2 * kPi), theta / kPi);
+    // The footprint's axes: (s,t) = (phi / 2 pi, 1 - theta / pi) differentiated along the unit
+    // light-space direction's derivatives, d(q/|q|) = (dq - (w.dq) w) / |q|.
+    texture::Vec2d axis[2];
+    const Vec3* dd[2] = {dddx, dddy};
+    for (int k = 0; k < 2; ++k) {
+        const Vec3 dq = transform3(m_light_from_world, *dd[k]);
+        const Vec3 dw = (dq - dot(w, dq) * w) / len;
+        const double dphi = (double(w.x) * dw.y - double(w.y) * dw.x) / rho2;
+        const double dtheta = -double(dw.z) / std::sqrt(double(rho2));  // sin(theta) = rho
+        axis[k] = {dphi / (2 * std::numbers::pi), -dtheta / std::numbers::pi};
+    }
+    const texture::Texel x = m_image->lookup(phi / (2 * kPi), 1.0 - theta / kPi,
+                                             texture::Footprint::axes(axis[0], axis[1]), m_filter);
+    if (m_image->image().channels() == 1) return Rgb(x[0]);
+    return {x[0], x[1], x[2]};
 }
 
 Rgb EnvironmentMap::sample(float u1, float u2, Vec3* wi, float* pdf) const {

@@ -56,9 +56,12 @@ class EnvironmentMap {
     EnvironmentMap(std::unique_ptr<texture::FilteredTexture> image,
                    const std::array<float, 9>& light_from_world);
 
-    /// Radiance the map shows along world direction `dir` (bilinear at full resolution, as
-    /// pbrt-v3's lookup without a footprint).
-    Rgb radiance(const Vec3& dir) const;
+    /// Radiance the map shows along world direction `dir`: bilinear at full resolution (pbrt-v3's
+    /// lookup without a width), or, given the direction's screen derivatives dD/dx and dD/dy (a
+    /// ray differential), filtered over their image in the map by `filter`.
+    Rgb radiance(const Vec3& dir, const Vec3* dddx = nullptr, const Vec3* dddy = nullptr) const;
+    /// The filter for lookups with a footprint (default EWA, pbrt-v3's imagemap default).
+    void set_filter(const texture::FilterOptions& filter) { m_filter = filter; }
     /// Samples a world direction towards the map by its luminance; returns its radiance and
     /// the density with respect to solid angle (0: nothing to sample).
     Rgb sample(float u1, float u2, Vec3* wi, float* pdf) const;
@@ -70,6 +73,7 @@ class EnvironmentMap {
     std::unique_ptr<texture::FilteredTexture> m_image;
     std::array<float, 9> m_light_from_world, m_world_from_light;
     Distribution2D m_dist;
+    texture::FilterOptions m_filter{texture::FilterKind::Ewa};
     Rgb at(float s, float theta_over_pi) const;
 };
 

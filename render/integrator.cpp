@@ -75,11 +75,19 @@ struct Tracer {
     // offset at every hit of the path, mapped to uv by that hit's differentials.
     float to_stratum_x = 0, to_stratum_y = 0;
 
-    Rgb escaped(const Vec3& dir) const {
+    // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
+    // over the ray differential's footprint when the ray carries one.
+    Rgb escaped(const Vec3& dir, const RayDifferential& diff) const {
         Rgb l{};
-        for (const Light& light : scene.lights)
-            if (light.type == Light::Type::Infinite)
-                l += light.env ? light.intensity * light.env->radiance(dir) : light.intensity;
+        for (const Light& light : scene.lights) {
+            if (light.type != Light::Type::Infinite) continue;
+            if (!light.env)
+                l += light.intensity;
+            else if (diff.valid && light.env_footprint)
+                l += light.intensity * light.env->radiance(dir, &diff.dddx, &diff.dddy);
+            else
+                l += light.intensity * light.env->radiance(dir);
+        }
         return l;
     }
 
@@ -203,7 +211,7 @@ struct Tracer {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             SurfaceHit h;
             if (!scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), &h))
-                return escaped(ray.dir);
+                return escaped(ray.dir, ray.diff);
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
             texture::RayTag t = tag;

@@ -131,8 +131,9 @@ struct Light {
     Vec3 direction{};  // distant: towards the light; spot: axis (from -> to)
     float cos_total = 0, cos_falloff_start = 0;
     std::shared_ptr<const EnvironmentMap> env;  // infinite: its map ("mapname"), times intensity
-    int prim = -1;           // area: the emitting primitive (index in Scene::primitives)
-    bool two_sided = false;  // area: emits on both sides (otherwise along its normal only)
+    bool env_footprint = false;  // escaping rays look the map up over their differentials
+    int prim = -1;               // area: the emitting primitive (index in Scene::primitives)
+    bool two_sided = false;      // area: emits on both sides (otherwise along its normal only)
 };
 
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).

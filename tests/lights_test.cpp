@@ -155,6 +155,35 @@ TEST(EnvironmentMap, ImportanceSamplingIsUnbiasedAndItsPdfIsConsistent) {
     EXPECT_NEAR(est, ref, 0.01 * ref);
 }
 
+TEST(EnvironmentMap, EscapingRaysFilterTheMapOverTheirDifferentials) {
+    // A checker of single texels: a point lookup at a texel's centre gives 0 or 1, a lookup over
+    // a footprint of about 8 x 8 texels its mean.
+    const std::string map =
+        write_map("checker.exr", 256, 128, [](int i, int j) { return Rgb(float((i + j) % 2)); });
+    auto s = test::scene_from(
+        camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""), "t.pbrt",
+        1);
+    ASSERT_TRUE(s->lights[0].env_footprint);
+    EXPECT_TRUE(s->needs_differentials);
+    const EnvironmentMap& env = *s->lights[0].env;
+    // phi at the centre of texel column 10, theta at the centre of row 64.
+    const float phi = 2 * kPi * 10.5f / 256, theta = kPi * 64.5f / 128;
+    const Vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    const float point = env.radiance(d).r;
+    EXPECT_TRUE(std::abs(point) < 1e-4f || std::abs(point - 1) < 1e-4f) << point;
+    const Vec3 dx = 0.2f * Vec3(-std::sin(phi), std::cos(phi), 0), dy(0, 0, -0.2f);
+    EXPECT_NEAR(env.radiance(d, &dx, &dy).r, 0.5f, 0.05f);
+    // --lod other than differentials point-samples the map, as pbrt-v3 does.
+    BuildOptions o;
+    o.lod = Lod::None;
+    auto p = render::build_scene(
+        pbrt::parse_string(
+            camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""),
+            "t.pbrt"),
+        o, {});
+    EXPECT_FALSE(p->lights[0].env_footprint);
+}
+
 TEST(EnvironmentMap, MissingMapIsALocatedError) {
     try {
         test::scene_from(
