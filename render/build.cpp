@@ -893,6 +893,7 @@ class Builder {
                                              0.5 * double(length(cross(b - a, c - a))));
                 }
             }
+            if (prim->kind == Primitive::Kind::Sphere) round_sphere(*prim);
             if (!l.intensity.is_black()) {
                 prim->area_light = static_cast<int>(m_scene->lights.size());
                 m_scene->lights.push_back(l);
@@ -923,6 +924,26 @@ class Builder {
         }
         p.phimax = finite_float(e, "phimax", 360);
         return p;
+    }
+
+    // A whole sphere whose transform is a rotation, reflection or uniform scale plus a
+    // translation stays a sphere: its centre and radius let area lights sample its cone.
+    static void round_sphere(Primitive& prim) {
+        if (prim.zmin > -prim.radius || prim.zmax < prim.radius ||
+            prim.phi_max < 2 * std::numbers::pi)
+            return;
+        const auto& m = prim.world_from_object;
+        double len2[3], dots[3];
+        for (int c = 0; c < 3; ++c) {
+            const int d = (c + 1) % 3;
+            len2[c] = m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c];
+            dots[c] = m[c] * m[d] + m[4 + c] * m[4 + d] + m[8 + c] * m[8 + d];
+        }
+        for (int c = 0; c < 3; ++c)
+            if (std::abs(len2[c] - len2[0]) > 1e-6 * len2[0] || std::abs(dots[c]) > 1e-6 * len2[0])
+                return;
+        prim.sphere_center = Vec3(float(m[3]), float(m[7]), float(m[11]));
+        prim.sphere_radius = float(prim.radius * std::sqrt(len2[0]));
     }
 
     // pbrt-v3's "diffuse" area light: radiance L (times scale) leaving the surface.

@@ -363,6 +363,33 @@ void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) co
     *pdf = float(1 / area_element);
 }
 
+bool Primitive::sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n,
+                            float* pdf) const {
+    const float R = sphere_radius;
+    if (!(R > 0)) return false;
+    const Vec3 to_c = sphere_center - ref;
+    const float d2 = dot(to_c, to_c);
+    if (!(d2 > R * R * 1.0001f)) return false;
+    const float dc = std::sqrt(d2);
+    // The cone's half-angle: sin^2 = R^2 / d^2; 1 - cos written as sin^2 / (1 + cos), which
+    // keeps its precision for small, distant spheres.
+    const float sin2_max = R * R / d2, cos_max = std::sqrt(std::max(0.0f, 1 - sin2_max));
+    const float one_minus_cos_max = sin2_max / (1 + cos_max);
+    const float cos_t = 1 - u1 * one_minus_cos_max;
+    const float sin2_t = std::max(0.0f, u1 * one_minus_cos_max * (1 + cos_t));
+    const float phi = 2 * kPi * u2;
+    const Frame f = Frame::from_z(to_c / dc);
+    const Vec3 wi = f.to_world(
+        Vec3(std::sqrt(sin2_t) * std::cos(phi), std::sqrt(sin2_t) * std::sin(phi), cos_t));
+    // The nearer intersection along wi: t = d cos - sqrt(R^2 - d^2 sin^2).
+    const float t = dc * cos_t - std::sqrt(std::max(0.0f, R * R - d2 * sin2_t));
+    *p = ref + wi * t;
+    const Vec3 out = normalize(*p - sphere_center);
+    *n = flip ? -out : out;
+    *pdf = 1 / (2 * kPi * one_minus_cos_max);
+    return true;
+}
+
 void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {

@@ -169,12 +169,14 @@ struct Tracer {
                     break;
                 }
                 case Light::Type::Area: {
-                    // One point uniform by area; its density converted to solid angle.
+                    // One point: in the cone a round sphere subtends, else uniform by area with
+                    // its density converted to solid angle.
                     const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
                     float u1 = rng.next_float(), u2 = rng.next_float(), pdf_area;
                     Vec3 p, n;
-                    prim.sample_area(u1, u2, &p, &n, &pdf_area);
-                    if (pdf_area == 0) continue;
+                    const bool cone = prim.sample_cone(h.p, u1, u2, &p, &n, &pdf);
+                    if (!cone) prim.sample_area(u1, u2, &p, &n, &pdf_area);
+                    if (!cone && pdf_area == 0) continue;
                     Vec3 d = p - h.p;
                     float d2 = dot(d, d);
                     if (d2 == 0) continue;
@@ -182,7 +184,7 @@ struct Tracer {
                     wi = d / dist;
                     float cos_l = dot(n, -wi);
                     if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
-                    pdf = pdf_area * d2 / std::abs(cos_l);
+                    if (!cone) pdf = pdf_area * d2 / std::abs(cos_l);
                     target = p;
                     li = light.intensity;
                     break;

@@ -156,9 +156,18 @@ struct Primitive {
     int area_light = -1;
     std::vector<double> area_cdf;
 
+    // A whole sphere under a transform that keeps it round: its world centre and radius
+    // (0: not such a sphere), for sampling the cone it subtends.
+    Vec3 sphere_center{};
+    float sphere_radius = 0;
+
     /// A point on the surface, uniform by area, from uniform numbers in [0,1): its position,
     /// oriented geometric normal and density with respect to area (0 when none).
     void sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
+    /// For a point `ref` outside a whole round sphere: a point on it seen from `ref`, uniform in
+    /// the cone of directions the sphere subtends, with its density with respect to solid angle.
+    /// False (nothing sampled) for other shapes and for points inside.
+    bool sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
 };
 
 /// A surface hit, in world space, oriented as pbrt-v3 orients it.

@@ -248,13 +248,22 @@ TEST(AreaLight, DiskAndSphereLightsUnderTransforms) {
     const double Ed = std::numbers::pi * 3 * 0.25 / (1 + 0.25);
     EXPECT_NEAR(mean_radiance(*disk, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 20000),
                 0.5 / std::numbers::pi * Ed, 0.005 * 0.5 / std::numbers::pi * Ed);
-    // A sphere of radius 0.5 centred 2 above: E = pi L (r / d)^2 (half its samples are on its
-    // far side and shadowed by itself).
+    // A sphere of radius 0.25 scaled by 2, centred 2 above: E = pi L (r / d)^2. A round sphere
+    // is sampled in the cone it subtends (almost no variance); the same sphere cut at its poles
+    // by zmin and zmax = +-0.2499 is sampled by area (half the samples on its far side).
     auto sphere = test::scene_from(camera_and_plane(
-        "AttributeBegin Translate 0 0 2 AreaLightSource \"diffuse\" \"rgb L\" [4 4 4] "
-        "Shape \"sphere\" \"float radius\" 0.5 AttributeEnd"));
+        "AttributeBegin Translate 0 0 2 Scale 2 2 2 AreaLightSource \"diffuse\" \"rgb L\" "
+        "[4 4 4] Shape \"sphere\" \"float radius\" 0.25 AttributeEnd"));
+    EXPECT_FLOAT_EQ(sphere->primitives[0]->sphere_radius, 0.5f);
     const double Es = std::numbers::pi * 4 * 0.0625;
-    EXPECT_NEAR(mean_radiance(*sphere, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 40000),
+    EXPECT_NEAR(mean_radiance(*sphere, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 2000),
+                0.5 / std::numbers::pi * Es, 0.001 * 0.5 / std::numbers::pi * Es);
+    auto cut = test::scene_from(camera_and_plane(
+        "AttributeBegin Translate 0 0 2 Scale 2 2 2 AreaLightSource \"diffuse\" \"rgb L\" "
+        "[4 4 4] Shape \"sphere\" \"float radius\" 0.25 \"float zmin\" -0.2499 "
+        "\"float zmax\" 0.2499 AttributeEnd"));
+    EXPECT_EQ(cut->primitives[0]->sphere_radius, 0);
+    EXPECT_NEAR(mean_radiance(*cut, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 40000),
                 0.5 / std::numbers::pi * Es, 0.01 * 0.5 / std::numbers::pi * Es);
 }
 
