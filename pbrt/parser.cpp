@@ -197,6 +197,18 @@ class Parser {
     void warn(const FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(format_warning(loc, msg));
     }
+    // A "mix" material's two named materials, resolved where it is declared (as pbrt-v3 does).
+    void resolve_mix(MaterialDesc& m) {
+        if (m.entity.type != "mix") return;
+        for (int k = 0; k < 2; ++k) {
+            const std::string param = "namedmaterial" + std::to_string(k + 1);
+            const Param* p = m.entity.params.find(param);
+            if (!p) continue;  // the builder reports it
+            const std::string name = m.entity.params.get_string(param, "");
+            auto it = m_names.materials.find(name);
+            if (it != m_names.materials.end()) m.mix[k] = it->second;
+        }
+    }
     // AttributeEnd or ObjectEnd: the state and the names as the innermost block found them.
     void restore_attributes() {
         m_gs = m_stack.back().saved;
@@ -502,6 +514,7 @@ class Parser {
             MaterialDesc m;
             m.entity = entity(dir);
             m.scope = m_names.scope_for(m.entity.params);
+            resolve_mix(m);
             m_gs.material = static_cast<int>(m_desc.materials.size());
             m_desc.materials.push_back(std::move(m));
         } else if (d == "MakeNamedMaterial") {
@@ -517,6 +530,7 @@ class Parser {
                                               " needs a \"string type\" parameter");
             m.entity.type = m.entity.params.get_string("type", "");
             m.scope = m_names.scope_for(m.entity.params);
+            resolve_mix(m);
             if (m_names.bind(m_names.materials, m.name, static_cast<int>(m_desc.materials.size()),
                              !m_stack.empty()))
                 warn(dir.loc, "named material " + q(m.name) + " redefined");

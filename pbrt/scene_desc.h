@@ -41,6 +41,9 @@ struct MaterialDesc {
     Entity entity;       // entity.type is the material type ("matte", ...)
     TextureScope scope;  // the textures its parameters name, as visible when it was declared
     std::string name;    // for MakeNamedMaterial
+    // "mix": the materials "namedmaterial1" and "namedmaterial2" name, as visible when it was
+    // declared (indices into SceneDesc::materials; -1 when not defined there).
+    int mix[2] = {-1, -1};
 };
 
 struct ShapeDesc {

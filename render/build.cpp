@@ -704,6 +704,19 @@ class Builder {
             m.remap_roughness = e.params.get_bool("remaproughness", true);
         } else if (t == "none" || t.empty()) {
             m.type = Material::Type::None;
+        } else if (t == "mix") {
+            m.type = Material::Type::Mix;
+            m.amount = spectrum_input(e, s, "amount", Rgb(0.5f));
+            for (int k = 0; k < 2; ++k) {
+                const std::string param = "namedmaterial" + std::to_string(k + 1);
+                const auto* p = e.params.find(param);
+                if (!p) throw SceneError(e.loc, "mix needs a \"string " + param + "\" parameter");
+                const std::string name = e.params.get_string(param, "");
+                m.mix[k] = d.mix[k];
+                if (d.mix[k] < 0)
+                    warn(p->loc, "named material " + q(name) +
+                                     " is not defined here; the default matte is used in the mix");
+            }
         } else {
             // pbrt-v3 renders a material it does not know as matte, with a warning; so does
             // cmam with the ones it does not render (subsurface scattering, Fourier BSDFs, hair).
@@ -711,7 +724,7 @@ class Builder {
             m.kd = spectrum_input(e, s, "Kd", Rgb(0.5f));
             warn(e.loc, "material " + q(t) + " is rendered as \"matte\"" +
                             (e.params.find("Kd") ? " with its Kd" : "") +
-                            " (cmam renders matte, mirror, glass, plastic, uber, metal, and "
+                            " (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
                             "substrate and translucent as plastic)");
             return m;  // its other parameters are not read: no warning for each
         }

@@ -201,6 +201,28 @@ struct Tracer {
         return L;
     }
 
+    // A "mix" material is one of its two materials, chosen per shading point with probability
+    // p = the amount's mean for the first, and weighted by amount / p or (1 - amount) / (1 - p)
+    // per channel: in expectation pbrt-v3's amount x first + (1 - amount) x second, for every
+    // lobe, specular ones included. The weight is applied to the BSDF make_bsdf builds.
+    Rgb mix_weight{1, 1, 1};
+    const Material& pick_mixed(const Material& m, const TexContext& ctx) {
+        mix_weight = Rgb(1);
+        const Material* cur = &m;
+        for (int k = 0; k < 16 && cur->type == Material::Type::Mix; ++k) {
+            Rgb a = eval_texture(scene, cur->amount, ctx);
+            a = Rgb(std::clamp(a.r, 0.0f, 1.0f), std::clamp(a.g, 0.0f, 1.0f),
+                    std::clamp(a.b, 0.0f, 1.0f));
+            const float p = (a.r + a.g + a.b) / 3;
+            const bool first = rng.next_float() < p;
+            mix_weight = mix_weight * (first ? a / p : (Rgb(1) - a) / (1 - p));
+            const int next = cur->mix[first ? 0 : 1];
+            cur = next >= 0 ? &scene.materials[static_cast<std::size_t>(next)]
+                            : &scene.default_material;
+        }
+        return *cur;
+    }
+
     /// A ray with the footprint state it carries.
     struct Ray {
         Vec3 org, dir;
@@ -251,7 +273,7 @@ struct Tracer {
             }
             Bsdf bsdf;
             Vec3 wo = -ray.dir;
-            if (!make_bsdf(scene, m, h, ctx, &bsdf)) {
+            if (!make_bsdf(scene, pick_mixed(m, ctx), h, ctx, &bsdf)) {
                 // Continue through: the footprint state moves to the hit point.
                 ray.org = offset_origin(h, ray.dir);
                 ray.diff.dodx = hd.dpdx;
@@ -259,6 +281,12 @@ struct Tracer {
                 ray.diff.valid = hd.valid;
                 ray.cone.width = cone_width_at(ray.cone, h.t);
                 continue;
+            }
+            if (m.type == Material::Type::Mix) {
+                bsdf.kd = bsdf.kd * mix_weight;
+                bsdf.ks = bsdf.ks * mix_weight;
+                bsdf.kr = bsdf.kr * mix_weight;
+                bsdf.kt = bsdf.kt * mix_weight;
             }
             if (aov) record_aov(ctx, h, bsdf);
             Rgb L = emitted(h, wo);

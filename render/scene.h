@@ -116,10 +116,14 @@ struct TextureNode {
 };
 
 struct Material {
-    enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, None };
+    enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, None, Mix };
     Type type = Type::Matte;
     TexInput kd{-1, Rgb(0.5f)}, ks, kr, kt, sigma, roughness, eta;
     TexInput k;  // metal: the conductor's absorption (eta is its index of refraction)
+    // Mix: pbrt-v3's blend, amount x the first material + (1 - amount) x the second (indices
+    // into Scene::materials; -1 is the default matte).
+    int mix[2] = {-1, -1};
+    TexInput amount;
     bool remap_roughness = true;
 };
 

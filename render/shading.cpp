@@ -430,6 +430,7 @@ bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, con
             break;
         }
         case Material::Type::None:
+        case Material::Type::Mix:  // the integrator picks one of its materials first
             return false;
     }
     return true;

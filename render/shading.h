@@ -118,7 +118,8 @@ struct Bsdf {
     Rgb f(const Vec3& wo, const Vec3& wi) const;
 };
 
-/// Builds the BSDF of `material` at `hit`; returns false for material "none".
+/// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose
+/// materials the integrator chooses between).
 bool make_bsdf(const Scene& scene, const Material& material, const SurfaceHit& hit,
                const TexContext& ctx, Bsdf* bsdf);
 
