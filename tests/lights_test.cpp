@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -275,4 +276,34 @@ TEST(AreaLight, InstancedShapesDoNotEmitWithAWarning) {
         "t.pbrt", [&](const std::string& w) { warnings.push_back(w); });
     ASSERT_FALSE(warnings.empty());
     EXPECT_NE(warnings[0].find("object"), std::string::npos) << warnings[0];
+}
+
+TEST(AreaLight, ImagesWithTheNewLightsMaterialsAndTexturesAreTheSameForAnyThreadCount) {
+    const std::string map = write_map("det.exr", 16, 8, [](int i, int j) {
+        return Rgb(float(i % 3) * 0.3f, float(j % 2), 0.5f);
+    });
+    auto s = test::scene_from(
+        "LookAt 0 -4 3  0 0 0  0 0 1 Camera \"perspective\" \"float fov\" 50 "
+        "Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 24 WorldBegin "
+        "LightSource \"infinite\" \"string mapname\" \"" +
+            map +
+            "\" AttributeBegin Translate 0 0 2 AreaLightSource \"diffuse\" \"rgb L\" [3 3 3] "
+            "Shape \"sphere\" \"float radius\" 0.3 AttributeEnd "
+            "Texture \"n\" \"spectrum\" \"fbm\" "
+            "MakeNamedMaterial \"a\" \"string type\" \"matte\" \"texture Kd\" \"n\" "
+            "MakeNamedMaterial \"b\" \"string type\" \"mirror\" "
+            "MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string namedmaterial1\" \"a\" "
+            "\"string namedmaterial2\" \"b\" NamedMaterial \"m\" "
+            "Shape \"trianglemesh\" \"point3 P\" [-5 -5 0  5 -5 0  5 5 0  -5 5 0] "
+            "\"integer indices\" [0 1 2 0 2 3] Shape \"cylinder\" \"float radius\" 0.5 WorldEnd",
+        "t.pbrt", 4);
+    RenderOptions one, two;
+    one.threads = 1;
+    two.threads = 2;
+    const Framebuffer a = render::render(*s, one, nullptr), b = render::render(*s, two, nullptr);
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(0, std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)));
+    double sum = 0;
+    for (float x : a.rgb) sum += x;
+    EXPECT_GT(sum, 0);
 }
