@@ -169,11 +169,13 @@ class Builder {
     void camera() {
         const Entity& e = m_desc.camera;
         if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
-        if (e.type != "perspective" && e.type != "orthographic")
+        if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment")
             throw SceneError(e.loc, "unsupported Camera " + q(e.type) +
-                                        " (supported: \"perspective\", \"orthographic\")");
+                                        " (supported: \"perspective\", \"orthographic\", "
+                                        "\"environment\")");
         Camera& c = m_scene->camera;
         c.orthographic = e.type == "orthographic";
+        c.environment = e.type == "environment";
         c.xres = m_scene->film.xres;
         c.yres = m_scene->film.yres;
         double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
@@ -221,7 +223,7 @@ class Builder {
         auto m = to34(wc);
         for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
         check_camera_rays(c, e.loc);
-        e.params.check_unused("Camera \"perspective\"", m_warn,
+        e.params.check_unused("Camera " + q(e.type), m_warn,
                               {"focaldistance", "shutteropen", "shutterclose"});
     }
 
@@ -1116,17 +1118,26 @@ std::string_view to_string(TagPolicy p) {
 }
 
 void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
+    const auto& m = world_from_camera;
+    if (environment) {
+        const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;
+        const Vec3 d(std::sin(theta) * std::cos(phi), std::cos(theta),
+                     std::sin(theta) * std::sin(phi));
+        *org = Vec3(m[3], m[7], m[11]);
+        *dir = normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
+                              m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                              m[8] * d.x + m[9] * d.y + m[10] * d.z));
+        return;
+    }
     float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
     if (orthographic) {
-        const auto& m = world_from_camera;
         *org = Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7],
                     m[8] * sx + m[9] * sy + m[11]);
         *dir = normalize(Vec3(m[2], m[6], m[10]));
         return;
     }
     Vec3 d(sx * tan_half_fov, sy * tan_half_fov, 1);
-    const auto& m = world_from_camera;
     *org = Vec3(m[3], m[7], m[11]);
     *dir =
         normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,

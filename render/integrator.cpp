@@ -395,6 +395,20 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
+// The environment camera's ray differential: the rays one pixel right and down, differenced
+// (pbrt-v3's default for cameras without a closed form), scaled by `scale`.
+RayDifferential environment_differential(const Camera& c, float px, float py, const Vec3& dir,
+                                         float scale) {
+    RayDifferential rd;
+    Vec3 org, dx, dy;
+    c.generate_ray(px + 1, py, &org, &dx);
+    c.generate_ray(px, py + 1, &org, &dy);
+    rd.valid = true;
+    rd.dddx = (dx - dir) * scale;
+    rd.dddy = (dy - dir) * scale;
+    return rd;
+}
+
 struct CameraSample {
     Vec3 org, dir;
     RayDifferential diff;
@@ -431,7 +445,12 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     const SamplerSettings& smp = scene.sampler;
     const int nx = smp.xsamples, ny = smp.ysamples, spp = nx * ny;
     const float footprint_scale = 1 / std::sqrt(float(spp));  // pbrt-v3: differentials / sqrt(spp)
-    const RayCone camera_spread = camera_cone(scene.camera, footprint_scale);
+    // The environment camera's pixel spans 2 pi / xres by pi / yres radians.
+    const RayCone camera_spread =
+        scene.camera.environment
+            ? RayCone{0, std::min(2 * kPi / scene.camera.xres, kPi / scene.camera.yres) *
+                             footprint_scale}
+            : camera_cone(scene.camera, footprint_scale);
     if (options.aov == AovKind::Footprint) fb.channel_names = {"major", "minor", "lambda"};
 
     std::unique_ptr<tbb::global_control> limit;
@@ -474,7 +493,10 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
             CameraSample cs;
             scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
             if (scene.needs_differentials)
-                cs.diff = camera_differential(scene.camera, fx, fy, footprint_scale);
+                cs.diff =
+                    scene.camera.environment
+                        ? environment_differential(scene.camera, fx, fy, cs.dir, footprint_scale)
+                        : camera_differential(scene.camera, fx, fy, footprint_scale);
             cs.cone = camera_spread;
             cs.to_stratum_x = 0.5f - j[0];
             cs.to_stratum_y = 0.5f - j[1];

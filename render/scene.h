@@ -23,11 +23,14 @@
 
 namespace cmam::render {
 
-/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), or
-/// its orthographic camera (the screen window is the view in camera units, rays along +z).
+/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), its
+/// orthographic camera (the screen window is the view in camera units, rays along +z), or its
+/// environment camera (the whole sphere in lat-long: theta = pi y / yres from camera +y,
+/// phi = 2 pi x / xres from +x towards +z).
 struct Camera {
     std::array<float, 12> world_from_camera{};  // 3x4
     bool orthographic = false;
+    bool environment = false;
     float tan_half_fov = 1;            // perspective; 1 for orthographic
     float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
     int xres = 640, yres = 480;

@@ -307,3 +307,23 @@ TEST(AreaLight, ImagesWithTheNewLightsMaterialsAndTexturesAreTheSameForAnyThread
     for (float x : a.rgb) sum += x;
     EXPECT_GT(sum, 0);
 }
+
+TEST(EnvironmentCamera, LatLongDirectionsAsPbrtV3) {
+    // Identity camera transform: theta from camera +y (the top row), phi from +x towards +z.
+    auto s = test::scene_from(
+        "Camera \"environment\" Film \"image\" \"integer xresolution\" 40 "
+        "\"integer yresolution\" 20 WorldBegin LightSource \"infinite\" Shape \"sphere\" "
+        "\"float radius\" 5 WorldEnd",
+        "t.pbrt", 1);
+    ASSERT_TRUE(s->camera.environment);
+    Vec3 o, d;
+    s->camera.generate_ray(0, 10, &o, &d);  // theta = pi/2, phi = 0
+    EXPECT_NEAR(d.x, 1, 1e-5f);
+    s->camera.generate_ray(10, 10, &o, &d);  // phi = pi/2: +z
+    EXPECT_NEAR(d.z, 1, 1e-5f);
+    s->camera.generate_ray(7, 0, &o, &d);  // the top row looks along +y
+    EXPECT_NEAR(d.y, 1, 1e-5f);
+    // Rendering from inside a sphere: every pixel sees it, lit by the sky.
+    const Framebuffer fb = render::render(*s, {}, nullptr);
+    for (std::size_t i = 0; i < fb.rgb.size(); ++i) ASSERT_TRUE(std::isfinite(fb.rgb[i]));
+}
