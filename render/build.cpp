@@ -988,16 +988,21 @@ class Builder {
 
     // pbrt-v3's infinite light image: a lat-long map in the light's frame, read as its imagemap
     // reads images (8-bit files decoded from sRGB); theta = 0 is the file's top row.
-    std::shared_ptr<const EnvironmentMap> environment_map(const Entity& e, const pbrt::Param& p,
-                                                          const Mat4& world_from_light) {
+    // A light's "mapname" image, read as pbrt-v3 reads light images (8-bit files decoded from
+    // sRGB).
+    std::shared_ptr<const texture::FilteredTexture> light_image(const Entity& e,
+                                                                const pbrt::Param& p) {
         const std::string path =
             pbrt::resolve_path(m_desc.base_dir, p.loc, e.params.get_string("mapname", ""));
-        texture::Image level0;
         try {
-            level0 = load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat);
+            return std::make_shared<const texture::FilteredTexture>(
+                load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat));
         } catch (const ImageIoError& err) {
             throw SceneError(p.loc, err.what());
         }
+    }
+    // The linear part of the light's transform's inverse (directions from world to light).
+    static std::array<float, 9> light_from_world(const Entity& e, const Mat4& world_from_light) {
         Mat4 inv;
         try {
             inv = world_from_light.inverse();
@@ -1007,8 +1012,13 @@ class Builder {
         std::array<float, 9> lw{};
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) lw[3 * i + j] = float(inv.m[i][j]);
-        auto env = std::make_shared<EnvironmentMap>(
-            std::make_unique<texture::FilteredTexture>(std::move(level0)), lw);
+        return lw;
+    }
+
+    std::shared_ptr<const EnvironmentMap> environment_map(const Entity& e, const pbrt::Param& p,
+                                                          const Mat4& world_from_light) {
+        auto env = std::make_shared<EnvironmentMap>(light_image(e, p),
+                                                    light_from_world(e, world_from_light));
         if (m_opts.filter) env->set_filter({*m_opts.filter});
         return env;
     }
@@ -1071,14 +1081,43 @@ class Builder {
             }
             e.params.get_int("samples",
                              1);  // pbrt-v3's sample count hint; one sample per lookup here
+        } else if (e.type == "goniometric" || e.type == "projection") {
+            // A point light at the light's origin whose intensity follows an image.
+            l.type = e.type == "goniometric" ? Light::Type::Goniometric : Light::Type::Projection;
+            l.intensity = intensity("I");
+            l.position = to_vec(m.apply_point({0, 0, 0}));
+            auto img = std::make_shared<LightImage>();
+            img->kind = e.type == "goniometric" ? LightImage::Kind::Goniometric
+                                                : LightImage::Kind::Projection;
+            img->light_from_world = light_from_world(e, m);
+            if (e.type == "projection") {
+                const double fov = finite_float(e, "fov", 45);
+                if (!(fov > 0 && fov < 180))
+                    throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
+                img->tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
+            }
+            if (const auto* mp = e.params.find("mapname")) {
+                img->image = light_image(e, *mp);
+                const auto& im = img->image->image();
+                const float aspect = float(im.width()) / float(im.height());
+                if (aspect > 1) {
+                    img->screen[0] = -aspect, img->screen[1] = aspect;
+                } else {
+                    img->screen[2] = -1 / aspect, img->screen[3] = 1 / aspect;
+                }
+                l.image = img;
+            } else if (e.type == "projection") {
+                l.image = img;  // without an image: 1 inside the square screen's frustum
+            }
         } else {
-            throw SceneError(e.loc,
-                             "unsupported light " + q(e.type) +
-                                 " (supported: \"point\", \"spot\", \"distant\", \"infinite\")");
+            throw SceneError(e.loc, "unsupported light " + q(e.type) +
+                                        " (supported: \"point\", \"spot\", \"distant\", "
+                                        "\"infinite\", \"goniometric\", \"projection\")");
         }
         // pbrt-v3's sample counts: a delta light needs one shadow ray, and the infinite light
         // is sampled once per shading point here.
-        e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta"});
+        // (pbrt-v3's goniometric light has no fov, but scenes give it; pbrt-v3 warns too.)
+        e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta", "fov"});
         m_scene->lights.push_back(l);
     }
 };

@@ -84,7 +84,7 @@ std::array<float, 9> inverse3(const std::array<float, 9>& m) {
 
 }  // namespace
 
-EnvironmentMap::EnvironmentMap(std::unique_ptr<texture::FilteredTexture> image,
+EnvironmentMap::EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> image,
                                const std::array<float, 9>& light_from_world)
     : m_image(std::move(image)),
       m_light_from_world(light_from_world),
@@ -186,6 +186,28 @@ float EnvironmentMap::pdf(const Vec3& dir) const {
     float phi = std::atan2(w.y, w.x);
     if (phi < 0) phi += 2 * kPi;
     return m_dist.pdf(phi / (2 * kPi), theta / kPi) / (2 * kPi * kPi * sin_theta);
+}
+
+Rgb LightImage::scale(const Vec3& w) const {
+    Vec3 q = transform3(light_from_world, w);
+    float s, t;  // from the file's top-left corner
+    if (kind == Kind::Goniometric) {
+        q = normalize(Vec3(q.x, q.z, q.y));
+        float phi = std::atan2(q.y, q.x);
+        if (phi < 0) phi += 2 * kPi;
+        s = phi / (2 * kPi);
+        t = std::acos(std::clamp(q.z, -1.0f, 1.0f)) / kPi;
+    } else {
+        constexpr float kHither = 1e-3f;
+        if (!(q.z >= kHither)) return {};
+        const float x = q.x / (q.z * tan_half_fov), y = q.y / (q.z * tan_half_fov);
+        if (x < screen[0] || x > screen[1] || y < screen[2] || y > screen[3]) return {};
+        s = (x - screen[0]) / (screen[1] - screen[0]);
+        t = (y - screen[2]) / (screen[3] - screen[2]);
+    }
+    const texture::Texel x = texture::bilinear(image->image(), s, 1.0 - t);
+    if (image->image().channels() == 1) return Rgb(x[0]);
+    return {x[0], x[1], x[2]};
 }
 
 }  // namespace cmam::render

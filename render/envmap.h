@@ -53,7 +53,7 @@ class EnvironmentMap {
   public:
     /// `image` is stored as load_texture() returns it (row 0 is the file's bottom row);
     /// `light_from_world` is the light's transform's inverse (3x3, row-major).
-    EnvironmentMap(std::unique_ptr<texture::FilteredTexture> image,
+    EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> image,
                    const std::array<float, 9>& light_from_world);
 
     /// Radiance the map shows along world direction `dir`: bilinear at full resolution (pbrt-v3's
@@ -70,11 +70,29 @@ class EnvironmentMap {
     const texture::FilteredTexture& image() const { return *m_image; }
 
   private:
-    std::unique_ptr<texture::FilteredTexture> m_image;
+    std::shared_ptr<const texture::FilteredTexture> m_image;
     std::array<float, 9> m_light_from_world, m_world_from_light;
     Distribution2D m_dist;
     texture::FilterOptions m_filter{texture::FilterKind::Ewa};
     Rgb at(float s, float theta_over_pi) const;
+};
+
+/// The image of pbrt-v3's goniometric or projection light: a point light whose intensity in
+/// direction w (away from the light) is multiplied by the image (bilinear at full resolution, as
+/// pbrt-v3 looks it up).
+struct LightImage {
+    enum class Kind { Goniometric, Projection };
+    Kind kind = Kind::Goniometric;
+    std::shared_ptr<const texture::FilteredTexture> image;  // as load_texture() returns it
+    std::array<float, 9> light_from_world{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    // Projection: tan(fov / 2) and the screen window [x0, x1] x [y0, y1] (the image's aspect).
+    float tan_half_fov = 1;
+    float screen[4] = {-1, 1, -1, 1};
+
+    /// Goniometric: the image in lat-long about the light's y axis (pbrt-v3 swaps y and z, then
+    /// u = phi / 2 pi, v = theta / pi from the file's top). Projection: the image on the
+    /// light's screen, a pinhole looking along +z; black outside it and behind the light.
+    Rgb scale(const Vec3& w) const;
 };
 
 }  // namespace cmam::render

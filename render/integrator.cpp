@@ -127,12 +127,15 @@ struct Tracer {
             Vec3 target;  // area lights: the point sampled on the light
             switch (light.type) {
                 case Light::Type::Point:
-                case Light::Type::Spot: {
+                case Light::Type::Spot:
+                case Light::Type::Goniometric:
+                case Light::Type::Projection: {
                     Vec3 d = light.position - h.p;
                     float d2 = dot(d, d);
                     dist = std::sqrt(d2);
                     wi = d / dist;
                     li = light.intensity / d2;
+                    if (light.image) li = li * light.image->scale(-wi);
                     if (light.type == Light::Type::Spot) {
                         float c = dot(-wi, light.direction);
                         if (c < light.cos_total) continue;

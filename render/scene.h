@@ -131,7 +131,7 @@ struct Material {
 };
 
 struct Light {
-    enum class Type { Point, Spot, Distant, Infinite, Area };
+    enum class Type { Point, Spot, Distant, Infinite, Area, Goniometric, Projection };
     Type type = Type::Point;
     Rgb intensity{};   // I for point/spot, L for distant/infinite/area (scale applied)
     Vec3 position{};   // point, spot
@@ -141,6 +141,7 @@ struct Light {
     bool env_footprint = false;  // escaping rays look the map up over their differentials
     int prim = -1;               // area: the emitting primitive (index in Scene::primitives)
     bool two_sided = false;      // area: emits on both sides (otherwise along its normal only)
+    std::shared_ptr<const LightImage> image;  // goniometric, projection: I times the image
 };
 
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).

@@ -327,3 +327,30 @@ TEST(EnvironmentCamera, LatLongDirectionsAsPbrtV3) {
     const Framebuffer fb = render::render(*s, {}, nullptr);
     for (std::size_t i = 0; i < fb.rgb.size(); ++i) ASSERT_TRUE(std::isfinite(fb.rgb[i]));
 }
+
+TEST(LightImage, GoniometricAndProjectionFollowPbrtV3) {
+    // Goniometric: the file's top rows are the light's +y (pbrt-v3 swaps y and z, then theta).
+    const std::string gmap =
+        write_map("gonio.exr", 16, 8, [](int, int j) { return Rgb(j < 4 ? 1.0f : 0.0f); });
+    auto g = test::scene_from(camera_and_plane(
+        "AttributeBegin Translate 0 0 5 LightSource \"goniometric\" \"rgb I\" [2 2 2] "
+        "\"string mapname\" \"" +
+        gmap + "\" AttributeEnd"));
+    const Light& gl = g->lights[0];
+    ASSERT_TRUE(gl.image);
+    EXPECT_EQ(gl.position.z, 5);
+    // theta = pi/4 from +y reads between rows 1 and 2, 3 pi/4 between rows 5 and 6.
+    EXPECT_NEAR(gl.image->scale(normalize(Vec3(1, 1, 0))).r, 1, 1e-6f);
+    EXPECT_NEAR(gl.image->scale(normalize(Vec3(0, -1, 1))).r, 0, 1e-6f);
+    // Projection: the image on the screen of a pinhole along +z, x in [-aspect, aspect].
+    const std::string pmap = write_map(
+        "proj.exr", 2, 1, [](int i, int) { return i == 0 ? Rgb(1, 0, 0) : Rgb(0, 0, 1); });
+    auto p = test::scene_from(camera_and_plane(
+        "LightSource \"projection\" \"float fov\" 90 \"string mapname\" \"" + pmap + "\""));
+    const LightImage& pi = *p->lights[0].image;
+    EXPECT_NEAR(pi.scale(normalize(Vec3(-1, 0, 1))).r, 1, 1e-6f);   // left texel's centre: red
+    EXPECT_NEAR(pi.scale(normalize(Vec3(1, 0, 1))).b, 1, 1e-6f);    // right one's: blue
+    EXPECT_TRUE(pi.scale(Vec3(0, 0, -1)).is_black());               // behind
+    EXPECT_TRUE(pi.scale(normalize(Vec3(3, 0, 1))).is_black());     // beside the screen
+    EXPECT_TRUE(pi.scale(normalize(Vec3(0, 1.5f, 1))).is_black());  // above it
+}
