@@ -164,6 +164,9 @@ class Parser {
         const std::string path = resolve_path(m_desc.base_dir, p.loc, p.strings[0]);
         if (std::string why = not_a_regular_file(path); !why.empty())
             throw SceneError(p.loc, "cannot read spectrum file " + q(path) + ": " + why);
+        if (std::error_code ec; !std::filesystem::exists(path, ec))
+            throw SceneError(p.loc, "cannot read spectrum file " + q(path) +
+                                        ": file not found (named by spectrum " + q(p.name) + ")");
         std::ifstream in(path);
         if (!in)
             throw SceneError(p.loc, "cannot read spectrum file " + q(path) +

@@ -246,6 +246,10 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
         EXPECT_NE(std::string(e.what()).find(":5:18: error: cannot read spectrum file"),
                   std::string::npos)
             << e.what();
+        EXPECT_NE(std::string(e.what()).find("missing.spd\": file not found (named by spectrum "
+                                             "\"Kd\")"),
+                  std::string::npos)
+            << e.what();
     }
     std::ofstream(dir / "main.pbrt")
         << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
