@@ -9,12 +9,14 @@ namespace cmam::render {
 
 Distribution1D::Distribution1D(std::vector<float> weights) : m_func(std::move(weights)) {
     const std::size_t n = m_func.size();
-    m_cdf.assign(n + 1, 0.0);
+    std::vector<double> sums(n + 1, 0.0);
     for (std::size_t i = 0; i < n; ++i)
-        m_cdf[i + 1] = m_cdf[i] + double(std::max(0.0f, m_func[i])) / double(n);
-    m_integral = n ? m_cdf[n] : 0.0;
-    for (std::size_t i = 1; i <= n; ++i)
-        m_cdf[i] = m_integral > 0 ? m_cdf[i] / m_integral : double(i) / double(n);
+        sums[i + 1] = sums[i] + double(std::max(0.0f, m_func[i])) / double(n);
+    m_integral = sums[n];
+    m_cdf.resize(n + 1);
+    for (std::size_t i = 0; i <= n; ++i)
+        m_cdf[i] = float(m_integral > 0 ? sums[i] / m_integral : double(i) / double(n));
+    if (n) m_cdf[n] = 1;
 }
 
 float Distribution1D::pdf(int cell) const {
@@ -25,10 +27,10 @@ float Distribution1D::pdf(int cell) const {
 float Distribution1D::sample(float u, float* pdf_out, int* cell) const {
     // The last cell whose cdf start is at or below u (cells of zero weight are never chosen:
     // their start equals the next cell's).
-    const auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), double(u));
+    const auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), u);
     const int n = size();
     const int k = std::clamp(static_cast<int>(it - m_cdf.begin()) - 1, 0, n - 1);
-    const double width = m_cdf[k + 1] - m_cdf[k];
+    const double width = double(m_cdf[k + 1]) - m_cdf[k];
     const double t = width > 0 ? (double(u) - m_cdf[k]) / width : 0.5;
     *cell = k;
     *pdf_out = pdf(k);

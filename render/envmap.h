@@ -27,7 +27,7 @@ class Distribution1D {
 
   private:
     std::vector<float> m_func;
-    std::vector<double> m_cdf;  // size() + 1 entries, from 0 to 1
+    std::vector<float> m_cdf;  // size() + 1 entries, from 0 to 1 (summed in double)
     double m_integral = 0;
 };
 
