@@ -556,6 +556,7 @@ class Parser {
             s.reverse_orientation = m_gs.reverse_orientation;
             s.material = m_gs.material;
             s.area_light = m_gs.area_light;
+            s.scope = m_names.scope_for(s.entity.params);
             if (m_in_object && s.area_light >= 0) {
                 warn(dir.loc,
                      "this shape is inside an object definition: pbrt-v3 does not make instanced "

@@ -52,6 +52,7 @@ struct ShapeDesc {
     bool reverse_orientation = false;
     int material = -1;    // index into SceneDesc::materials; -1 is the default matte
     int area_light = -1;  // index into SceneDesc::area_lights; -1: the shape does not emit
+    TextureScope scope;   // the textures its parameters name ("alpha"), as visible there
 };
 
 struct LightDesc {

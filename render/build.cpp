@@ -778,6 +778,11 @@ class Builder {
         } else if (e.type == "trianglemesh" || e.type == "plymesh" || e.type == "loopsubdiv" ||
                    is_tessellated_quadric(e.type)) {
             prim->kind = Primitive::Kind::Triangles;
+            // pbrt-v3's cut-out masks (float textures or constants), read before the
+            // parameters are checked.
+            if (e.params.find("alpha")) prim->alpha = float_input(e, s.scope, "alpha", 1);
+            if (e.params.find("shadowalpha"))
+                prim->shadow_alpha = float_input(e, s.scope, "shadowalpha", 1);
             std::vector<float> P, N, UV;
             std::vector<int> idx;
             if (is_tessellated_quadric(e.type)) {

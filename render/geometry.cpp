@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "render/scene.h"
+#include "render/shading.h"
 
 namespace cmam::render {
 
@@ -143,6 +144,22 @@ void quadric_occluded(const RTCOccludedFunctionNArguments* args) {
     }
 }
 
+void alpha_filter(const RTCFilterFunctionNArguments* args, bool shadow) {
+    const auto* prim = static_cast<const Primitive*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        if (prim->cut_out(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
+                          RTCHitN_v(args->hit, args->N, i), shadow))
+            args->valid[i] = 0;  // not there: Embree goes on to the next hit
+    }
+}
+void alpha_intersect_filter(const RTCFilterFunctionNArguments* args) {
+    alpha_filter(args, false);
+}
+void alpha_occluded_filter(const RTCFilterFunctionNArguments* args) {
+    alpha_filter(args, true);
+}
+
 void embree_error(void*, RTCError code, const char* str) {
     throw std::runtime_error(std::string("Embree error ") + std::to_string(code) + ": " +
                              (str ? str : ""));
@@ -185,6 +202,12 @@ void Scene::commit() {
                 rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                         3 * sizeof(uint32_t), prim.indices.size() / 3));
             std::copy(prim.indices.begin(), prim.indices.end(), idx);
+            prim.scene = this;
+            if (prim.has_alpha()) {
+                rtcSetGeometryUserData(g, &prim);
+                rtcSetGeometryIntersectFilterFunction(g, alpha_intersect_filter);
+                rtcSetGeometryOccludedFilterFunction(g, alpha_occluded_filter);
+            }
         } else {
             g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_USER);
             rtcSetGeometryUserPrimitiveCount(g, 1);
@@ -361,6 +384,23 @@ void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) co
     Vec3 nw = normalize(to_vec(cw));
     *n = flip ? -nw : nw;
     *pdf = float(1 / area_element);
+}
+
+bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
+    const uint32_t i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
+    const float b0 = 1 - b1 - b2;
+    TexContext ctx;  // a point lookup: no footprint
+    if (!uvs.empty()) {
+        ctx.u = b0 * uvs[i0][0] + b1 * uvs[i1][0] + b2 * uvs[i2][0];
+        ctx.v = b0 * uvs[i0][1] + b1 * uvs[i1][1] + b2 * uvs[i2][1];
+    } else {
+        ctx.u = b1 + b2;
+        ctx.v = b2;
+    }
+    ctx.p = b0 * positions[i0] + b1 * positions[i1] + b2 * positions[i2];
+    ctx.object = id;
+    if (eval_texture(*scene, alpha, ctx).r == 0) return true;
+    return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
 }
 
 bool Primitive::sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n,

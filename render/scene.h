@@ -144,6 +144,8 @@ struct Light {
     std::shared_ptr<const LightImage> image;  // goniometric, projection: I times the image
 };
 
+class Scene;
+
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).
 struct Primitive {
     enum class Kind { Triangles, Sphere, Disk };
@@ -163,6 +165,18 @@ struct Primitive {
     // triangles the cumulative areas that pick one by area.
     int area_light = -1;
     std::vector<double> area_cdf;
+
+    // Triangles: pbrt-v3's cut-out masks, float inputs; where one is 0 the surface is not there
+    // (for every ray, and "shadowalpha" for shadow rays too). -1 with value 1: no mask.
+    TexInput alpha{-1, Rgb(1)}, shadow_alpha{-1, Rgb(1)};
+    const Scene* scene = nullptr;  // for evaluating the masks (set by Scene::commit)
+    bool has_alpha() const {
+        return alpha.node >= 0 || alpha.value.r != 1 || shadow_alpha.node >= 0 ||
+               shadow_alpha.value.r != 1;
+    }
+    /// True when the masks remove the point at barycentrics (b1, b2) of triangle `tri` (for a
+    /// shadow ray when `shadow`).
+    bool cut_out(uint32_t tri, float b1, float b2, bool shadow) const;
 
     // A whole sphere under a transform that keeps it round: its world centre and radius
     // (0: not such a sphere), for sampling the cone it subtends.

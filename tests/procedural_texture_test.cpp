@@ -157,3 +157,37 @@ TEST(ProceduralTexture, UnknownMappingIsALocatedError) {
             << e.what();
     }
 }
+
+TEST(AlphaMask, CutOutsFollowTheMaskForCameraAndShadowRays) {
+    // A unit square at z = 1 (uv = xy) over a big plane at z = 0, lit from straight above.
+    auto scene = [](const std::string& mask) {
+        return test::scene_from(
+            "Camera \"perspective\" WorldBegin LightSource \"distant\" \"point from\" [0 0 1] "
+            "\"point to\" [0 0 0] Texture \"checks\" \"float\" \"checkerboard\" \"float uscale\" 2 "
+            "\"float vscale\" 2 \"float tex1\" 1 \"float tex2\" 0 "
+            "Shape \"trianglemesh\" \"point3 P\" [0 0 1  1 0 1  1 1 1  0 1 1] \"point2 uv\" "
+            "[0 0 1 0 1 1 0 1] \"integer indices\" [0 1 2 0 2 3] " +
+            mask +
+            " Shape \"trianglemesh\" \"point3 P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] "
+            "\"integer indices\" [0 1 2 0 2 3] WorldEnd");
+    };
+    auto hit_z = [](const Scene& s, float x, float y) {
+        SurfaceHit h;
+        EXPECT_TRUE(s.intersect(Vec3(x, y, 5), Vec3(0, 0, -1), 0, 100, &h));
+        return h.p.z;
+    };
+    auto none = scene("\"float alpha\" 0");
+    EXPECT_NEAR(hit_z(*none, 0.3f, 0.3f), 0, 1e-5f);  // not there
+    auto checks = scene("\"texture alpha\" \"checks\"");
+    EXPECT_NEAR(hit_z(*checks, 0.25f, 0.25f), 1, 1e-5f);  // cell (0,0): 1, present
+    EXPECT_NEAR(hit_z(*checks, 0.75f, 0.25f), 0, 1e-5f);  // cell (1,0): 0, cut out
+    EXPECT_FALSE(checks->occluded(Vec3(0.75f, 0.25f, 0.5f), Vec3(0, 0, 1), 0, 10));
+    EXPECT_TRUE(checks->occluded(Vec3(0.25f, 0.25f, 0.5f), Vec3(0, 0, 1), 0, 10));
+    // shadowalpha: seen by camera rays, not by shadow rays.
+    auto ghost = scene("\"float shadowalpha\" 0");
+    EXPECT_NEAR(hit_z(*ghost, 0.3f, 0.3f), 1, 1e-5f);
+    EXPECT_FALSE(ghost->occluded(Vec3(0.3f, 0.3f, 0.5f), Vec3(0, 0, 1), 0, 10));
+    // The plane under a square that is not there is lit: Kd / pi * E with E = 1.
+    EXPECT_NEAR(trace_radiance(*none, Vec3(0.3f, 0.3f, 5), Vec3(0, 0, -1), 1, nullptr).r,
+                0.5f / kPi * 1, 1e-5f);
+}
