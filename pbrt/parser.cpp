@@ -40,6 +40,7 @@ struct GraphicsState {
     Mat4 ctm = Mat4::identity();
     bool reverse_orientation = false;
     int material = -1;
+    int area_light = -1;  // the AreaLightSource in effect (index into SceneDesc::area_lights)
 };
 
 // The named textures and materials visible at the current point of the file: one table each,
@@ -112,7 +113,8 @@ const char* kSupportedDirectives =
     "LookAt, Translate, Rotate, Scale, Transform, ConcatTransform, Identity, CoordinateSystem, "
     "CoordSysTransform, ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
     "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, Texture, "
-    "Shape, LightSource, Camera, Film, Sampler, PixelFilter, Integrator, Accelerator, "
+    "Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, Integrator, "
+    "Accelerator, "
     "ObjectBegin, ObjectEnd, ObjectInstance";
 
 class Parser {
@@ -162,6 +164,9 @@ class Parser {
         const std::string path = resolve_path(m_desc.base_dir, p.loc, p.strings[0]);
         if (std::string why = not_a_regular_file(path); !why.empty())
             throw SceneError(p.loc, "cannot read spectrum file " + q(path) + ": " + why);
+        if (std::error_code ec; !std::filesystem::exists(path, ec))
+            throw SceneError(p.loc, "cannot read spectrum file " + q(path) +
+                                        ": file not found (named by spectrum " + q(p.name) + ")");
         std::ifstream in(path);
         if (!in)
             throw SceneError(p.loc, "cannot read spectrum file " + q(path) +
@@ -194,6 +199,18 @@ class Parser {
 
     void warn(const FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(format_warning(loc, msg));
+    }
+    // A "mix" material's two named materials, resolved where it is declared (as pbrt-v3 does).
+    void resolve_mix(MaterialDesc& m) {
+        if (m.entity.type != "mix") return;
+        for (int k = 0; k < 2; ++k) {
+            const std::string param = "namedmaterial" + std::to_string(k + 1);
+            const Param* p = m.entity.params.find(param);
+            if (!p) continue;  // the builder reports it
+            const std::string name = m.entity.params.get_string(param, "");
+            auto it = m_names.materials.find(name);
+            if (it != m_names.materials.end()) m.mix[k] = it->second;
+        }
     }
     // AttributeEnd or ObjectEnd: the state and the names as the innermost block found them.
     void restore_attributes() {
@@ -500,6 +517,7 @@ class Parser {
             MaterialDesc m;
             m.entity = entity(dir);
             m.scope = m_names.scope_for(m.entity.params);
+            resolve_mix(m);
             m_gs.material = static_cast<int>(m_desc.materials.size());
             m_desc.materials.push_back(std::move(m));
         } else if (d == "MakeNamedMaterial") {
@@ -515,6 +533,7 @@ class Parser {
                                               " needs a \"string type\" parameter");
             m.entity.type = m.entity.params.get_string("type", "");
             m.scope = m_names.scope_for(m.entity.params);
+            resolve_mix(m);
             if (m_names.bind(m_names.materials, m.name, static_cast<int>(m_desc.materials.size()),
                              !m_stack.empty()))
                 warn(dir.loc, "named material " + q(m.name) + " redefined");
@@ -524,8 +543,11 @@ class Parser {
             std::string name = expect_string(dir, "a quoted material name");
             auto it = m_names.materials.find(name);
             if (it == m_names.materials.end())
-                throw SceneError(dir.loc, "named material " + q(name) + " is not defined");
-            m_gs.material = it->second;
+                warn(dir.loc, "named material " + q(name) +
+                                  " is not defined; the current material is kept (as pbrt-v3 "
+                                  "does)");
+            else
+                m_gs.material = it->second;
         } else if (d == "Shape") {
             need_world(dir, true);
             ShapeDesc s;
@@ -533,6 +555,14 @@ class Parser {
             s.world_from_object = m_gs.ctm;
             s.reverse_orientation = m_gs.reverse_orientation;
             s.material = m_gs.material;
+            s.area_light = m_gs.area_light;
+            s.scope = m_names.scope_for(s.entity.params);
+            if (m_in_object && s.area_light >= 0) {
+                warn(dir.loc,
+                     "this shape is inside an object definition: pbrt-v3 does not make instanced "
+                     "shapes area lights, so it does not emit");
+                s.area_light = -1;
+            }
             if (m_in_object)
                 m_desc.objects[m_objects[m_object_name]].shapes.push_back(std::move(s));
             else
@@ -579,9 +609,9 @@ class Parser {
                 throw SceneError(dir.loc, "object " + q(name) + " is not defined");
             m_desc.instances.push_back({it->second, m_gs.ctm, dir.loc});
         } else if (d == "AreaLightSource") {
-            throw SceneError(dir.loc,
-                             "AreaLightSource is not supported (cmam's Whitted integrator "
-                             "supports point, spot, distant and infinite lights)");
+            need_world(dir, true);
+            m_gs.area_light = static_cast<int>(m_desc.area_lights.size());
+            m_desc.area_lights.push_back(entity(dir));
         } else if (d == "ActiveTransform") {
             Token t = expect_any(dir, "All, StartTime or EndTime");
             warn(dir.loc, "ActiveTransform " + t.text + " ignored: cmam renders no motion blur");

@@ -41,13 +41,18 @@ struct MaterialDesc {
     Entity entity;       // entity.type is the material type ("matte", ...)
     TextureScope scope;  // the textures its parameters name, as visible when it was declared
     std::string name;    // for MakeNamedMaterial
+    // "mix": the materials "namedmaterial1" and "namedmaterial2" name, as visible when it was
+    // declared (indices into SceneDesc::materials; -1 when not defined there).
+    int mix[2] = {-1, -1};
 };
 
 struct ShapeDesc {
     Entity entity;
     Mat4 world_from_object;
     bool reverse_orientation = false;
-    int material = -1;  // index into SceneDesc::materials; -1 is the default matte
+    int material = -1;    // index into SceneDesc::materials; -1 is the default matte
+    int area_light = -1;  // index into SceneDesc::area_lights; -1: the shape does not emit
+    TextureScope scope;   // the textures its parameters name ("alpha"), as visible there
 };
 
 /// An object (ObjectBegin ... ObjectEnd): its shapes, each placed by the transform current at
@@ -80,6 +85,7 @@ struct SceneDesc {
     std::vector<ObjectDesc> objects;
     std::vector<InstanceDesc> instances;
     std::vector<LightDesc> lights;
+    std::vector<Entity> area_lights;   // AreaLightSource directives (each shape in scope emits)
     std::vector<std::string> sources;  // every scene file read (the main file, then Includes)
     std::string base_dir;  // directory of the main file, which relative paths resolve against
                            // (pbrt-v3), Included files' too (resolve_path())

@@ -11,6 +11,7 @@
 #include "pbrt/ply.h"
 #include "render/image_io.h"
 #include "render/scene.h"
+#include "render/tessellate.h"
 
 namespace cmam::render {
 
@@ -51,10 +52,11 @@ class Builder {
                                                    names_of(m_desc.accelerator));
         for (std::size_t i = 0; i < m_desc.textures.size(); ++i) texture(m_desc.textures[i]);
         for (const auto& m : m_desc.materials) m_scene->materials.push_back(material(m));
+        for (const auto& a : m_desc.area_lights) m_area_lights.push_back(area_light(a));
         for (const auto& s : m_desc.shapes) shape(s, m_scene->primitives);
         instances();
         for (const auto& l : m_desc.lights) light(l);
-        if (m_desc.lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) &&
+        if (m_scene->lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) &&
             m_warn)
             m_warn(pbrt::format_warning(m_desc.camera.loc,
                                         "the scene has no lights; it will render black"));
@@ -68,6 +70,7 @@ class Builder {
     pbrt::WarningSink m_warn;
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
+    std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
 
     void warn(const pbrt::FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(pbrt::format_warning(loc, msg));
@@ -169,11 +172,13 @@ class Builder {
     void camera() {
         const Entity& e = m_desc.camera;
         if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
-        if (e.type != "perspective" && e.type != "orthographic")
+        if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment")
             throw SceneError(e.loc, "unsupported Camera " + q(e.type) +
-                                        " (supported: \"perspective\", \"orthographic\")");
+                                        " (supported: \"perspective\", \"orthographic\", "
+                                        "\"environment\")");
         Camera& c = m_scene->camera;
         c.orthographic = e.type == "orthographic";
+        c.environment = e.type == "environment";
         c.xres = m_scene->film.xres;
         c.yres = m_scene->film.yres;
         double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
@@ -221,7 +226,7 @@ class Builder {
         auto m = to34(wc);
         for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
         check_camera_rays(c, e.loc);
-        e.params.check_unused("Camera \"perspective\"", m_warn,
+        e.params.check_unused("Camera " + q(e.type), m_warn,
                               {"focaldistance", "shutteropen", "shutterclose"});
     }
 
@@ -382,17 +387,43 @@ class Builder {
         return {-1, Rgb(float(finite_float(e, name, def, positive)))};
     }
 
-    void uv_mapping(const Entity& e, TextureNode* n) {
+    // pbrt-v3's 2-D texture mappings ("mapping": uv, spherical, cylindrical, planar).
+    void uv_mapping(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n) {
         std::string mapping = e.params.get_string("mapping", "uv");
-        if (mapping != "uv") {
+        if (mapping == "uv") {
+            n->su = float(e.params.get_float("uscale", 1));
+            n->sv = float(e.params.get_float("vscale", 1));
+            n->du = float(e.params.get_float("udelta", 0));
+            n->dv = float(e.params.get_float("vdelta", 0));
+        } else if (mapping == "spherical" || mapping == "cylindrical") {
+            n->mapping = mapping == "spherical" ? TextureNode::Mapping::Spherical
+                                                : TextureNode::Mapping::Cylindrical;
+            texture_space(e, t, n);
+        } else if (mapping == "planar") {
+            n->mapping = TextureNode::Mapping::Planar;
+            n->v1 = to_vec(finite_values(e, "v1", e.params.get_point3("v1", {1, 0, 0})));
+            n->v2 = to_vec(finite_values(e, "v2", e.params.get_point3("v2", {0, 1, 0})));
+            n->du = float(finite_float(e, "udelta", 0));
+            n->dv = float(finite_float(e, "vdelta", 0));
+        } else {
             const auto* p = e.params.find("mapping");
             throw SceneError(p ? p->loc : e.loc,
-                             "unsupported texture mapping " + q(mapping) + " (supported: \"uv\")");
+                             "unknown texture mapping " + q(mapping) +
+                                 " (expected \"uv\", \"spherical\", \"cylindrical\" or "
+                                 "\"planar\")");
         }
-        n->su = float(e.params.get_float("uscale", 1));
-        n->sv = float(e.params.get_float("vscale", 1));
-        n->du = float(e.params.get_float("udelta", 0));
-        n->dv = float(e.params.get_float("vdelta", 0));
+    }
+    // World -> texture space: the inverse of the transform where the texture was declared.
+    void texture_space(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n) {
+        finite_transform(t.world_from_texture, e.loc, "texture");
+        Mat4 inv;
+        try {
+            inv = t.world_from_texture.inverse();
+        } catch (const std::domain_error&) {
+            throw SceneError(e.loc, "the texture's transform is singular");
+        }
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 4; ++j) n->texture_from_world[4 * i + j] = float(inv.m[i][j]);
     }
 
     const texture::FilteredTexture* load_image(const Entity& e, bool is_float) {
@@ -439,7 +470,7 @@ class Builder {
         };
         if (e.type == "imagemap") {
             n.kind = TextureNode::Kind::Image;
-            uv_mapping(e, &n);
+            uv_mapping(e, t, &n);
             n.image = load_image(e, t.is_float);
             if (m_opts.untextured) {
                 const texture::Texel& mean = n.image->image().mean();
@@ -486,13 +517,19 @@ class Builder {
         } else if (e.type == "constant") {
             n.kind = TextureNode::Kind::Constant;
             n.constant = input("value", 1).value;
+        } else if (e.type == "checkerboard" && e.params.get_int("dimension", 2) == 3) {
+            n.kind = TextureNode::Kind::Checkerboard3D;
+            texture_space(e, t, &n);
+            n.tex1 = input("tex1", 1);
+            n.tex2 = input("tex2", 0);
         } else if (e.type == "checkerboard") {
             n.kind = TextureNode::Kind::Checkerboard;
             int dim = e.params.get_int("dimension", 2);
             if (dim != 2)
-                throw SceneError(e.params.find("dimension")->loc,
-                                 "only 2-D checkerboards are supported");
-            uv_mapping(e, &n);
+                throw SceneError(
+                    e.params.find("dimension")->loc,
+                    "checkerboard dimension must be 2 or 3, got " + std::to_string(dim));
+            uv_mapping(e, t, &n);
             n.tex1 = input("tex1", 1);
             n.tex2 = input("tex2", 0);
             std::string aa = e.params.get_string("aamode", "closedform");
@@ -520,11 +557,62 @@ class Builder {
             n.tex1 = input("tex1", 0);
             n.tex2 = input("tex2", 1);
             n.amount = float_input(e, t.scope, "amount", 0.5f);
+        } else if (e.type == "bilerp") {
+            n.kind = TextureNode::Kind::Bilerp;
+            uv_mapping(e, t, &n);
+            const char* names[4] = {"v00", "v01", "v10", "v11"};
+            const float defs[4] = {0, 1, 0, 1};
+            for (int k = 0; k < 4; ++k) {
+                if (t.is_float)
+                    n.corners[k] = Rgb(float(finite_float(e, names[k], defs[k])));
+                else if (auto c = e.params.get_rgb(names[k]))
+                    n.corners[k] = to_rgb(finite_values(e, names[k], *c));
+                else
+                    n.corners[k] = Rgb(defs[k]);
+            }
+        } else if (e.type == "uv") {
+            n.kind = TextureNode::Kind::Uv;
+            uv_mapping(e, t, &n);
+            if (t.is_float)
+                warn(e.loc, "pbrt-v3 has no float \"uv\" texture; cmam gives its s coordinate");
+        } else if (e.type == "dots") {
+            n.kind = TextureNode::Kind::Dots;
+            uv_mapping(e, t, &n);
+            n.tex1 = input("inside", 1);
+            n.tex2 = input("outside", 0);
+        } else if (e.type == "fbm" || e.type == "wrinkled" || e.type == "windy" ||
+                   e.type == "marble") {
+            n.kind = e.type == "fbm"        ? TextureNode::Kind::Fbm
+                     : e.type == "wrinkled" ? TextureNode::Kind::Wrinkled
+                     : e.type == "windy"    ? TextureNode::Kind::Windy
+                                            : TextureNode::Kind::Marble;
+            texture_space(e, t, &n);
+            if (e.type != "windy") {
+                n.octaves = std::clamp(e.params.get_int("octaves", 8), 0, 64);
+                n.omega = float(finite_float(e, "roughness", 0.5));
+            }
+            if (e.type == "marble") {
+                n.scale = float(finite_float(e, "scale", 1));
+                n.variation = float(finite_float(e, "variation", 0.2));
+                if (t.is_float)
+                    warn(e.loc,
+                         "pbrt-v3 has no float \"marble\" texture; cmam gives the "
+                         "luminance of its colour");
+            }
+            // Their octaves follow the footprint, as in pbrt-v3: ray differentials are traced.
+            m_scene->needs_differentials = true;
         } else {
             throw SceneError(e.loc, "unsupported texture class " + q(e.type) +
                                         " (supported: \"imagemap\", \"checkerboard\", "
-                                        "\"constant\", \"scale\", \"mix\")");
+                                        "\"constant\", \"scale\", \"mix\", \"bilerp\", "
+                                        "\"uv\", \"dots\", \"fbm\", \"wrinkled\", "
+                                        "\"windy\", \"marble\")");
         }
+        // Non-uv mappings take their footprints from dP/dx and dP/dy.
+        if (n.mapping != TextureNode::Mapping::Uv &&
+            (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
+            n.lod == Lod::Differentials)
+            m_scene->needs_differentials = true;
         e.params.check_unused(what, m_warn);
         if (n.kind == TextureNode::Kind::Image ||
             (n.kind == TextureNode::Kind::Checkerboard && n.closed_form)) {
@@ -625,6 +713,19 @@ class Builder {
             m.remap_roughness = e.params.get_bool("remaproughness", true);
         } else if (t == "none" || t.empty()) {
             m.type = Material::Type::None;
+        } else if (t == "mix") {
+            m.type = Material::Type::Mix;
+            m.amount = spectrum_input(e, s, "amount", Rgb(0.5f));
+            for (int k = 0; k < 2; ++k) {
+                const std::string param = "namedmaterial" + std::to_string(k + 1);
+                const auto* p = e.params.find(param);
+                if (!p) throw SceneError(e.loc, "mix needs a \"string " + param + "\" parameter");
+                const std::string name = e.params.get_string(param, "");
+                m.mix[k] = d.mix[k];
+                if (d.mix[k] < 0)
+                    warn(p->loc, "named material " + q(name) +
+                                     " is not defined here; the default matte is used in the mix");
+            }
         } else {
             // pbrt-v3 renders a material it does not know as matte, with a warning; so does
             // cmam with the ones it does not render (subsurface scattering, Fourier BSDFs, hair).
@@ -632,7 +733,7 @@ class Builder {
             m.kd = spectrum_input(e, s, "Kd", Rgb(0.5f));
             warn(e.loc, "material " + q(t) + " is rendered as \"matte\"" +
                             (e.params.find("Kd") ? " with its Kd" : "") +
-                            " (cmam renders matte, mirror, glass, plastic, uber, metal, and "
+                            " (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
                             "substrate and translucent as plastic)");
             return m;  // its other parameters are not read: no warning for each
         }
@@ -682,11 +783,24 @@ class Builder {
                                      "innerradius must be in [0, radius)");
             }
             e.params.check_unused("shape " + q(e.type), m_warn, ignored);
-        } else if (e.type == "trianglemesh" || e.type == "plymesh") {
+        } else if (e.type == "trianglemesh" || e.type == "plymesh" || e.type == "loopsubdiv" ||
+                   is_tessellated_quadric(e.type)) {
             prim->kind = Primitive::Kind::Triangles;
+            // pbrt-v3's cut-out masks (float textures or constants), read before the
+            // parameters are checked.
+            if (e.params.find("alpha")) prim->alpha = float_input(e, s.scope, "alpha", 1);
+            if (e.params.find("shadowalpha"))
+                prim->shadow_alpha = float_input(e, s.scope, "shadowalpha", 1);
             std::vector<float> P, N, UV;
             std::vector<int> idx;
-            if (e.type == "plymesh") {
+            if (is_tessellated_quadric(e.type)) {
+                QuadricMesh mesh = tessellate(e.type, quadric_params(e));
+                P = std::move(mesh.positions);
+                N = std::move(mesh.normals);
+                UV = std::move(mesh.uvs);
+                idx = std::move(mesh.indices);
+                e.params.check_unused("shape " + q(e.type), m_warn, ignored);
+            } else if (e.type == "plymesh") {
                 const auto* fp = e.params.find("filename");
                 if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
                 std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc,
@@ -707,8 +821,17 @@ class Builder {
                 e.params.check_unused("shape \"plymesh\"", m_warn,
                                       {"alpha", "shadowalpha", "displacement", "edgelength"});
             } else {
+                const std::string what = q(e.type);
+                if (e.type == "loopsubdiv") {
+                    // The control mesh stands for the limit surface (close for fine meshes).
+                    warn(e.loc,
+                         "shape \"loopsubdiv\" is rendered as its control mesh, not "
+                         "subdivided");
+                    (void)e.params.get_int("levels", 3);
+                    (void)e.params.get_int("nlevels", 3);  // pbrt-v3 reads either name
+                }
                 auto p = e.params.get_point3s("P");
-                if (!p) throw SceneError(e.loc, "trianglemesh needs a \"point3 P\" parameter");
+                if (!p) throw SceneError(e.loc, what + " needs a \"point3 P\" parameter");
                 for (double x : finite_values(e, "P", *p)) P.push_back(float(x));
                 std::size_t nv = P.size() / 3;
                 if (auto i = e.params.get_ints("indices")) {
@@ -716,7 +839,7 @@ class Builder {
                 } else if (nv == 3) {
                     idx = {0, 1, 2};
                 } else {
-                    throw SceneError(e.loc, "trianglemesh needs an \"integer indices\" parameter");
+                    throw SceneError(e.loc, what + " needs an \"integer indices\" parameter");
                 }
                 if (idx.size() % 3 != 0)
                     throw SceneError(
@@ -741,7 +864,7 @@ class Builder {
                             std::string(uvname) + " must have one (u,v) pair per vertex of P");
                     for (double x : finite_values(e, uvname, *uv)) UV.push_back(float(x));
                 }
-                e.params.check_unused("shape \"trianglemesh\"", m_warn,
+                e.params.check_unused("shape " + what, m_warn,
                                       {"alpha", "shadowalpha", "S", "faceIndices"});
             }
             std::size_t nv = P.size() / 3;
@@ -776,12 +899,37 @@ class Builder {
                                                            uint32_t(idx[t + 2])});
             }
             if (prim->indices.empty()) return;
+        } else if (e.type == "curve") {
+            warn(e.loc, "shape \"curve\" is not rendered (cmam has no curves); it is skipped");
+            return;
         } else {
-            throw SceneError(
-                e.loc, "unsupported shape " + q(e.type) +
-                           " (supported: \"sphere\", \"disk\", \"trianglemesh\", \"plymesh\")");
+            throw SceneError(e.loc, "unsupported shape " + q(e.type) +
+                                        " (supported: \"sphere\", \"disk\", \"cylinder\", "
+                                        "\"cone\", \"paraboloid\", \"hyperboloid\", "
+                                        "\"trianglemesh\", \"plymesh\", \"loopsubdiv\")");
         }
         prim->id = static_cast<uint32_t>(out.size());
+        if (s.area_light >= 0 && &out == &m_scene->primitives) {
+            // pbrt-v3 makes every shape in an AreaLightSource's scope emit; one light per shape
+            // here, sampled uniformly by area over all its triangles.
+            Light l = m_area_lights[static_cast<std::size_t>(s.area_light)];
+            l.prim = static_cast<int>(prim->id);
+            if (prim->kind == Primitive::Kind::Triangles) {
+                prim->area_cdf.assign(1, 0.0);
+                for (std::size_t t = 0; t < prim->indices.size(); t += 3) {
+                    const Vec3 a = prim->positions[prim->indices[t]],
+                               b = prim->positions[prim->indices[t + 1]],
+                               c = prim->positions[prim->indices[t + 2]];
+                    prim->area_cdf.push_back(prim->area_cdf.back() +
+                                             0.5 * double(length(cross(b - a, c - a))));
+                }
+            }
+            if (prim->kind == Primitive::Kind::Sphere) round_sphere(*prim);
+            if (!l.intensity.is_black()) {
+                prim->area_light = static_cast<int>(m_scene->lights.size());
+                m_scene->lights.push_back(l);
+            }
+        }
         out.push_back(std::move(prim));
     }
 
@@ -826,11 +974,111 @@ class Builder {
         }
     }
 
+    QuadricParams quadric_params(const Entity& e) {
+        QuadricParams p;
+        if (e.type == "hyperboloid") {
+            auto a = finite_values(e, "p1", e.params.get_point3("p1", {0, 0, 0}));
+            auto b = finite_values(e, "p2", e.params.get_point3("p2", {1, 1, 1}));
+            std::copy(a.begin(), a.end(), p.p1);
+            std::copy(b.begin(), b.end(), p.p2);
+            if (a[2] == b[2]) throw SceneError(e.loc, "hyperboloid p1 and p2 must differ in z");
+        } else {
+            p.radius = finite_float(e, "radius", 1, true);
+        }
+        if (e.type == "cone") p.height = finite_float(e, "height", 1, true);
+        if (e.type == "cylinder" || e.type == "paraboloid") {
+            p.zmin = finite_float(e, "zmin", e.type == "cylinder" ? -1 : 0);
+            p.zmax = finite_float(e, "zmax", 1);
+            if (p.zmin == p.zmax) throw SceneError(e.loc, e.type + " has zmin == zmax");
+            if (e.type == "paraboloid" &&
+                (std::min(p.zmin, p.zmax) < 0 || std::max(p.zmin, p.zmax) <= 0))
+                throw SceneError(e.loc, "paraboloid zmin and zmax must be at least 0");
+        }
+        p.phimax = finite_float(e, "phimax", 360);
+        return p;
+    }
+
+    // A whole sphere whose transform is a rotation, reflection or uniform scale plus a
+    // translation stays a sphere: its centre and radius let area lights sample its cone.
+    static void round_sphere(Primitive& prim) {
+        if (prim.zmin > -prim.radius || prim.zmax < prim.radius ||
+            prim.phi_max < 2 * std::numbers::pi)
+            return;
+        const auto& m = prim.world_from_object;
+        double len2[3], dots[3];
+        for (int c = 0; c < 3; ++c) {
+            const int d = (c + 1) % 3;
+            len2[c] = m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c];
+            dots[c] = m[c] * m[d] + m[4 + c] * m[4 + d] + m[8 + c] * m[8 + d];
+        }
+        for (int c = 0; c < 3; ++c)
+            if (std::abs(len2[c] - len2[0]) > 1e-6 * len2[0] || std::abs(dots[c]) > 1e-6 * len2[0])
+                return;
+        prim.sphere_center = Vec3(float(m[3]), float(m[7]), float(m[11]));
+        prim.sphere_radius = float(prim.radius * std::sqrt(len2[0]));
+    }
+
+    // pbrt-v3's "diffuse" area light: radiance L (times scale) leaving the surface.
+    Light area_light(const Entity& e) {
+        Light l;
+        l.type = Light::Type::Area;
+        if (e.type != "diffuse" && e.type != "area") {  // pbrt-v3 warns and goes on
+            warn(e.loc, "unknown AreaLightSource " + q(e.type) +
+                            " (pbrt-v3 has \"diffuse\", also named \"area\"): the shapes in "
+                            "its scope do not emit");
+            return l;  // black: no light is made
+        }
+        Rgb scale(1);
+        if (auto sc = e.params.get_rgb("scale")) scale = to_rgb(finite_values(e, "scale", *sc));
+        auto L = e.params.get_rgb("L");
+        l.intensity = (L ? to_rgb(finite_values(e, "L", *L)) : Rgb(1)) * scale;
+        l.two_sided = e.params.get_bool("twosided", false);
+        e.params.check_unused("AreaLightSource \"diffuse\"", m_warn, {"nsamples", "samples"});
+        return l;
+    }
+
     // --- lights ---------------------------------------------------------------------------
     static Vec3 to_vec(const std::array<double, 3>& a) {
         return Vec3(float(a[0]), float(a[1]), float(a[2]));
     }
     static Rgb to_rgb(const pbrt::Rgb& c) { return Rgb(c[0], c[1], c[2]); }
+
+    // pbrt-v3's infinite light image: a lat-long map in the light's frame, read as its imagemap
+    // reads images (8-bit files decoded from sRGB); theta = 0 is the file's top row.
+    // A light's "mapname" image, read as pbrt-v3 reads light images (8-bit files decoded from
+    // sRGB).
+    std::shared_ptr<const texture::FilteredTexture> light_image(const Entity& e,
+                                                                const pbrt::Param& p) {
+        const std::string path =
+            pbrt::resolve_path(m_desc.base_dir, p.loc, e.params.get_string("mapname", ""));
+        try {
+            return std::make_shared<const texture::FilteredTexture>(
+                load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat));
+        } catch (const ImageIoError& err) {
+            throw SceneError(p.loc, err.what());
+        }
+    }
+    // The linear part of the light's transform's inverse (directions from world to light).
+    static std::array<float, 9> light_from_world(const Entity& e, const Mat4& world_from_light) {
+        Mat4 inv;
+        try {
+            inv = world_from_light.inverse();
+        } catch (const std::domain_error&) {
+            throw SceneError(e.loc, "the light's transform is singular");
+        }
+        std::array<float, 9> lw{};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) lw[3 * i + j] = float(inv.m[i][j]);
+        return lw;
+    }
+
+    std::shared_ptr<const EnvironmentMap> environment_map(const Entity& e, const pbrt::Param& p,
+                                                          const Mat4& world_from_light) {
+        auto env = std::make_shared<EnvironmentMap>(light_image(e, p),
+                                                    light_from_world(e, world_from_light));
+        if (m_opts.filter) env->set_filter({*m_opts.filter});
+        return env;
+    }
 
     void light(const pbrt::LightDesc& d) {
         const Entity& e = d.entity;
@@ -879,21 +1127,54 @@ class Builder {
             l.direction = normalize(w);
         } else if (e.type == "infinite") {
             l.type = Light::Type::Infinite;
-            if (const auto* mp = e.params.find("mapname"))
-                throw SceneError(mp->loc,
-                                 "infinite light environment maps are not supported (give a "
-                                 "constant \"rgb L\")");
             l.intensity = intensity("L");
+            if (const auto* mp = e.params.find("mapname")) {
+                l.env = environment_map(e, *mp, m);
+                // Escaping rays filter the map over their ray differentials' footprint, with
+                // the image textures' filter (EWA unless overridden); other footprint sources
+                // point-sample it as pbrt-v3 does.
+                l.env_footprint = !m_opts.lod || *m_opts.lod == Lod::Differentials;
+                if (l.env_footprint) m_scene->needs_differentials = true;
+            }
             e.params.get_int("samples",
                              1);  // pbrt-v3's sample count hint; one sample per lookup here
+        } else if (e.type == "goniometric" || e.type == "projection") {
+            // A point light at the light's origin whose intensity follows an image.
+            l.type = e.type == "goniometric" ? Light::Type::Goniometric : Light::Type::Projection;
+            l.intensity = intensity("I");
+            l.position = to_vec(m.apply_point({0, 0, 0}));
+            auto img = std::make_shared<LightImage>();
+            img->kind = e.type == "goniometric" ? LightImage::Kind::Goniometric
+                                                : LightImage::Kind::Projection;
+            img->light_from_world = light_from_world(e, m);
+            if (e.type == "projection") {
+                const double fov = finite_float(e, "fov", 45);
+                if (!(fov > 0 && fov < 180))
+                    throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
+                img->tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
+            }
+            if (const auto* mp = e.params.find("mapname")) {
+                img->image = light_image(e, *mp);
+                const auto& im = img->image->image();
+                const float aspect = float(im.width()) / float(im.height());
+                if (aspect > 1) {
+                    img->screen[0] = -aspect, img->screen[1] = aspect;
+                } else {
+                    img->screen[2] = -1 / aspect, img->screen[3] = 1 / aspect;
+                }
+                l.image = img;
+            } else if (e.type == "projection") {
+                l.image = img;  // without an image: 1 inside the square screen's frustum
+            }
         } else {
-            throw SceneError(e.loc,
-                             "unsupported light " + q(e.type) +
-                                 " (supported: \"point\", \"spot\", \"distant\", \"infinite\")");
+            throw SceneError(e.loc, "unsupported light " + q(e.type) +
+                                        " (supported: \"point\", \"spot\", \"distant\", "
+                                        "\"infinite\", \"goniometric\", \"projection\")");
         }
         // pbrt-v3's sample counts: a delta light needs one shadow ray, and the infinite light
         // is sampled once per shading point here.
-        e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta"});
+        // (pbrt-v3's goniometric light has no fov, but scenes give it; pbrt-v3 warns too.)
+        e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta", "fov"});
         m_scene->lights.push_back(l);
     }
 };
@@ -933,17 +1214,26 @@ std::string_view to_string(TagPolicy p) {
 }
 
 void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
+    const auto& m = world_from_camera;
+    if (environment) {
+        const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;
+        const Vec3 d(std::sin(theta) * std::cos(phi), std::cos(theta),
+                     std::sin(theta) * std::sin(phi));
+        *org = Vec3(m[3], m[7], m[11]);
+        *dir = normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
+                              m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                              m[8] * d.x + m[9] * d.y + m[10] * d.z));
+        return;
+    }
     float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
     if (orthographic) {
-        const auto& m = world_from_camera;
         *org = Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7],
                     m[8] * sx + m[9] * sy + m[11]);
         *dir = normalize(Vec3(m[2], m[6], m[10]));
         return;
     }
     Vec3 d(sx * tan_half_fov, sy * tan_half_fov, 1);
-    const auto& m = world_from_camera;
     *org = Vec3(m[3], m[7], m[11]);
     *dir =
         normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,

@@ -1,10 +1,12 @@
 // render — Embree set-up, analytic quadrics (pbrt-v3 sphere and disk) as user geometry, and
 // the construction of oriented surface hits.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include "render/scene.h"
+#include "render/shading.h"
 
 namespace cmam::render {
 
@@ -142,6 +144,22 @@ void quadric_occluded(const RTCOccludedFunctionNArguments* args) {
     }
 }
 
+void alpha_filter(const RTCFilterFunctionNArguments* args, bool shadow) {
+    const auto* prim = static_cast<const Primitive*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        if (prim->cut_out(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
+                          RTCHitN_v(args->hit, args->N, i), shadow))
+            args->valid[i] = 0;  // not there: Embree goes on to the next hit
+    }
+}
+void alpha_intersect_filter(const RTCFilterFunctionNArguments* args) {
+    alpha_filter(args, false);
+}
+void alpha_occluded_filter(const RTCFilterFunctionNArguments* args) {
+    alpha_filter(args, true);
+}
+
 void embree_error(void*, RTCError code, const char* str) {
     throw std::runtime_error(std::string("Embree error ") + std::to_string(code) + ": " +
                              (str ? str : ""));
@@ -257,7 +275,7 @@ Scene::~Scene() {
 
 namespace {
 
-void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id) {
+void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id, const Scene* owner) {
     RTCGeometry g;
     if (prim.kind == Primitive::Kind::Triangles) {
         g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -273,6 +291,12 @@ void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id) {
             rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                     3 * sizeof(uint32_t), prim.indices.size() / 3));
         std::copy(prim.indices.begin(), prim.indices.end(), idx);
+        prim.scene = owner;
+        if (prim.has_alpha()) {
+            rtcSetGeometryUserData(g, &prim);
+            rtcSetGeometryIntersectFilterFunction(g, alpha_intersect_filter);
+            rtcSetGeometryOccludedFilterFunction(g, alpha_occluded_filter);
+        }
     } else {
         g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(g, 1);
@@ -299,14 +323,14 @@ void Scene::commit() {
         RTCScene s = rtcNewScene(m_device);
         rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
         for (std::size_t id = 0; id < objects[o].primitives.size(); ++id)
-            attach(m_device, s, *objects[o].primitives[id], static_cast<unsigned>(id));
+            attach(m_device, s, *objects[o].primitives[id], static_cast<unsigned>(id), this);
         rtcCommitScene(s);
         m_object_scenes[o] = s;
     }
     m_scene = rtcNewScene(m_device);
     rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
     for (std::size_t id = 0; id < primitives.size(); ++id)
-        attach(m_device, m_scene, *primitives[id], static_cast<unsigned>(id));
+        attach(m_device, m_scene, *primitives[id], static_cast<unsigned>(id), this);
     // Instances take the geometry ids after the primitives outside objects.
     for (std::size_t i = 0; i < instances.size(); ++i) {
         RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_INSTANCE);
@@ -374,6 +398,110 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
     h.ns_object = h.ns;
     h.ng = normalize(in.to_world_normal(h.ng));
     h.ns = normalize(in.to_world_normal(h.ns));
+    return true;
+}
+
+void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const {
+    *pdf = 0;
+    if (kind == Kind::Triangles) {
+        // A triangle by area (area_cdf), then a point uniform in it; u1 is reused within the
+        // chosen triangle's span.
+        const double total = area_cdf.empty() ? 0 : area_cdf.back();
+        if (!(total > 0)) return;
+        const double x = double(u1) * total;
+        const auto it = std::upper_bound(area_cdf.begin(), area_cdf.end(), x);
+        const std::size_t ntri = area_cdf.size() - 1;
+        const std::size_t t = std::min(ntri - 1, static_cast<std::size_t>(std::max<std::ptrdiff_t>(
+                                                     0, (it - area_cdf.begin()) - 1)));
+        const double span = area_cdf[t + 1] - area_cdf[t];
+        const float r = span > 0 ? float(std::clamp((x - area_cdf[t]) / span, 0.0, 1.0)) : 0.5f;
+        const float su = std::sqrt(r), b0 = 1 - su, b1 = u2 * su, b2 = 1 - b0 - b1;
+        const uint32_t i0 = indices[3 * t], i1 = indices[3 * t + 1], i2 = indices[3 * t + 2];
+        const Vec3 &p0 = positions[i0], &p1 = positions[i1], &p2 = positions[i2];
+        *p = b0 * p0 + b1 * p1 + b2 * p2;
+        Vec3 ng = normalize(cross(p0 - p2, p1 - p2));
+        if (flip) ng = -ng;
+        if (!normals.empty()) {  // oriented as intersect() orients hits
+            const Vec3 ns = b0 * normals[i0] + b1 * normals[i1] + b2 * normals[i2];
+            if (length(ns) > 0) ng = faceforward(ng, flip ? -ns : ns);
+        }
+        *n = ng;
+        *pdf = float(1 / total);
+        return;
+    }
+    // Quadrics: (u1,u2) map to a point uniform by object-space area (Archimedes' z for the
+    // sphere, r^2 for the disk, phi for both). The world-space area element is |dP/du1 x
+    // dP/du2| after the transform, det(M) M^-T applied to the object-space one, so the density
+    // is exact under any transform.
+    const double phi = double(u2) * phi_max;
+    D3 po, cross_obj;
+    if (kind == Kind::Sphere) {
+        const double z = zmin + double(u1) * (zmax - zmin);
+        const double rho = std::sqrt(std::max(0.0, radius * radius - z * z));
+        po = {rho * std::cos(phi), rho * std::sin(phi), z};
+        const double k = (zmax - zmin) * phi_max;
+        cross_obj = {k * po[0], k * po[1], k * po[2]};  // outwards, |.| = k * radius
+    } else {
+        const double r2 = inner_radius * inner_radius +
+                          double(u1) * (radius * radius - inner_radius * inner_radius);
+        const double rho = std::sqrt(r2);
+        po = {rho * std::cos(phi), rho * std::sin(phi), height};
+        cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
+    }
+    const auto& m = world_from_object;
+    const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+                       m[2] * (m[4] * m[9] - m[5] * m[8]);
+    const D3 cw = xform_normal(object_from_world, cross_obj);
+    const double area_element =
+        std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
+    if (!(area_element > 0) || !std::isfinite(area_element)) return;
+    *p = to_vec(xform_point(world_from_object, po));
+    Vec3 nw = normalize(to_vec(cw));
+    *n = flip ? -nw : nw;
+    *pdf = float(1 / area_element);
+}
+
+bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
+    const uint32_t i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
+    const float b0 = 1 - b1 - b2;
+    TexContext ctx;  // a point lookup: no footprint
+    if (!uvs.empty()) {
+        ctx.u = b0 * uvs[i0][0] + b1 * uvs[i1][0] + b2 * uvs[i2][0];
+        ctx.v = b0 * uvs[i0][1] + b1 * uvs[i1][1] + b2 * uvs[i2][1];
+    } else {
+        ctx.u = b1 + b2;
+        ctx.v = b2;
+    }
+    ctx.p = b0 * positions[i0] + b1 * positions[i1] + b2 * positions[i2];
+    ctx.object = id;
+    if (eval_texture(*scene, alpha, ctx).r == 0) return true;
+    return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
+}
+
+bool Primitive::sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n,
+                            float* pdf) const {
+    const float R = sphere_radius;
+    if (!(R > 0)) return false;
+    const Vec3 to_c = sphere_center - ref;
+    const float d2 = dot(to_c, to_c);
+    if (!(d2 > R * R * 1.0001f)) return false;
+    const float dc = std::sqrt(d2);
+    // The cone's half-angle: sin^2 = R^2 / d^2; 1 - cos written as sin^2 / (1 + cos), which
+    // keeps its precision for small, distant spheres.
+    const float sin2_max = R * R / d2, cos_max = std::sqrt(std::max(0.0f, 1 - sin2_max));
+    const float one_minus_cos_max = sin2_max / (1 + cos_max);
+    const float cos_t = 1 - u1 * one_minus_cos_max;
+    const float sin2_t = std::max(0.0f, u1 * one_minus_cos_max * (1 + cos_t));
+    const float phi = 2 * kPi * u2;
+    const Frame f = Frame::from_z(to_c / dc);
+    const Vec3 wi = f.to_world(
+        Vec3(std::sqrt(sin2_t) * std::cos(phi), std::sqrt(sin2_t) * std::sin(phi), cos_t));
+    // The nearer intersection along wi: t = d cos - sqrt(R^2 - d^2 sin^2).
+    const float t = dc * cos_t - std::sqrt(std::max(0.0f, R * R - d2 * sin2_t));
+    *p = ref + wi * t;
+    const Vec3 out = normalize(*p - sphere_center);
+    *n = flip ? -out : out;
+    *pdf = 1 / (2 * kPi * one_minus_cos_max);
     return true;
 }
 

@@ -75,11 +75,28 @@ struct Tracer {
     // offset at every hit of the path, mapped to uv by that hit's differentials.
     float to_stratum_x = 0, to_stratum_y = 0;
 
-    Rgb escaped() const {
+    // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
+    // over the ray differential's footprint when the ray carries one.
+    Rgb escaped(const Vec3& dir, const RayDifferential& diff) const {
         Rgb l{};
-        for (const Light& light : scene.lights)
-            if (light.type == Light::Type::Infinite) l += light.intensity;
+        for (const Light& light : scene.lights) {
+            if (light.type != Light::Type::Infinite) continue;
+            if (!light.env)
+                l += light.intensity;
+            else if (diff.valid && light.env_footprint)
+                l += light.intensity * light.env->radiance(dir, &diff.dddx, &diff.dddy);
+            else
+                l += light.intensity * light.env->radiance(dir);
+        }
         return l;
+    }
+
+    // What an area light's surface emits towards w (pbrt-v3: along its oriented normal only,
+    // unless two-sided).
+    Rgb emitted(const SurfaceHit& h, const Vec3& w) const {
+        if (h.prim->area_light < 0) return {};
+        const Light& l = scene.lights[static_cast<std::size_t>(h.prim->area_light)];
+        return l.two_sided || dot(h.ng, w) > 0 ? l.intensity : Rgb();
     }
 
     bool visible(const SurfaceHit& h, const Vec3& wi, float dist) {
@@ -89,6 +106,17 @@ struct Tracer {
         return !scene.occluded(o, wi, 0, tmax);
     }
 
+    // Whether the segment from the hit (offset along wi's side) to the point p on an area
+    // light is clear, short of the light's own surface by its ray epsilon.
+    bool visible_point(const SurfaceHit& h, const Vec3& wi, const Vec3& p) {
+        if (counts) ++counts->shadow;
+        Vec3 o = offset_origin(h, wi);
+        Vec3 d = p - o;
+        float len = length(d);
+        float tmax = len - ray_epsilon(p);
+        return tmax <= 0 || !scene.occluded(o, d / len, 0, tmax);
+    }
+
     Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
         Rgb L{};
         for (const Light& light : scene.lights) {
@@ -96,14 +124,18 @@ struct Tracer {
             Rgb li;
             float dist = std::numeric_limits<float>::infinity();
             float pdf = 1;
+            Vec3 target;  // area lights: the point sampled on the light
             switch (light.type) {
                 case Light::Type::Point:
-                case Light::Type::Spot: {
+                case Light::Type::Spot:
+                case Light::Type::Goniometric:
+                case Light::Type::Projection: {
                     Vec3 d = light.position - h.p;
                     float d2 = dot(d, d);
                     dist = std::sqrt(d2);
                     wi = d / dist;
                     li = light.intensity / d2;
+                    if (light.image) li = li * light.image->scale(-wi);
                     if (light.type == Light::Type::Spot) {
                         float c = dot(-wi, light.direction);
                         if (c < light.cos_total) continue;
@@ -120,6 +152,12 @@ struct Tracer {
                     li = light.intensity;
                     break;
                 case Light::Type::Infinite: {
+                    if (light.env) {  // by the map's luminance
+                        float u1 = rng.next_float(), u2 = rng.next_float();
+                        li = light.intensity * light.env->sample(u1, u2, &wi, &pdf);
+                        if (pdf == 0) continue;
+                        break;
+                    }
                     // Cosine-weighted about the geometric normal on wo's side: the same expected
                     // value as pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
                     float u1 = rng.next_float(), u2 = rng.next_float();
@@ -133,14 +171,59 @@ struct Tracer {
                     li = light.intensity;
                     break;
                 }
+                case Light::Type::Area: {
+                    // One point: in the cone a round sphere subtends, else uniform by area with
+                    // its density converted to solid angle.
+                    const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
+                    float u1 = rng.next_float(), u2 = rng.next_float(), pdf_area;
+                    Vec3 p, n;
+                    const bool cone = prim.sample_cone(h.p, u1, u2, &p, &n, &pdf);
+                    if (!cone) prim.sample_area(u1, u2, &p, &n, &pdf_area);
+                    if (!cone && pdf_area == 0) continue;
+                    Vec3 d = p - h.p;
+                    float d2 = dot(d, d);
+                    if (d2 == 0) continue;
+                    dist = std::sqrt(d2);
+                    wi = d / dist;
+                    float cos_l = dot(n, -wi);
+                    if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
+                    if (!cone) pdf = pdf_area * d2 / std::abs(cos_l);
+                    target = p;
+                    li = light.intensity;
+                    break;
+                }
             }
             if (li.is_black()) continue;
             Rgb fv = bsdf.f(wo, wi);
             if (fv.is_black()) continue;
-            if (!visible(h, wi, dist)) continue;
+            if (light.type == Light::Type::Area ? !visible_point(h, wi, target)
+                                                : !visible(h, wi, dist))
+                continue;
             L += fv * li * (absdot(wi, h.ns) / pdf);
         }
         return L;
+    }
+
+    // A "mix" material is one of its two materials, chosen per shading point with probability
+    // p = the amount's mean for the first, and weighted by amount / p or (1 - amount) / (1 - p)
+    // per channel: in expectation pbrt-v3's amount x first + (1 - amount) x second, for every
+    // lobe, specular ones included. The weight is applied to the BSDF make_bsdf builds.
+    Rgb mix_weight{1, 1, 1};
+    const Material& pick_mixed(const Material& m, const TexContext& ctx) {
+        mix_weight = Rgb(1);
+        const Material* cur = &m;
+        for (int k = 0; k < 16 && cur->type == Material::Type::Mix; ++k) {
+            Rgb a = eval_texture(scene, cur->amount, ctx);
+            a = Rgb(std::clamp(a.r, 0.0f, 1.0f), std::clamp(a.g, 0.0f, 1.0f),
+                    std::clamp(a.b, 0.0f, 1.0f));
+            const float p = (a.r + a.g + a.b) / 3;
+            const bool first = rng.next_float() < p;
+            mix_weight = mix_weight * (first ? a / p : (Rgb(1) - a) / (1 - p));
+            const int next = cur->mix[first ? 0 : 1];
+            cur = next >= 0 ? &scene.materials[static_cast<std::size_t>(next)]
+                            : &scene.default_material;
+        }
+        return *cur;
     }
 
     /// A ray with the footprint state it carries.
@@ -155,7 +238,7 @@ struct Tracer {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             SurfaceHit h;
             if (!scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), &h))
-                return escaped();
+                return escaped(ray.dir, ray.diff);
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
             texture::RayTag t = tag;
@@ -168,10 +251,13 @@ struct Tracer {
             ctx.object = h.object_id;
             ctx.cmam = cmam;
             ctx.path = ray.path;
+            ctx.p = h.p;
             HitDifferential hd;
             if (scene.needs_differentials) {
                 hd = transfer(ray.diff, ray.dir, h);
                 if (hd.valid) {
+                    ctx.dpdx = hd.dpdx;
+                    ctx.dpdy = hd.dpdy;
                     ctx.footprint =
                         texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
                     ctx.stratum_offset = {hd.dudx * to_stratum_x + hd.dudy * to_stratum_y,
@@ -193,7 +279,7 @@ struct Tracer {
                 ctx.cmam_record = record_cmam_of(m, &cmam_record);
             Bsdf bsdf;
             Vec3 wo = -ray.dir;
-            if (!make_bsdf(scene, m, h, ctx, &bsdf)) {
+            if (!make_bsdf(scene, pick_mixed(m, ctx), h, ctx, &bsdf)) {
                 // Continue through: the footprint state moves to the hit point.
                 ray.org = offset_origin(h, ray.dir);
                 ray.diff.dodx = hd.dpdx;
@@ -202,8 +288,14 @@ struct Tracer {
                 ray.cone.width = cone_width_at(ray.cone, h.t);
                 continue;
             }
+            if (m.type == Material::Type::Mix) {
+                bsdf.kd = bsdf.kd * mix_weight;
+                bsdf.ks = bsdf.ks * mix_weight;
+                bsdf.kr = bsdf.kr * mix_weight;
+                bsdf.kt = bsdf.kt * mix_weight;
+            }
             if (aov) record_aov(ctx, h, bsdf);
-            Rgb L{};
+            Rgb L = emitted(h, wo);
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
                 L += specular_reflect(ray, h, hd, bsdf, wo, depth);
@@ -331,6 +423,20 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
+// The environment camera's ray differential: the rays one pixel right and down, differenced
+// (pbrt-v3's default for cameras without a closed form), scaled by `scale`.
+RayDifferential environment_differential(const Camera& c, float px, float py, const Vec3& dir,
+                                         float scale) {
+    RayDifferential rd;
+    Vec3 org, dx, dy;
+    c.generate_ray(px + 1, py, &org, &dx);
+    c.generate_ray(px, py + 1, &org, &dy);
+    rd.valid = true;
+    rd.dddx = (dx - dir) * scale;
+    rd.dddy = (dy - dir) * scale;
+    return rd;
+}
+
 struct CameraSample {
     Vec3 org, dir;
     RayDifferential diff;
@@ -367,7 +473,12 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     const SamplerSettings& smp = scene.sampler;
     const int nx = smp.xsamples, ny = smp.ysamples, spp = nx * ny;
     const float footprint_scale = 1 / std::sqrt(float(spp));  // pbrt-v3: differentials / sqrt(spp)
-    const RayCone camera_spread = camera_cone(scene.camera, footprint_scale);
+    // The environment camera's pixel spans 2 pi / xres by pi / yres radians.
+    const RayCone camera_spread =
+        scene.camera.environment
+            ? RayCone{0, std::min(2 * kPi / scene.camera.xres, kPi / scene.camera.yres) *
+                             footprint_scale}
+            : camera_cone(scene.camera, footprint_scale);
     if (options.aov == AovKind::Footprint) fb.channel_names = {"major", "minor", "lambda"};
 
     std::unique_ptr<tbb::global_control> limit;
@@ -410,7 +521,10 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
             CameraSample cs;
             scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
             if (scene.needs_differentials)
-                cs.diff = camera_differential(scene.camera, fx, fy, footprint_scale);
+                cs.diff =
+                    scene.camera.environment
+                        ? environment_differential(scene.camera, fx, fy, cs.dir, footprint_scale)
+                        : camera_differential(scene.camera, fx, fy, footprint_scale);
             cs.cone = camera_spread;
             cs.to_stratum_x = 0.5f - j[0];
             cs.to_stratum_y = 0.5f - j[1];

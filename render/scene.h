@@ -18,15 +18,19 @@
 
 #include "pbrt/error.h"
 #include "pbrt/scene_desc.h"
+#include "render/envmap.h"
 #include "render/math.h"
 
 namespace cmam::render {
 
-/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), or
-/// its orthographic camera (the screen window is the view in camera units, rays along +z).
+/// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), its
+/// orthographic camera (the screen window is the view in camera units, rays along +z), or its
+/// environment camera (the whole sphere in lat-long: theta = pi y / yres from camera +y,
+/// phi = 2 pi x / xres from +x towards +z).
 struct Camera {
     std::array<float, 12> world_from_camera{};  // 3x4
     bool orthographic = false;
+    bool environment = false;
     float tan_half_fov = 1;            // perspective; 1 for orthographic
     float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
     int xres = 640, yres = 480;
@@ -77,11 +81,36 @@ struct TexInput {
 };
 
 struct TextureNode {
-    enum class Kind { Constant, Image, Checkerboard, Scale, Mix };
+    enum class Kind {
+        Constant,
+        Image,
+        Checkerboard,
+        Scale,
+        Mix,
+        Bilerp,
+        Uv,
+        Dots,
+        Checkerboard3D,
+        Fbm,
+        Wrinkled,
+        Windy,
+        Marble
+    };
+    /// pbrt-v3's 2-D texture mappings: (u,v) scaled and offset; the direction from the texture
+    /// space origin as (theta / pi, phi / 2 pi) or as (angle, height) around z; or projections
+    /// of the world-space point on two vectors.
+    enum class Mapping { Uv, Spherical, Cylindrical, Planar };
     Kind kind = Kind::Constant;
     bool is_float = false;
     Rgb constant{};
-    float su = 1, sv = 1, du = 0, dv = 0;             // uv mapping
+    Mapping mapping = Mapping::Uv;
+    float su = 1, sv = 1, du = 0, dv = 0;  // uv mapping (du, dv: planar's offsets too)
+    Vec3 v1{1, 0, 0}, v2{0, 1, 0};         // planar mapping
+    // Spherical and cylindrical mappings and the 3-D textures: world -> texture space (3x4).
+    std::array<float, 12> texture_from_world{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    Rgb corners[4]{};                                 // Bilerp: v00, v01, v10, v11
+    int octaves = 8;                                  // Fbm, Wrinkled, Marble
+    float omega = 0.5f, scale = 1, variation = 0.2f;  // Fbm, Wrinkled (omega), Marble
     const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
     texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
     Lod lod = Lod::Differentials;                     // Image, Checkerboard: footprint source
@@ -90,21 +119,32 @@ struct TextureNode {
 };
 
 struct Material {
-    enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, None };
+    enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, None, Mix };
     Type type = Type::Matte;
     TexInput kd{-1, Rgb(0.5f)}, ks, kr, kt, sigma, roughness, eta;
     TexInput k;  // metal: the conductor's absorption (eta is its index of refraction)
+    // Mix: pbrt-v3's blend, amount x the first material + (1 - amount) x the second (indices
+    // into Scene::materials; -1 is the default matte).
+    int mix[2] = {-1, -1};
+    TexInput amount;
     bool remap_roughness = true;
 };
 
 struct Light {
-    enum class Type { Point, Spot, Distant, Infinite };
+    enum class Type { Point, Spot, Distant, Infinite, Area, Goniometric, Projection };
     Type type = Type::Point;
-    Rgb intensity{};   // I for point/spot, L for distant/infinite (scale applied)
+    Rgb intensity{};   // I for point/spot, L for distant/infinite/area (scale applied)
     Vec3 position{};   // point, spot
     Vec3 direction{};  // distant: towards the light; spot: axis (from -> to)
     float cos_total = 0, cos_falloff_start = 0;
+    std::shared_ptr<const EnvironmentMap> env;  // infinite: its map ("mapname"), times intensity
+    bool env_footprint = false;  // escaping rays look the map up over their differentials
+    int prim = -1;               // area: the emitting primitive (index in Scene::primitives)
+    bool two_sided = false;      // area: emits on both sides (otherwise along its normal only)
+    std::shared_ptr<const LightImage> image;  // goniometric, projection: I times the image
 };
+
+class Scene;
 
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).
 struct Primitive {
@@ -121,6 +161,35 @@ struct Primitive {
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
     double height = 0, inner_radius = 0;
+    // Area light ("AreaLightSource" in the shape's scope): its index in Scene::lights, and for
+    // triangles the cumulative areas that pick one by area.
+    int area_light = -1;
+    std::vector<double> area_cdf;
+
+    // Triangles: pbrt-v3's cut-out masks, float inputs; where one is 0 the surface is not there
+    // (for every ray, and "shadowalpha" for shadow rays too). -1 with value 1: no mask.
+    TexInput alpha{-1, Rgb(1)}, shadow_alpha{-1, Rgb(1)};
+    const Scene* scene = nullptr;  // for evaluating the masks (set by Scene::commit)
+    bool has_alpha() const {
+        return alpha.node >= 0 || alpha.value.r != 1 || shadow_alpha.node >= 0 ||
+               shadow_alpha.value.r != 1;
+    }
+    /// True when the masks remove the point at barycentrics (b1, b2) of triangle `tri` (for a
+    /// shadow ray when `shadow`).
+    bool cut_out(uint32_t tri, float b1, float b2, bool shadow) const;
+
+    // A whole sphere under a transform that keeps it round: its world centre and radius
+    // (0: not such a sphere), for sampling the cone it subtends.
+    Vec3 sphere_center{};
+    float sphere_radius = 0;
+
+    /// A point on the surface, uniform by area, from uniform numbers in [0,1): its position,
+    /// oriented geometric normal and density with respect to area (0 when none).
+    void sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
+    /// For a point `ref` outside a whole round sphere: a point on it seen from `ref`, uniform in
+    /// the cone of directions the sphere subtends, with its density with respect to solid angle.
+    /// False (nothing sampled) for other shapes and for points inside.
+    bool sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
 };
 
 /// An object's primitives, in the object's own space, with their own Embree scene, which every

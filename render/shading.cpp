@@ -1,5 +1,7 @@
 #include "render/shading.h"
 
+#include "render/noise.h"
+
 namespace cmam::render {
 
 texture::Texel lookup_image(const texture::FilteredTexture& image,
@@ -45,6 +47,99 @@ texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
     return fp;
 }
 
+namespace {
+
+Vec3 texture_point(const TextureNode& n, const Vec3& p) {
+    const auto& m = n.texture_from_world;
+    return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
+            m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+            m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+}
+Vec3 texture_vector(const TextureNode& n, const Vec3& v) {
+    const auto& m = n.texture_from_world;
+    return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+            m[8] * v.x + m[9] * v.y + m[10] * v.z};
+}
+
+// (s,t) of world point p under a spherical, cylindrical or planar mapping (pbrt-v3's: planar
+// projects the world-space point, the others the texture-space direction from the origin).
+texture::Vec2d mapped_st(const TextureNode& n, const Vec3& p) {
+    if (n.mapping == TextureNode::Mapping::Planar)
+        return {double(n.du) + dot(p, n.v1), double(n.dv) + dot(p, n.v2)};
+    const Vec3 q = texture_point(n, p);
+    const float len = length(q);
+    const Vec3 d = len > 0 ? q / len : Vec3(0, 0, 1);
+    if (n.mapping == TextureNode::Mapping::Spherical) {
+        float phi = std::atan2(d.y, d.x);
+        if (phi < 0) phi += 2 * kPi;
+        return {std::acos(std::clamp(d.z, -1.0f, 1.0f)) * kInvPi, phi / (2 * kPi)};
+    }
+    return {(kPi + std::atan2(d.y, d.x)) / (2 * kPi), d.z};
+}
+
+// A 2-D mapping's (s,t) at the hit and the footprint its lookup uses: for uv mapping the
+// node's (node_footprint); for the others the images of dP/dx and dP/dy (exact for planar,
+// finite differences for the angular mappings, across their seam the short way), or none
+// without ray differentials.
+texture::Vec2d node_st(const TextureNode& n, const TexContext& ctx, texture::Footprint* fp) {
+    if (n.mapping == TextureNode::Mapping::Uv) {
+        if (fp) *fp = node_footprint(n, ctx);
+        return {double(n.su) * ctx.u + n.du, double(n.sv) * ctx.v + n.dv};
+    }
+    const texture::Vec2d st = mapped_st(n, ctx.p);
+    if (!fp) return st;
+    *fp = {};
+    if (n.lod != Lod::Differentials ||
+        (dot(ctx.dpdx, ctx.dpdx) == 0 && dot(ctx.dpdy, ctx.dpdy) == 0))
+        return st;
+    texture::Vec2d axis[2];
+    const Vec3 dp[2] = {ctx.dpdx, ctx.dpdy};
+    for (int k = 0; k < 2; ++k) {
+        if (n.mapping == TextureNode::Mapping::Planar) {
+            axis[k] = {dot(dp[k], n.v1), dot(dp[k], n.v2)};
+            continue;
+        }
+        constexpr float kDelta = 0.01f;
+        const texture::Vec2d o = mapped_st(n, ctx.p + kDelta * dp[k]);
+        double a[2] = {(o.u - st.u) / kDelta, (o.v - st.v) / kDelta};
+        double& angle = a[n.mapping == TextureNode::Mapping::Spherical ? 1 : 0];
+        const double period = 1 / kDelta;
+        if (angle > period / 2) angle -= period;
+        if (angle < -period / 2) angle += period;
+        axis[k] = {a[0], a[1]};
+    }
+    *fp = texture::Footprint::axes(axis[0], axis[1]);
+    return st;
+}
+
+float noise2(float x, float y) {
+    return perlin_noise(Vec3(x, y, 0.5f));
+}
+
+// pbrt-v3's marble: a sine of height perturbed by fbm, through a Bezier spline of nine greys
+// and blues. Its segment index is clamped to at most 1 (pbrt-v3 does so; later segments are
+// reached by extrapolating the first two).
+Rgb marble(const TextureNode& n, const TexContext& ctx) {
+    const Vec3 p = texture_point(n, ctx.p) * n.scale;
+    const Vec3 dx = texture_vector(n, ctx.dpdx) * n.scale,
+               dy = texture_vector(n, ctx.dpdy) * n.scale;
+    float t = 0.5f + 0.5f * std::sin(p.y + n.variation * fbm(p, dx, dy, n.omega, n.octaves));
+    static const Rgb c[9] = {{.58f, .58f, .6f}, {.58f, .58f, .6f}, {.58f, .58f, .6f},
+                             {.5f, .5f, .5f},   {.6f, .59f, .58f}, {.58f, .58f, .6f},
+                             {.58f, .58f, .6f}, {.2f, .2f, .33f},  {.58f, .58f, .6f}};
+    constexpr int kSegments = 6;
+    const int first = std::min(1, static_cast<int>(std::floor(t * kSegments)));
+    t = t * kSegments - float(first);
+    auto mix = [t](const Rgb& a, const Rgb& b) { return (1 - t) * a + t * b; };
+    Rgb s0 = mix(c[first], c[first + 1]), s1 = mix(c[first + 1], c[first + 2]),
+        s2 = mix(c[first + 2], c[first + 3]);
+    s0 = mix(s0, s1);
+    s1 = mix(s1, s2);
+    return 1.5f * mix(s0, s1);
+}
+
+}  // namespace
+
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
     if (in.node < 0) return in.value;
     const TextureNode& n = scene.textures[static_cast<std::size_t>(in.node)];
@@ -52,7 +147,9 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
         case TextureNode::Kind::Constant:
             return n.constant;
         case TextureNode::Kind::Image: {
-            double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
+            texture::Footprint fp;
+            const texture::Vec2d st = node_st(n, ctx, &fp);
+            double s = st.u, t = st.v;
             texture::Texel x;
             if (n.lod == Lod::Cmam && ctx.cmam) {
                 // The CMAM sits between the texture and the parameterization: tag and (s,t) in.
@@ -75,19 +172,20 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 }
             } else {
                 if (n.filter.kind == texture::FilterKind::Area && n.lod == Lod::Differentials &&
+                    n.mapping == TextureNode::Mapping::Uv &&
                     ctx.footprint.kind == texture::Footprint::Kind::Axes) {
                     s += n.su * ctx.stratum_offset.u;
                     t += n.sv * ctx.stratum_offset.v;
                 }
-                x = lookup_image(*n.image, n.filter, s, t, node_footprint(n, ctx), ctx.tag,
-                                 ctx.counts);
+                x = lookup_image(*n.image, n.filter, s, t, fp, ctx.tag, ctx.counts);
             }
             if (n.image->image().channels() == 1) return Rgb(x[0]);
             return Rgb(x[0], x[1], x[2]);
         }
         case TextureNode::Kind::Checkerboard: {
-            double s = double(n.su) * ctx.u + n.du, t = double(n.sv) * ctx.v + n.dv;
-            texture::Footprint fp = n.closed_form ? node_footprint(n, ctx) : texture::Footprint{};
+            texture::Footprint fp;
+            const texture::Vec2d st = node_st(n, ctx, n.closed_form ? &fp : nullptr);
+            const double s = st.u, t = st.v;
             if (fp.kind == texture::Footprint::Kind::Axes) {
                 // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.
                 double ds = std::max(std::abs(fp.axis_a.u), std::abs(fp.axis_b.u));
@@ -109,6 +207,55 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
             auto parity =
                 static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
             return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);
+        }
+        case TextureNode::Kind::Bilerp: {
+            const texture::Vec2d st = node_st(n, ctx, nullptr);
+            const float s = float(st.u), t = float(st.v);
+            return (1 - s) * (1 - t) * n.corners[0] + (1 - s) * t * n.corners[1] +
+                   s * (1 - t) * n.corners[2] + s * t * n.corners[3];
+        }
+        case TextureNode::Kind::Uv: {
+            const texture::Vec2d st = node_st(n, ctx, nullptr);
+            const Rgb c(float(st.u - std::floor(st.u)), float(st.v - std::floor(st.v)), 0);
+            return n.is_float ? Rgb(c.r) : c;
+        }
+        case TextureNode::Kind::Dots: {
+            // A dot of radius 0.35 in about half the unit cells (centred on the integers),
+            // jittered inside its cell by noise.
+            const texture::Vec2d st = node_st(n, ctx, nullptr);
+            const float s_cell = std::floor(float(st.u) + 0.5f),
+                        t_cell = std::floor(float(st.v) + 0.5f);
+            if (noise2(s_cell + 0.5f, t_cell + 0.5f) > 0) {
+                constexpr float kRadius = 0.35f, kShift = 0.5f - kRadius;
+                const float sc = s_cell + kShift * noise2(s_cell + 1.5f, t_cell + 2.8f);
+                const float tc = t_cell + kShift * noise2(s_cell + 4.5f, t_cell + 9.8f);
+                const float ds = float(st.u) - sc, dt = float(st.v) - tc;
+                if (ds * ds + dt * dt < kRadius * kRadius) return eval_texture(scene, n.tex1, ctx);
+            }
+            return eval_texture(scene, n.tex2, ctx);
+        }
+        case TextureNode::Kind::Checkerboard3D: {
+            const Vec3 p = texture_point(n, ctx.p);
+            const long long parity = static_cast<long long>(std::floor(p.x)) +
+                                     static_cast<long long>(std::floor(p.y)) +
+                                     static_cast<long long>(std::floor(p.z));
+            return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);
+        }
+        case TextureNode::Kind::Fbm:
+        case TextureNode::Kind::Wrinkled:
+        case TextureNode::Kind::Windy: {
+            const Vec3 p = texture_point(n, ctx.p), dx = texture_vector(n, ctx.dpdx),
+                       dy = texture_vector(n, ctx.dpdy);
+            if (n.kind == TextureNode::Kind::Fbm) return Rgb(fbm(p, dx, dy, n.omega, n.octaves));
+            if (n.kind == TextureNode::Kind::Wrinkled)
+                return Rgb(turbulence(p, dx, dy, n.omega, n.octaves));
+            // Windy: small waves whose height follows a slowly varying wind strength.
+            const float wind = fbm(0.1f * p, 0.1f * dx, 0.1f * dy, 0.5f, 3);
+            return Rgb(std::abs(wind) * fbm(p, dx, dy, 0.5f, 6));
+        }
+        case TextureNode::Kind::Marble: {
+            const Rgb c = marble(n, ctx);
+            return n.is_float ? Rgb(c.luminance()) : c;
         }
         case TextureNode::Kind::Scale:
             return eval_texture(scene, n.tex1, ctx) * eval_texture(scene, n.tex2, ctx);
@@ -286,6 +433,7 @@ bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, con
             break;
         }
         case Material::Type::None:
+        case Material::Type::Mix:  // the integrator picks one of its materials first
             return false;
     }
     return true;

@@ -77,6 +77,9 @@ struct TexContext {
     uint64_t path = 1;
     CmamRowState* cmam = nullptr;       // the row's CMAM caches (null: no CMAM)
     CmamRecord* cmam_record = nullptr;  // optional: what a CMAM lookup filtered
+    // The hit in world space and, with ray differentials, its screen derivatives (zero
+    // without): what 3-D textures and the non-uv mappings read.
+    Vec3 p{}, dpdx{}, dpdy{};
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the
@@ -125,7 +128,8 @@ struct Bsdf {
     Rgb f(const Vec3& wo, const Vec3& wi) const;
 };
 
-/// Builds the BSDF of `material` at `hit`; returns false for material "none".
+/// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose
+/// materials the integrator chooses between).
 bool make_bsdf(const Scene& scene, const Material& material, const SurfaceHit& hit,
                const TexContext& ctx, Bsdf* bsdf);
 

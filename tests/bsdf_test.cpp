@@ -155,10 +155,11 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
             return w.find(text) != std::string::npos;
         });
     };
-    EXPECT_EQ(count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
-                    "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, and "
-                    "substrate and translucent as plastic)"),
-              1);
+    EXPECT_EQ(
+        count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
+              "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
+              "substrate and translucent as plastic)"),
+        1);
     EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
     warnings.clear();
     const Bsdf s = bsdf_of(

@@ -1,0 +1,215 @@
+#include "render/envmap.h"
+
+#include <cmam/texture/filters.h>
+
+#include <algorithm>
+#include <numbers>
+
+namespace cmam::render {
+
+Distribution1D::Distribution1D(std::vector<float> weights) : m_func(std::move(weights)) {
+    const std::size_t n = m_func.size();
+    std::vector<double> sums(n + 1, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+        sums[i + 1] = sums[i] + double(std::max(0.0f, m_func[i])) / double(n);
+    m_integral = sums[n];
+    m_cdf.resize(n + 1);
+    for (std::size_t i = 0; i <= n; ++i)
+        m_cdf[i] = float(m_integral > 0 ? sums[i] / m_integral : double(i) / double(n));
+    if (n) m_cdf[n] = 1;
+}
+
+float Distribution1D::pdf(int cell) const {
+    if (m_integral <= 0) return 1;  // uniform
+    return float(std::max(0.0f, m_func[static_cast<std::size_t>(cell)]) / m_integral);
+}
+
+float Distribution1D::sample(float u, float* pdf_out, int* cell) const {
+    // The last cell whose cdf start is at or below u (cells of zero weight are never chosen:
+    // their start equals the next cell's).
+    const auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), u);
+    const int n = size();
+    const int k = std::clamp(static_cast<int>(it - m_cdf.begin()) - 1, 0, n - 1);
+    const double width = double(m_cdf[k + 1]) - m_cdf[k];
+    const double t = width > 0 ? (double(u) - m_cdf[k]) / width : 0.5;
+    *cell = k;
+    *pdf_out = pdf(k);
+    return std::min(float((k + std::clamp(t, 0.0, 1.0)) / n), 0x1.fffffep-1f);
+}
+
+Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv) {
+    std::vector<float> marginal(static_cast<std::size_t>(nv));
+    m_rows.reserve(static_cast<std::size_t>(nv));
+    for (int v = 0; v < nv; ++v) {
+        const auto row = weights.begin() + static_cast<std::ptrdiff_t>(v) * nu;
+        m_rows.emplace_back(std::vector<float>(row, row + nu));
+        marginal[static_cast<std::size_t>(v)] = float(m_rows.back().integral());
+    }
+    m_marginal = Distribution1D(std::move(marginal));
+}
+
+std::array<float, 2> Distribution2D::sample(float u1, float u2, float* pdf) const {
+    float pv, pu;
+    int row, col;
+    const float v = m_marginal.sample(u2, &pv, &row);
+    const float u = m_rows[static_cast<std::size_t>(row)].sample(u1, &pu, &col);
+    *pdf = pu * pv;
+    return {u, v};
+}
+
+float Distribution2D::pdf(float u, float v) const {
+    const int nv = m_marginal.size(), nu = m_rows.empty() ? 0 : m_rows[0].size();
+    if (nv == 0) return 0;
+    const int row = std::clamp(static_cast<int>(v * nv), 0, nv - 1);
+    const int col = std::clamp(static_cast<int>(u * nu), 0, nu - 1);
+    return m_marginal.pdf(row) * m_rows[static_cast<std::size_t>(row)].pdf(col);
+}
+
+namespace {
+
+Vec3 transform3(const std::array<float, 9>& m, const Vec3& v) {
+    return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
+            m[6] * v.x + m[7] * v.y + m[8] * v.z};
+}
+
+std::array<float, 9> inverse3(const std::array<float, 9>& m) {
+    const double a = m[0], b = m[1], c = m[2], d = m[3], e = m[4], f = m[5], g = m[6], h = m[7],
+                 i = m[8];
+    const double A = e * i - f * h, B = -(d * i - f * g), C = d * h - e * g;
+    const double det = a * A + b * B + c * C;
+    if (det == 0) return {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const double k = 1 / det;
+    return {float(A * k), float(-(b * i - c * h) * k), float((b * f - c * e) * k),
+            float(B * k), float((a * i - c * g) * k),  float(-(a * f - c * d) * k),
+            float(C * k), float(-(a * h - b * g) * k), float((a * e - b * d) * k)};
+}
+
+}  // namespace
+
+EnvironmentMap::EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> image,
+                               const std::array<float, 9>& light_from_world)
+    : m_image(std::move(image)),
+      m_light_from_world(light_from_world),
+      m_world_from_light(inverse3(light_from_world)) {
+    // One cell per texel, in the map's own order (row 0 at theta = 0). The bilinear
+    // reconstruction inside a texel's cell blends it with its eight neighbours, and its largest
+    // value there is at one of nine points: the centre, the edges' midpoints or the corners.
+    // Weighting each cell by that maximum gives every direction with radiance a non-zero density,
+    // so the estimate is unbiased; sin(theta) turns the (u,v) density into one over the sphere.
+    const texture::Image& img = m_image->image();
+    const int W = img.width(), H = img.height(), ch = img.channels();
+    std::vector<float> lum(static_cast<std::size_t>(W) * H);
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const float* t = img.texel(i, j);
+            const float y = ch >= 3 ? Rgb(t[0], t[1], t[2]).luminance() : t[0];
+            lum[static_cast<std::size_t>(j) * W + i] = std::max(0.0f, y);
+        }
+    auto L = [&](int i, int j) {
+        i = ((i % W) + W) % W;
+        j = ((j % H) + H) % H;
+        return lum[static_cast<std::size_t>(j) * W + i];
+    };
+    std::vector<float> weights(static_cast<std::size_t>(W) * H);
+    for (int r = 0; r < H; ++r) {
+        const int j = H - 1 - r;  // image row of distribution row r
+        const float sin_theta = std::sin(kPi * (r + 0.5f) / H);
+        for (int i = 0; i < W; ++i) {
+            const float c = L(i, j);
+            float m = c;
+            for (int dj = -1; dj <= 1; dj += 2)
+                for (int di = -1; di <= 1; di += 2) {
+                    const float side_u = L(i + di, j), side_v = L(i, j + dj);
+                    const float corner = 0.25f * (c + side_u + side_v + L(i + di, j + dj));
+                    m = std::max({m, 0.5f * (c + side_u), 0.5f * (c + side_v), corner});
+                }
+            weights[static_cast<std::size_t>(r) * W + i] = m * sin_theta;
+        }
+    }
+    m_dist = Distribution2D(weights, W, H);
+}
+
+Rgb EnvironmentMap::at(float s, float theta_over_pi) const {
+    // The image is stored bottom row first; theta = 0 is the file's top row.
+    const texture::Texel x = texture::bilinear(m_image->image(), s, 1.0 - theta_over_pi);
+    if (m_image->image().channels() == 1) return Rgb(x[0]);
+    return {x[0], x[1], x[2]};
+}
+
+Rgb EnvironmentMap::radiance(const Vec3& dir, const Vec3* dddx, const Vec3* dddy) const {
+    const Vec3 q = transform3(m_light_from_world, dir);
+    const float len = length(q);
+    const Vec3 w = q / len;
+    const float theta = std::acos(std::clamp(w.z, -1.0f, 1.0f));
+    float phi = std::atan2(w.y, w.x);
+    if (phi < 0) phi += 2 * kPi;
+    const float rho2 = w.x * w.x + w.y * w.y;
+    if (!dddx || !dddy || !(rho2 > 1e-12f)) return at(phi / (2 * kPi), theta / kPi);
+    // The footprint's axes: (s,t) = (phi / 2 pi, 1 - theta / pi) differentiated along the unit
+    // light-space direction's derivatives, d(q/|q|) = (dq - (w.dq) w) / |q|.
+    texture::Vec2d axis[2];
+    const Vec3* dd[2] = {dddx, dddy};
+    for (int k = 0; k < 2; ++k) {
+        const Vec3 dq = transform3(m_light_from_world, *dd[k]);
+        const Vec3 dw = (dq - dot(w, dq) * w) / len;
+        const double dphi = (double(w.x) * dw.y - double(w.y) * dw.x) / rho2;
+        const double dtheta = -double(dw.z) / std::sqrt(double(rho2));  // sin(theta) = rho
+        axis[k] = {dphi / (2 * std::numbers::pi), -dtheta / std::numbers::pi};
+    }
+    const texture::Texel x = m_image->lookup(phi / (2 * kPi), 1.0 - theta / kPi,
+                                             texture::Footprint::axes(axis[0], axis[1]), m_filter);
+    if (m_image->image().channels() == 1) return Rgb(x[0]);
+    return {x[0], x[1], x[2]};
+}
+
+Rgb EnvironmentMap::sample(float u1, float u2, Vec3* wi, float* pdf) const {
+    *pdf = 0;
+    if (m_dist.empty()) return {};
+    float map_pdf;
+    const auto uv = m_dist.sample(u1, u2, &map_pdf);
+    if (map_pdf == 0) return {};
+    const float theta = uv[1] * kPi, phi = uv[0] * 2 * kPi;
+    const float sin_theta = std::sin(theta);
+    if (sin_theta == 0) return {};
+    // d(omega) = sin(theta) dtheta dphi = 2 pi^2 sin(theta) du dv.
+    *pdf = map_pdf / (2 * kPi * kPi * sin_theta);
+    *wi =
+        normalize(transform3(m_world_from_light, Vec3(sin_theta * std::cos(phi),
+                                                      sin_theta * std::sin(phi), std::cos(theta))));
+    return at(uv[0], uv[1]);
+}
+
+float EnvironmentMap::pdf(const Vec3& dir) const {
+    if (m_dist.empty()) return 0;
+    const Vec3 w = normalize(transform3(m_light_from_world, dir));
+    const float theta = std::acos(std::clamp(w.z, -1.0f, 1.0f));
+    const float sin_theta = std::sin(theta);
+    if (sin_theta == 0) return 0;
+    float phi = std::atan2(w.y, w.x);
+    if (phi < 0) phi += 2 * kPi;
+    return m_dist.pdf(phi / (2 * kPi), theta / kPi) / (2 * kPi * kPi * sin_theta);
+}
+
+Rgb LightImage::scale(const Vec3& w) const {
+    Vec3 q = transform3(light_from_world, w);
+    float s, t;  // from the file's top-left corner
+    if (kind == Kind::Goniometric) {
+        q = normalize(Vec3(q.x, q.z, q.y));
+        float phi = std::atan2(q.y, q.x);
+        if (phi < 0) phi += 2 * kPi;
+        s = phi / (2 * kPi);
+        t = std::acos(std::clamp(q.z, -1.0f, 1.0f)) / kPi;
+    } else {
+        constexpr float kHither = 1e-3f;
+        if (!(q.z >= kHither)) return {};
+        const float x = q.x / (q.z * tan_half_fov), y = q.y / (q.z * tan_half_fov);
+        if (x < screen[0] || x > screen[1] || y < screen[2] || y > screen[3]) return {};
+        s = (x - screen[0]) / (screen[1] - screen[0]);
+        t = (y - screen[2]) / (screen[3] - screen[2]);
+    }
+    const texture::Texel x = texture::bilinear(image->image(), s, 1.0 - t);
+    if (image->image().channels() == 1) return Rgb(x[0]);
+    return {x[0], x[1], x[2]};
+}
+
+}  // namespace cmam::render

@@ -1,0 +1,98 @@
+// render — pbrt-v3's "infinite" light with an environment map: a lat-long image around the
+// scene, seen by rays that escape and importance-sampled for direct lighting by a
+// piecewise-constant 2-D distribution of its luminance (algorithms.md §13).
+#pragma once
+
+#include <cmam/texture/filter.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "render/math.h"
+
+namespace cmam::render {
+
+/// A piecewise-constant density on [0,1): n equal cells with non-negative weights.
+class Distribution1D {
+  public:
+    Distribution1D() = default;
+    explicit Distribution1D(std::vector<float> weights);
+    int size() const { return static_cast<int>(m_func.size()); }
+    /// The weights' integral over [0,1) (their mean).
+    double integral() const { return m_integral; }
+    /// Maps a uniform number in [0,1) to x in [0,1) with density pdf(x); `cell` gets x's cell.
+    float sample(float u, float* pdf, int* cell) const;
+    float pdf(int cell) const;
+
+  private:
+    std::vector<float> m_func;
+    std::vector<float> m_cdf;  // size() + 1 entries, from 0 to 1 (summed in double)
+    double m_integral = 0;
+};
+
+/// A piecewise-constant density on [0,1)^2 over an nu x nv grid (weights row by row, v major):
+/// v is drawn from the rows' marginal, then u from that row's conditional.
+class Distribution2D {
+  public:
+    Distribution2D() = default;
+    Distribution2D(const std::vector<float>& weights, int nu, int nv);
+    bool empty() const { return m_marginal.size() == 0 || m_marginal.integral() == 0; }
+    /// (u,v) in [0,1)^2 with density *pdf with respect to du dv.
+    std::array<float, 2> sample(float u1, float u2, float* pdf) const;
+    float pdf(float u, float v) const;
+
+  private:
+    std::vector<Distribution1D> m_rows;
+    Distribution1D m_marginal;
+};
+
+/// A lat-long environment map in the light's frame (z up): direction (theta, phi) in the light's
+/// frame shows the image at (phi / 2 pi, theta / pi), measured from the file's top-left corner.
+class EnvironmentMap {
+  public:
+    /// `image` is stored as load_texture() returns it (row 0 is the file's bottom row);
+    /// `light_from_world` is the light's transform's inverse (3x3, row-major).
+    EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> image,
+                   const std::array<float, 9>& light_from_world);
+
+    /// Radiance the map shows along world direction `dir`: bilinear at full resolution (pbrt-v3's
+    /// lookup without a width), or, given the direction's screen derivatives dD/dx and dD/dy (a
+    /// ray differential), filtered over their image in the map by `filter`.
+    Rgb radiance(const Vec3& dir, const Vec3* dddx = nullptr, const Vec3* dddy = nullptr) const;
+    /// The filter for lookups with a footprint (default EWA, pbrt-v3's imagemap default).
+    void set_filter(const texture::FilterOptions& filter) { m_filter = filter; }
+    /// Samples a world direction towards the map by its luminance; returns its radiance and
+    /// the density with respect to solid angle (0: nothing to sample).
+    Rgb sample(float u1, float u2, Vec3* wi, float* pdf) const;
+    /// Density sample() gives the world direction `dir`, with respect to solid angle.
+    float pdf(const Vec3& dir) const;
+    const texture::FilteredTexture& image() const { return *m_image; }
+
+  private:
+    std::shared_ptr<const texture::FilteredTexture> m_image;
+    std::array<float, 9> m_light_from_world, m_world_from_light;
+    Distribution2D m_dist;
+    texture::FilterOptions m_filter{texture::FilterKind::Ewa};
+    Rgb at(float s, float theta_over_pi) const;
+};
+
+/// The image of pbrt-v3's goniometric or projection light: a point light whose intensity in
+/// direction w (away from the light) is multiplied by the image (bilinear at full resolution, as
+/// pbrt-v3 looks it up).
+struct LightImage {
+    enum class Kind { Goniometric, Projection };
+    Kind kind = Kind::Goniometric;
+    std::shared_ptr<const texture::FilteredTexture> image;  // as load_texture() returns it
+    std::array<float, 9> light_from_world{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    // Projection: tan(fov / 2) and the screen window [x0, x1] x [y0, y1] (the image's aspect).
+    float tan_half_fov = 1;
+    float screen[4] = {-1, 1, -1, 1};
+
+    /// Goniometric: the image in lat-long about the light's y axis (pbrt-v3 swaps y and z, then
+    /// u = phi / 2 pi, v = theta / pi from the file's top). Projection: the image on the
+    /// light's screen, a pinhole looking along +z; black outside it and behind the light.
+    Rgb scale(const Vec3& w) const;
+};
+
+}  // namespace cmam::render

@@ -1,0 +1,356 @@
+// Environment maps and area lights against closed forms: a diffuse plane under a constant map
+// reflects Kd L; the map's orientation follows pbrt-v3's (phi / 2 pi, theta / pi) with z up in
+// the light's frame; importance sampling is unbiased against a quadrature of the map; square,
+// disk and sphere area lights give the irradiance of their form factors.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "render/envmap.h"
+#include "render/image_io.h"
+#include "render/integrator.h"
+#include "scene_util.h"
+
+using namespace cmam;
+using namespace cmam::render;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+    fs::path d = fs::temp_directory_path() / ("cmam_lights_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+}
+
+// Writes a W x H map whose texel (i, j) (j = 0 the file's top row) is f(i, j).
+template <class F>
+std::string write_map(const std::string& name, int W, int H, F f) {
+    std::vector<float> rgb(static_cast<std::size_t>(W) * H * 3);
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const Rgb c = f(i, j);
+            float* p = &rgb[(static_cast<std::size_t>(j) * W + i) * 3];
+            p[0] = c.r;
+            p[1] = c.g;
+            p[2] = c.b;
+        }
+    const std::string path = (temp_dir() / name).string();
+    write_image(path, W, H, rgb);
+    return path;
+}
+
+std::string camera_and_plane(const std::string& world) {
+    return "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
+           "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 WorldBegin " +
+           world +
+           " Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5] "
+           "Shape \"trianglemesh\" \"point3 P\" [-20 -20 0  20 -20 0  20 20 0  -20 20 0] "
+           "\"integer indices\" [0 1 2 0 2 3] WorldEnd";
+}
+
+double mean_red(const Framebuffer& fb) {
+    double m = 0;
+    for (std::size_t i = 0; i < fb.rgb.size(); i += 3) m += fb.rgb[i];
+    return m / double(fb.rgb.size() / 3);
+}
+
+// Mean red radiance along a ray over many seeds.
+double mean_radiance(const Scene& s, Vec3 org, Vec3 dir, int n) {
+    double m = 0;
+    for (int k = 0; k < n; ++k)
+        m += trace_radiance(s, org, normalize(dir), uint64_t(k) + 1, nullptr).r;
+    return m / n;
+}
+
+}  // namespace
+
+TEST(EnvironmentMap, ConstantMapLightsADiffusePlaneWithKdTimesL) {
+    const std::string map = write_map("const.exr", 16, 8, [](int, int) { return Rgb(0.7f); });
+    auto s = test::scene_from(camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" +
+                                               map + "\" \"rgb L\" [2 2 2]"),
+                              "t.pbrt", 256);
+    ASSERT_EQ(s->lights.size(), 1u);
+    ASSERT_TRUE(s->lights[0].env);
+    Framebuffer fb = render::render(*s, {}, nullptr);
+    // 65536 samples of 4 Kd L cos(theta)^+ (uniform over the sphere): sigma 0.0035.
+    EXPECT_NEAR(mean_red(fb), 0.5 * 0.7 * 2, 0.012);
+}
+
+TEST(EnvironmentMap, OrientationFollowsPbrtV3) {
+    // The file's top half (theta < pi/2: +z in the light's frame) is bright; its left half
+    // (phi < pi: +y side) is red, its right half blue.
+    const std::string map = write_map("orient.exr", 64, 32, [](int i, int j) {
+        const float up = j < 16 ? 1.0f : 0.1f;
+        return i < 32 ? Rgb(up, 0, 0) : Rgb(0, 0, up);
+    });
+    const std::string light = "LightSource \"infinite\" \"string mapname\" \"" + map + "\" ";
+    auto s = test::scene_from(camera_and_plane(light), "t.pbrt", 1);
+    const EnvironmentMap& env = *s->lights[0].env;
+    EXPECT_NEAR(env.radiance(normalize(Vec3(0.1f, 1, 1))).r, 1.0f, 1e-5f);   // up, +y: red
+    EXPECT_NEAR(env.radiance(normalize(Vec3(0.1f, -1, 1))).b, 1.0f, 1e-5f);  // up, -y: blue
+    EXPECT_NEAR(env.radiance(normalize(Vec3(0.1f, 1, -1))).r, 0.1f, 1e-5f);  // down
+    // A camera ray that escapes sees the map: straight up from above the plane.
+    EXPECT_NEAR(trace_radiance(*s, Vec3(0, 0, 1), normalize(Vec3(0.1f, 1, 1)), 1, nullptr).r, 1.0f,
+                1e-5f);
+    // The light's transform orients it: Rotate -90 about x takes its z to world +y.
+    auto r = test::scene_from(
+        camera_and_plane("AttributeBegin Rotate -90 1 0 0 " + light + "AttributeEnd"), "t.pbrt", 1);
+    const EnvironmentMap& er = *r->lights[0].env;
+    EXPECT_NEAR(er.radiance(normalize(Vec3(0.1f, 1, -1))).r, 1.0f, 1e-5f);
+    EXPECT_NEAR(er.radiance(normalize(Vec3(0.1f, -1, 1))).r + er.radiance(Vec3(0.1f, -1, 1)).b,
+                0.1f, 1e-5f);
+}
+
+TEST(EnvironmentMap, ImportanceSamplingIsUnbiasedAndItsPdfIsConsistent) {
+    // A dim map with a small bright patch and a band: the luminance-sampled estimate of the
+    // cosine-weighted integral over the upper hemisphere matches a fine quadrature.
+    const std::string map = write_map("sun.exr", 32, 16, [](int i, int j) {
+        if (i == 5 && j == 4) return Rgb(200, 150, 100);
+        if (j == 10) return Rgb(0, 3, 0);
+        return Rgb(0.05f * float((i * 7 + j * 3) % 5));
+    });
+    auto s = test::scene_from(
+        camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""), "t.pbrt",
+        1);
+    const EnvironmentMap& env = *s->lights[0].env;
+    const Vec3 n = normalize(Vec3(0.3f, -0.2f, 1));
+    double ref = 0;
+    const int NT = 1200, NP = 2400;
+    for (int a = 0; a < NT; ++a)
+        for (int b = 0; b < NP; ++b) {
+            const double th = (a + 0.5) * std::numbers::pi / NT,
+                         ph = (b + 0.5) * 2 * std::numbers::pi / NP;
+            const Vec3 w(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
+                         float(std::cos(th)));
+            ref += env.radiance(w).luminance() * std::max(0.0f, dot(w, n)) * std::sin(th);
+        }
+    ref *= (std::numbers::pi / NT) * (2 * std::numbers::pi / NP);
+    double est = 0;
+    const int N = 400000;
+    uint64_t x = 12345;
+    auto uni = [&x] {
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+        return float(x >> 40) * 0x1.0p-24f;
+    };
+    int checked = 0, pdf_mismatches = 0;
+    for (int k = 0; k < N; ++k) {
+        Vec3 wi;
+        float pdf;
+        const Rgb L = env.sample(uni(), uni(), &wi, &pdf);
+        if (pdf == 0) continue;
+        est += L.luminance() * std::max(0.0f, dot(wi, n)) / pdf;
+        if (k % 997 == 0) {  // the sample's radiance and density are those of its direction
+            EXPECT_NEAR(L.luminance(), env.radiance(wi).luminance(), 1e-3f * (1 + L.luminance()));
+            // (a sample within rounding of a cell's edge may find the neighbour's density)
+            pdf_mismatches += std::abs(pdf - env.pdf(wi)) > 2e-3f * pdf;
+            ++checked;
+        }
+    }
+    est /= N;
+    EXPECT_GT(checked, 100);
+    EXPECT_LE(pdf_mismatches, checked / 50);
+    EXPECT_NEAR(est, ref, 0.01 * ref);
+}
+
+TEST(EnvironmentMap, EscapingRaysFilterTheMapOverTheirDifferentials) {
+    // A checker of single texels: a point lookup at a texel's centre gives 0 or 1, a lookup over
+    // a footprint of about 8 x 8 texels its mean.
+    const std::string map =
+        write_map("checker.exr", 256, 128, [](int i, int j) { return Rgb(float((i + j) % 2)); });
+    auto s = test::scene_from(
+        camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""), "t.pbrt",
+        1);
+    ASSERT_TRUE(s->lights[0].env_footprint);
+    EXPECT_TRUE(s->needs_differentials);
+    const EnvironmentMap& env = *s->lights[0].env;
+    // phi at the centre of texel column 10, theta at the centre of row 64.
+    const float phi = 2 * kPi * 10.5f / 256, theta = kPi * 64.5f / 128;
+    const Vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    const float point = env.radiance(d).r;
+    EXPECT_TRUE(std::abs(point) < 1e-4f || std::abs(point - 1) < 1e-4f) << point;
+    const Vec3 dx = 0.2f * Vec3(-std::sin(phi), std::cos(phi), 0), dy(0, 0, -0.2f);
+    EXPECT_NEAR(env.radiance(d, &dx, &dy).r, 0.5f, 0.05f);
+    // --lod other than differentials point-samples the map, as pbrt-v3 does.
+    BuildOptions o;
+    o.lod = Lod::None;
+    auto p = render::build_scene(
+        pbrt::parse_string(
+            camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""),
+            "t.pbrt"),
+        o, {});
+    EXPECT_FALSE(p->lights[0].env_footprint);
+}
+
+TEST(EnvironmentMap, MissingMapIsALocatedError) {
+    try {
+        test::scene_from(
+            camera_and_plane("LightSource \"infinite\" \"string mapname\" \"no_such_map.exr\""));
+        FAIL() << "no error";
+    } catch (const pbrt::SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("t.pbrt:1:"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("no_such_map.exr"), std::string::npos) << e.what();
+    }
+}
+
+namespace {
+// Irradiance at the foot of the normal from a uniform emitter of radiance L covering the
+// rectangle [0,X] x [0,Y] in a parallel plane at height h (form factor of a point to a
+// rectangle with a corner above it).
+double rect_irradiance(double L, double X, double Y, double h) {
+    const double x = X / h, y = Y / h;
+    const double f = (x / std::sqrt(1 + x * x)) * std::atan(y / std::sqrt(1 + x * x)) +
+                     (y / std::sqrt(1 + y * y)) * std::atan(x / std::sqrt(1 + y * y));
+    return L * f / 2;  // pi L F with F = f / (2 pi)
+}
+}  // namespace
+
+TEST(AreaLight, SquareLightGivesTheFormFactorIrradiance) {
+    // A 0.6 x 0.6 square at height 1, facing down, L = 5; the plane's radiance at the origin is
+    // Kd / pi * E.
+    const std::string light =
+        "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [5 5 5] "
+        "Shape \"trianglemesh\" \"point3 P\" [-0.3 -0.3 1  -0.3 0.3 1  0.3 0.3 1  0.3 -0.3 1] "
+        "\"integer indices\" [0 1 2 0 2 3] AttributeEnd";
+    auto s = test::scene_from(camera_and_plane(light), "t.pbrt", 1);
+    ASSERT_EQ(s->lights.size(), 1u);
+    const double E = 4 * rect_irradiance(5, 0.3, 0.3, 1);
+    const double got = mean_radiance(*s, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 20000);
+    EXPECT_NEAR(got, 0.5 / std::numbers::pi * E, 0.003 * 0.5 / std::numbers::pi * E);
+    // Its emitting side (the normal of P0 P1 P2 points down) shows L; the other side nothing.
+    EXPECT_FLOAT_EQ(trace_radiance(*s, Vec3(0.1f, 0, 0.5f), Vec3(0, 0, 1), 1, nullptr).r, 5);
+    EXPECT_FLOAT_EQ(trace_radiance(*s, Vec3(0.1f, 0, 2), Vec3(0, 0, -1), 1, nullptr).r, 0);
+}
+
+TEST(AreaLight, TwoSidedEmitsOnBothSidesAndReverseOrientationFlips) {
+    auto mk = [](const std::string& pre, const std::string& params) {
+        return test::scene_from(camera_and_plane(
+            "AttributeBegin " + pre + " AreaLightSource \"diffuse\" \"rgb L\" [5 5 5] " + params +
+            " Shape \"trianglemesh\" \"point3 P\" [-0.3 -0.3 1  -0.3 0.3 1  0.3 0.3 1  0.3 -0.3 "
+            "1] \"integer indices\" [0 1 2 0 2 3] AttributeEnd"));
+    };
+    auto two = mk("", "\"bool twosided\" true");
+    EXPECT_FLOAT_EQ(trace_radiance(*two, Vec3(0.1f, 0, 2), Vec3(0, 0, -1), 1, nullptr).r, 5);
+    auto rev = mk("ReverseOrientation", "");
+    EXPECT_FLOAT_EQ(trace_radiance(*rev, Vec3(0.1f, 0, 2), Vec3(0, 0, -1), 1, nullptr).r, 5);
+    EXPECT_FLOAT_EQ(trace_radiance(*rev, Vec3(0.1f, 0, 0.5f), Vec3(0, 0, 1), 1, nullptr).r, 0);
+}
+
+TEST(AreaLight, DiskAndSphereLightsUnderTransforms) {
+    // A disk of radius 0.25 scaled by 2 (radius 0.5 in the world) at height 1, facing down:
+    // E = pi L R^2 / (h^2 + R^2).
+    auto disk = test::scene_from(camera_and_plane(
+        "AttributeBegin Translate 0 0 1 Scale 2 2 2 ReverseOrientation "
+        "AreaLightSource \"diffuse\" \"rgb L\" [3 3 3] Shape \"disk\" \"float radius\" 0.25 "
+        "AttributeEnd"));
+    const double Ed = std::numbers::pi * 3 * 0.25 / (1 + 0.25);
+    EXPECT_NEAR(mean_radiance(*disk, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 20000),
+                0.5 / std::numbers::pi * Ed, 0.005 * 0.5 / std::numbers::pi * Ed);
+    // A sphere of radius 0.25 scaled by 2, centred 2 above: E = pi L (r / d)^2. A round sphere
+    // is sampled in the cone it subtends (almost no variance); the same sphere cut at its poles
+    // by zmin and zmax = +-0.2499 is sampled by area (half the samples on its far side).
+    auto sphere = test::scene_from(camera_and_plane(
+        "AttributeBegin Translate 0 0 2 Scale 2 2 2 AreaLightSource \"diffuse\" \"rgb L\" "
+        "[4 4 4] Shape \"sphere\" \"float radius\" 0.25 AttributeEnd"));
+    EXPECT_FLOAT_EQ(sphere->primitives[0]->sphere_radius, 0.5f);
+    const double Es = std::numbers::pi * 4 * 0.0625;
+    EXPECT_NEAR(mean_radiance(*sphere, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 2000),
+                0.5 / std::numbers::pi * Es, 0.001 * 0.5 / std::numbers::pi * Es);
+    auto cut = test::scene_from(camera_and_plane(
+        "AttributeBegin Translate 0 0 2 Scale 2 2 2 AreaLightSource \"diffuse\" \"rgb L\" "
+        "[4 4 4] Shape \"sphere\" \"float radius\" 0.25 \"float zmin\" -0.2499 "
+        "\"float zmax\" 0.2499 AttributeEnd"));
+    EXPECT_EQ(cut->primitives[0]->sphere_radius, 0);
+    EXPECT_NEAR(mean_radiance(*cut, Vec3(0, -0.4f, 0.4f), Vec3(0, 0.4f, -0.4f), 40000),
+                0.5 / std::numbers::pi * Es, 0.01 * 0.5 / std::numbers::pi * Es);
+}
+
+TEST(AreaLight, InstancedShapesDoNotEmitWithAWarning) {
+    std::vector<std::string> warnings;
+    pbrt::SceneDesc d = pbrt::parse_string(
+        camera_and_plane("AreaLightSource \"diffuse\" ObjectBegin \"o\" Shape \"sphere\" "
+                         "ObjectEnd ObjectInstance \"o\""),
+        "t.pbrt", [&](const std::string& w) { warnings.push_back(w); });
+    ASSERT_FALSE(warnings.empty());
+    EXPECT_NE(warnings[0].find("object"), std::string::npos) << warnings[0];
+}
+
+TEST(AreaLight, ImagesWithTheNewLightsMaterialsAndTexturesAreTheSameForAnyThreadCount) {
+    const std::string map = write_map("det.exr", 16, 8, [](int i, int j) {
+        return Rgb(float(i % 3) * 0.3f, float(j % 2), 0.5f);
+    });
+    auto s = test::scene_from(
+        "LookAt 0 -4 3  0 0 0  0 0 1 Camera \"perspective\" \"float fov\" 50 "
+        "Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 24 WorldBegin "
+        "LightSource \"infinite\" \"string mapname\" \"" +
+            map +
+            "\" AttributeBegin Translate 0 0 2 AreaLightSource \"diffuse\" \"rgb L\" [3 3 3] "
+            "Shape \"sphere\" \"float radius\" 0.3 AttributeEnd "
+            "Texture \"n\" \"spectrum\" \"fbm\" "
+            "MakeNamedMaterial \"a\" \"string type\" \"matte\" \"texture Kd\" \"n\" "
+            "MakeNamedMaterial \"b\" \"string type\" \"mirror\" "
+            "MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string namedmaterial1\" \"a\" "
+            "\"string namedmaterial2\" \"b\" NamedMaterial \"m\" "
+            "Shape \"trianglemesh\" \"point3 P\" [-5 -5 0  5 -5 0  5 5 0  -5 5 0] "
+            "\"integer indices\" [0 1 2 0 2 3] Shape \"cylinder\" \"float radius\" 0.5 WorldEnd",
+        "t.pbrt", 4);
+    RenderOptions one, two;
+    one.threads = 1;
+    two.threads = 2;
+    const Framebuffer a = render::render(*s, one, nullptr), b = render::render(*s, two, nullptr);
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(0, std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)));
+    double sum = 0;
+    for (float x : a.rgb) sum += x;
+    EXPECT_GT(sum, 0);
+}
+
+TEST(EnvironmentCamera, LatLongDirectionsAsPbrtV3) {
+    // Identity camera transform: theta from camera +y (the top row), phi from +x towards +z.
+    auto s = test::scene_from(
+        "Camera \"environment\" Film \"image\" \"integer xresolution\" 40 "
+        "\"integer yresolution\" 20 WorldBegin LightSource \"infinite\" Shape \"sphere\" "
+        "\"float radius\" 5 WorldEnd",
+        "t.pbrt", 1);
+    ASSERT_TRUE(s->camera.environment);
+    Vec3 o, d;
+    s->camera.generate_ray(0, 10, &o, &d);  // theta = pi/2, phi = 0
+    EXPECT_NEAR(d.x, 1, 1e-5f);
+    s->camera.generate_ray(10, 10, &o, &d);  // phi = pi/2: +z
+    EXPECT_NEAR(d.z, 1, 1e-5f);
+    s->camera.generate_ray(7, 0, &o, &d);  // the top row looks along +y
+    EXPECT_NEAR(d.y, 1, 1e-5f);
+    // Rendering from inside a sphere: every pixel sees it, lit by the sky.
+    const Framebuffer fb = render::render(*s, {}, nullptr);
+    for (std::size_t i = 0; i < fb.rgb.size(); ++i) ASSERT_TRUE(std::isfinite(fb.rgb[i]));
+}
+
+TEST(LightImage, GoniometricAndProjectionFollowPbrtV3) {
+    // Goniometric: the file's top rows are the light's +y (pbrt-v3 swaps y and z, then theta).
+    const std::string gmap =
+        write_map("gonio.exr", 16, 8, [](int, int j) { return Rgb(j < 4 ? 1.0f : 0.0f); });
+    auto g = test::scene_from(camera_and_plane(
+        "AttributeBegin Translate 0 0 5 LightSource \"goniometric\" \"rgb I\" [2 2 2] "
+        "\"string mapname\" \"" +
+        gmap + "\" AttributeEnd"));
+    const Light& gl = g->lights[0];
+    ASSERT_TRUE(gl.image);
+    EXPECT_EQ(gl.position.z, 5);
+    // theta = pi/4 from +y reads between rows 1 and 2, 3 pi/4 between rows 5 and 6.
+    EXPECT_NEAR(gl.image->scale(normalize(Vec3(1, 1, 0))).r, 1, 1e-6f);
+    EXPECT_NEAR(gl.image->scale(normalize(Vec3(0, -1, 1))).r, 0, 1e-6f);
+    // Projection: the image on the screen of a pinhole along +z, x in [-aspect, aspect].
+    const std::string pmap = write_map(
+        "proj.exr", 2, 1, [](int i, int) { return i == 0 ? Rgb(1, 0, 0) : Rgb(0, 0, 1); });
+    auto p = test::scene_from(camera_and_plane(
+        "LightSource \"projection\" \"float fov\" 90 \"string mapname\" \"" + pmap + "\""));
+    const LightImage& pi = *p->lights[0].image;
+    EXPECT_NEAR(pi.scale(normalize(Vec3(-1, 0, 1))).r, 1, 1e-6f);   // left texel's centre: red
+    EXPECT_NEAR(pi.scale(normalize(Vec3(1, 0, 1))).b, 1, 1e-6f);    // right one's: blue
+    EXPECT_TRUE(pi.scale(Vec3(0, 0, -1)).is_black());               // behind
+    EXPECT_TRUE(pi.scale(normalize(Vec3(3, 0, 1))).is_black());     // beside the screen
+    EXPECT_TRUE(pi.scale(normalize(Vec3(0, 1.5f, 1))).is_black());  // above it
+}

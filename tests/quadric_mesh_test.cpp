@@ -1,0 +1,84 @@
+// Cylinders, cones, paraboloids and hyperboloids, tessellated at build time: hits lie on the
+// exact surface (within the facets' sag), with pbrt-v3's (u,v) and outward normals.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "render/tessellate.h"
+#include "scene_util.h"
+
+using namespace cmam;
+using namespace cmam::render;
+
+namespace {
+
+std::unique_ptr<Scene> shape(const std::string& s) {
+    return test::scene_from("Camera \"perspective\" WorldBegin " + s + " WorldEnd");
+}
+
+// Hits the shape with a ray from far out along the horizontal direction at angle phi, at
+// height z, towards the z axis.
+SurfaceHit hit_towards_axis(const Scene& s, float phi, float z) {
+    const Vec3 dir(-std::cos(phi), -std::sin(phi), 0);
+    SurfaceHit h;
+    EXPECT_TRUE(s.intersect(Vec3(0, 0, z) - 10 * dir, dir, 0, 100, &h));
+    return h;
+}
+
+}  // namespace
+
+TEST(QuadricMesh, CylinderHasPbrtV3sParameterization) {
+    auto s = shape("Shape \"cylinder\" \"float radius\" 2 \"float zmin\" -1 \"float zmax\" 3");
+    const float phi = 0.3f;
+    SurfaceHit h = hit_towards_axis(*s, phi, 0.2f);
+    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), 2, 2 * 4e-4);  // the chord's sag at 128 segments
+    EXPECT_NEAR(h.u, phi / (2 * kPi), 1e-3);
+    EXPECT_NEAR(h.v, (0.2f + 1) / 4, 1e-5);
+    EXPECT_NEAR(h.ns.x, std::cos(phi), 1e-3);
+    EXPECT_NEAR(h.ns.y, std::sin(phi), 1e-3);
+    EXPECT_GT(dot(h.ng, Vec3(std::cos(phi), std::sin(phi), 0)), 0.99f);
+    auto r = shape("ReverseOrientation Shape \"cylinder\"");
+    SurfaceHit hr = hit_towards_axis(*r, phi, 0);
+    EXPECT_LT(hr.ns.x, -0.9f);
+    EXPECT_LT(hr.ng.x, -0.9f);
+}
+
+TEST(QuadricMesh, ConeParaboloidAndHyperboloid) {
+    // Cone: radius r (1 - z / height).
+    auto c = shape("Shape \"cone\" \"float radius\" 1 \"float height\" 2");
+    SurfaceHit h = hit_towards_axis(*c, 1.0f, 0.5f);
+    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), 0.75f, 1e-3);
+    EXPECT_NEAR(h.v, 0.25f, 1e-5);
+    EXPECT_NEAR(h.u, 1.0f / (2 * kPi), 1e-3);
+    const Vec3 n = normalize(Vec3(2 * std::cos(1.0f), 2 * std::sin(1.0f), 1));
+    EXPECT_GT(dot(h.ns, n), 0.9999f);
+    // Paraboloid: x^2 + y^2 = r^2 z / zmax.
+    auto p = shape("Shape \"paraboloid\" \"float radius\" 1 \"float zmin\" 0 \"float zmax\" 4");
+    h = hit_towards_axis(*p, 2.0f, 1.0f);
+    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), 0.5f, 2e-3);
+    EXPECT_NEAR(h.v, 0.25f, 2e-3);
+    // Hyperboloid from (1, 0, 0) to (0, 1, 1): at v = 1/2 the point (1/2, 1/2, 1/2) turned by
+    // phi; the radius is sqrt(1/2).
+    auto y = shape("Shape \"hyperboloid\" \"point3 p1\" [1 0 0] \"point3 p2\" [0 1 1]");
+    h = hit_towards_axis(*y, kPi / 4 + 0.5f, 0.5f);
+    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), std::sqrt(0.5f), 1e-3);
+    EXPECT_NEAR(h.v, 0.5f, 1e-5);
+    EXPECT_NEAR(h.u, 0.5f / (2 * kPi), 1e-3);
+    EXPECT_GT(h.ns.x * h.p.x + h.ns.y * h.p.y, 0);  // outwards
+}
+
+TEST(QuadricMesh, PartialSweepsAndUnsupportedShapes) {
+    const QuadricMesh m = tessellate("cylinder", QuadricParams{.phimax = 90}, 128);
+    EXPECT_EQ(m.indices.size(), 32u * 6);  // a quarter of the segments, one row
+    for (std::size_t i = 0; i < m.uvs.size(); i += 2) EXPECT_LE(m.uvs[i], 1.0f);
+    std::vector<std::string> warnings;
+    pbrt::SceneDesc d = pbrt::parse_string(
+        "Camera \"perspective\" WorldBegin Shape \"curve\" \"point3 P\" "
+        "[0 0 0 1 0 0 2 0 0 3 0 0] WorldEnd",
+        "t.pbrt");
+    auto s = render::build_scene(d, {}, [&](const std::string& w) { warnings.push_back(w); });
+    EXPECT_TRUE(s->primitives.empty());
+    EXPECT_TRUE(std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
+        return w.find("t.pbrt:1:33: warning: shape \"curve\" is not rendered") == 0;
+    }));
+}
