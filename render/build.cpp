@@ -71,6 +71,14 @@ class Builder {
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
     std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
+    bool m_light_samples = false;      // lights' nsamples are used (directlighting, "all")
+
+    // Shadow rays per shading point for a light: its nsamples under pbrt-v3's directlighting
+    // integrator, which reads them; 1 otherwise, as pbrt-v3's whitted and path take.
+    int light_samples(const Entity& e) const {
+        if (!m_light_samples || !e.params.find("nsamples")) return 1;
+        return std::clamp(e.params.get_int("nsamples", 1), 1, 1 << 16);
+    }
 
     void warn(const pbrt::FileLoc& loc, const std::string& msg) {
         if (m_warn) m_warn(pbrt::format_warning(loc, msg));
@@ -350,7 +358,13 @@ class Builder {
                      "\"whitted\"");
             return;
         }
-        if (e.type != "whitted")
+        // pbrt-v3's directlighting is whitted's recursion with every light sampled nsamples
+        // times ("all", its default) or one light chosen per point ("one": here each light
+        // once, the same expectation).
+        const bool direct = e.type == "directlighting";
+        if (direct)
+            m_light_samples = e.params.get_string("strategy", "all") == "all";
+        else if (e.type != "whitted")
             warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
         if (const auto* p = e.params.find("maxdepth")) {
             const int depth = e.params.get_int("maxdepth", 5);
@@ -361,7 +375,7 @@ class Builder {
         }
         e.params.check_unused(
             "Integrator " + q(e.type), m_warn,
-            e.type == "whitted" ? std::vector<std::string>{"pixelbounds"} : names_of(e));
+            e.type == "whitted" || direct ? std::vector<std::string>{"pixelbounds"} : names_of(e));
     }
 
     // --- textures ---------------------------------------------------------------------
@@ -1033,6 +1047,7 @@ class Builder {
         auto L = e.params.get_rgb("L");
         l.intensity = (L ? to_rgb(finite_values(e, "L", *L)) : Rgb(1)) * scale;
         l.two_sided = e.params.get_bool("twosided", false);
+        l.samples = light_samples(e);
         e.params.check_unused("AreaLightSource \"diffuse\"", m_warn, {"nsamples", "samples"});
         return l;
     }
@@ -1171,9 +1186,9 @@ class Builder {
                                         " (supported: \"point\", \"spot\", \"distant\", "
                                         "\"infinite\", \"goniometric\", \"projection\")");
         }
-        // pbrt-v3's sample counts: a delta light needs one shadow ray, and the infinite light
-        // is sampled once per shading point here.
+        // A delta light needs one shadow ray; the others take nsamples under directlighting.
         // (pbrt-v3's goniometric light has no fov, but scenes give it; pbrt-v3 warns too.)
+        if (l.type == Light::Type::Infinite) l.samples = light_samples(e);
         e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta", "fov"});
         m_scene->lights.push_back(l);
     }

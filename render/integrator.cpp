@@ -120,86 +120,93 @@ struct Tracer {
     Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
         Rgb L{};
         for (const Light& light : scene.lights) {
-            Vec3 wi;
-            Rgb li;
-            float dist = std::numeric_limits<float>::infinity();
-            float pdf = 1;
-            Vec3 target;  // area lights: the point sampled on the light
-            switch (light.type) {
-                case Light::Type::Point:
-                case Light::Type::Spot:
-                case Light::Type::Goniometric:
-                case Light::Type::Projection: {
-                    Vec3 d = light.position - h.p;
-                    float d2 = dot(d, d);
-                    dist = std::sqrt(d2);
-                    wi = d / dist;
-                    li = light.intensity / d2;
-                    if (light.image) li = li * light.image->scale(-wi);
-                    if (light.type == Light::Type::Spot) {
-                        float c = dot(-wi, light.direction);
-                        if (c < light.cos_total) continue;
-                        if (c < light.cos_falloff_start) {
-                            float delta =
-                                (c - light.cos_total) / (light.cos_falloff_start - light.cos_total);
-                            li = li * ((delta * delta) * (delta * delta));
+            // Lights that are sampled (infinite, area) take light.samples shadow rays, averaged.
+            Rgb sum{};
+            for (int k = 0; k < light.samples; ++k) {
+                Vec3 wi;
+                Rgb li;
+                float dist = std::numeric_limits<float>::infinity();
+                float pdf = 1;
+                Vec3 target;  // area lights: the point sampled on the light
+                switch (light.type) {
+                    case Light::Type::Point:
+                    case Light::Type::Spot:
+                    case Light::Type::Goniometric:
+                    case Light::Type::Projection: {
+                        Vec3 d = light.position - h.p;
+                        float d2 = dot(d, d);
+                        dist = std::sqrt(d2);
+                        wi = d / dist;
+                        li = light.intensity / d2;
+                        if (light.image) li = li * light.image->scale(-wi);
+                        if (light.type == Light::Type::Spot) {
+                            float c = dot(-wi, light.direction);
+                            if (c < light.cos_total) continue;
+                            if (c < light.cos_falloff_start) {
+                                float delta = (c - light.cos_total) /
+                                              (light.cos_falloff_start - light.cos_total);
+                                li = li * ((delta * delta) * (delta * delta));
+                            }
                         }
-                    }
-                    break;
-                }
-                case Light::Type::Distant:
-                    wi = light.direction;
-                    li = light.intensity;
-                    break;
-                case Light::Type::Infinite: {
-                    if (light.env) {  // by the map's luminance
-                        float u1 = rng.next_float(), u2 = rng.next_float();
-                        li = light.intensity * light.env->sample(u1, u2, &wi, &pdf);
-                        if (pdf == 0) continue;
                         break;
                     }
-                    // Cosine-weighted about the geometric normal on wo's side: the same expected
-                    // value as pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
-                    float u1 = rng.next_float(), u2 = rng.next_float();
-                    float r = std::sqrt(u1), phi = 2 * kPi * u2;
-                    Vec3 local(r * std::cos(phi), r * std::sin(phi),
-                               std::sqrt(std::max(0.0f, 1 - u1)));
-                    Frame f = Frame::from_z(faceforward(h.ng, wo));
-                    wi = f.to_world(local);
-                    pdf = local.z * kInvPi;
-                    if (pdf == 0) continue;
-                    li = light.intensity;
-                    break;
+                    case Light::Type::Distant:
+                        wi = light.direction;
+                        li = light.intensity;
+                        break;
+                    case Light::Type::Infinite: {
+                        if (light.env) {  // by the map's luminance
+                            float u1 = rng.next_float(), u2 = rng.next_float();
+                            li = light.intensity * light.env->sample(u1, u2, &wi, &pdf);
+                            if (pdf == 0) continue;
+                            break;
+                        }
+                        // Cosine-weighted about the geometric normal on wo's side: the same
+                        // expected value as pbrt-v3's sphere sampling for reflection-only BSDFs,
+                        // lower variance.
+                        float u1 = rng.next_float(), u2 = rng.next_float();
+                        float r = std::sqrt(u1), phi = 2 * kPi * u2;
+                        Vec3 local(r * std::cos(phi), r * std::sin(phi),
+                                   std::sqrt(std::max(0.0f, 1 - u1)));
+                        Frame f = Frame::from_z(faceforward(h.ng, wo));
+                        wi = f.to_world(local);
+                        pdf = local.z * kInvPi;
+                        if (pdf == 0) continue;
+                        li = light.intensity;
+                        break;
+                    }
+                    case Light::Type::Area: {
+                        // One point: in the cone a round sphere subtends, else uniform by area with
+                        // its density converted to solid angle.
+                        const Primitive& prim =
+                            *scene.primitives[static_cast<std::size_t>(light.prim)];
+                        float u1 = rng.next_float(), u2 = rng.next_float(), pdf_area;
+                        Vec3 p, n;
+                        const bool cone = prim.sample_cone(h.p, u1, u2, &p, &n, &pdf);
+                        if (!cone) prim.sample_area(u1, u2, &p, &n, &pdf_area);
+                        if (!cone && pdf_area == 0) continue;
+                        Vec3 d = p - h.p;
+                        float d2 = dot(d, d);
+                        if (d2 == 0) continue;
+                        dist = std::sqrt(d2);
+                        wi = d / dist;
+                        float cos_l = dot(n, -wi);
+                        if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
+                        if (!cone) pdf = pdf_area * d2 / std::abs(cos_l);
+                        target = p;
+                        li = light.intensity;
+                        break;
+                    }
                 }
-                case Light::Type::Area: {
-                    // One point: in the cone a round sphere subtends, else uniform by area with
-                    // its density converted to solid angle.
-                    const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
-                    float u1 = rng.next_float(), u2 = rng.next_float(), pdf_area;
-                    Vec3 p, n;
-                    const bool cone = prim.sample_cone(h.p, u1, u2, &p, &n, &pdf);
-                    if (!cone) prim.sample_area(u1, u2, &p, &n, &pdf_area);
-                    if (!cone && pdf_area == 0) continue;
-                    Vec3 d = p - h.p;
-                    float d2 = dot(d, d);
-                    if (d2 == 0) continue;
-                    dist = std::sqrt(d2);
-                    wi = d / dist;
-                    float cos_l = dot(n, -wi);
-                    if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
-                    if (!cone) pdf = pdf_area * d2 / std::abs(cos_l);
-                    target = p;
-                    li = light.intensity;
-                    break;
-                }
+                if (li.is_black()) continue;
+                Rgb fv = bsdf.f(wo, wi);
+                if (fv.is_black()) continue;
+                if (light.type == Light::Type::Area ? !visible_point(h, wi, target)
+                                                    : !visible(h, wi, dist))
+                    continue;
+                sum += fv * li * (absdot(wi, h.ns) / pdf);
             }
-            if (li.is_black()) continue;
-            Rgb fv = bsdf.f(wo, wi);
-            if (fv.is_black()) continue;
-            if (light.type == Light::Type::Area ? !visible_point(h, wi, target)
-                                                : !visible(h, wi, dist))
-                continue;
-            L += fv * li * (absdot(wi, h.ns) / pdf);
+            L += light.samples == 1 ? sum : sum / float(light.samples);
         }
         return L;
     }

@@ -142,6 +142,7 @@ struct Light {
     int prim = -1;               // area: the emitting primitive (index in Scene::primitives)
     bool two_sided = false;      // area: emits on both sides (otherwise along its normal only)
     std::shared_ptr<const LightImage> image;  // goniometric, projection: I times the image
+    int samples = 1;  // infinite, area: shadow rays per shading point (averaged)
 };
 
 class Scene;

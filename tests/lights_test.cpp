@@ -354,3 +354,42 @@ TEST(LightImage, GoniometricAndProjectionFollowPbrtV3) {
     EXPECT_TRUE(pi.scale(normalize(Vec3(3, 0, 1))).is_black());     // beside the screen
     EXPECT_TRUE(pi.scale(normalize(Vec3(0, 1.5f, 1))).is_black());  // above it
 }
+
+// Under pbrt-v3's directlighting integrator (strategy "all"), an area light takes its nsamples
+// shadow rays per shading point, averaged: the same mean, a quarter of the noise at 16; under
+// whitted (or strategy "one") nsamples is not read, as in pbrt-v3.
+TEST(AreaLight, NsamplesUnderDirectLightingAveragesThatManyShadowRays) {
+    auto scene = [](const std::string& integrator) {
+        const std::string light =
+            "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [5 5 5] \"integer nsamples\" 16 "
+            "Shape \"trianglemesh\" \"point3 P\" [-2 -2 1  -2 2 1  2 2 1  2 -2 1] "
+            "\"integer indices\" [0 1 2 0 2 3] AttributeEnd";
+        std::string text = camera_and_plane(light);
+        text.insert(text.find("WorldBegin"), integrator + " ");
+        return test::scene_from(text, "t.pbrt", 1);
+    };
+    const auto direct = scene("Integrator \"directlighting\""),
+               whitted = scene("Integrator \"whitted\""),
+               one = scene("Integrator \"directlighting\" \"string strategy\" \"one\"");
+    EXPECT_EQ(direct->lights[0].samples, 16);
+    EXPECT_EQ(whitted->lights[0].samples, 1);
+    EXPECT_EQ(one->lights[0].samples, 1);
+    auto stats = [](const Scene& s) {  // mean and standard deviation over seeds at one point
+        double m = 0, m2 = 0;
+        const int n = 4000;
+        for (int k = 0; k < n; ++k) {
+            const double r =
+                trace_radiance(s, Vec3(0.3f, 0.2f, 0.5f), Vec3(0, 0, -1), uint64_t(k) + 1, nullptr)
+                    .r;
+            m += r;
+            m2 += r * r;
+        }
+        m /= n;
+        return std::pair{m, std::sqrt(std::max(0.0, m2 / n - m * m))};
+    };
+    const auto [m16, s16] = stats(*direct);
+    const auto [m1, s1] = stats(*whitted);
+    EXPECT_NEAR(m16, m1, 4 * s1 / std::sqrt(4000.0));
+    EXPECT_GT(s1, 0);
+    EXPECT_NEAR(s16 / s1, 0.25, 0.05);
+}
