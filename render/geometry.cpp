@@ -261,7 +261,13 @@ void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit* 
 }  // namespace
 
 Scene::Scene() {
+#ifdef CMAM_STD_THREADS
+    // Builds for ThreadSanitizer: Embree builds its hierarchies on the calling thread (its
+    // oneTBB workers' hand-offs are invisible to the sanitizer).
+    m_device = rtcNewDevice("threads=1");
+#else
     m_device = rtcNewDevice(nullptr);
+#endif
     if (!m_device) throw std::runtime_error("cannot create the Embree device");
     rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
 }

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <memory>
+#include <thread>
 
 #include "render/cones.h"
 #include "render/differentials.h"
@@ -471,6 +472,33 @@ Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_
     return L;
 }
 
+namespace {
+
+// body(begin, end) over [0, n) in parallel: with oneTBB, or, in a build for ThreadSanitizer
+// (CMAM_STD_THREADS), with std::thread workers taking one index at a time, whose hand-offs
+// ThreadSanitizer sees (it cannot see into an uninstrumented oneTBB). The image does not depend
+// on which is used.
+template <class Body>
+void parallel_range(int n, int threads, Body&& body) {
+#ifdef CMAM_STD_THREADS
+    const int workers =
+        std::max(1, threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
+    std::atomic<int> next{0};
+    std::vector<std::thread> pool;
+    for (int w = 0; w < workers; ++w)
+        pool.emplace_back([&] {
+            for (int i = next++; i < n; i = next++) body(i, i + 1);
+        });
+    for (std::thread& t : pool) t.join();
+#else
+    (void)threads;
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 1),
+                      [&](const tbb::blocked_range<int>& r) { body(r.begin(), r.end()); });
+#endif
+}
+
+}  // namespace
+
 Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
     const FilmSettings& film = scene.film;
     Framebuffer fb;
@@ -578,17 +606,16 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         // count.
         constexpr int kBlockRows = 8;
         const int blocks = (fb.height + kBlockRows - 1) / kBlockRows;
-        tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1),
-                          [&](const tbb::blocked_range<int>& r) {
-                              CmamRowState cmam;
-                              for (int b = r.begin(); b < r.end(); ++b)
-                                  for (int row = b * kBlockRows;
-                                       row < std::min(fb.height, (b + 1) * kBlockRows); ++row) {
-                                      render_span(row, 0, fb.width, 0, cmam);
-                                      int done = ++rows_done;
-                                      if (options.progress) options.progress(done, fb.height);
-                                  }
-                          });
+        parallel_range(blocks, options.threads, [&](int begin, int end) {
+            CmamRowState cmam;
+            for (int b = begin; b < end; ++b)
+                for (int row = b * kBlockRows; row < std::min(fb.height, (b + 1) * kBlockRows);
+                     ++row) {
+                    render_span(row, 0, fb.width, 0, cmam);
+                    int done = ++rows_done;
+                    if (options.progress) options.progress(done, fb.height);
+                }
+        });
         return fb;
     }
     // With the CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top to
@@ -600,8 +627,8 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     const int strips = (fb.width + kCmamStripWidth - 1) / kCmamStripWidth;
     const int prime_pixels = sub_rows ? (nx >= 2 ? 1 : 2) : 0;
     std::atomic<int> spans_done{0};
-    tbb::parallel_for(tbb::blocked_range<int>(0, strips, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int k = r.begin(); k < r.end(); ++k) {
+    parallel_range(strips, options.threads, [&](int begin, int end) {
+        for (int k = begin; k < end; ++k) {
             CmamRowState cmam;
             const int x0 = k * kCmamStripWidth, x1 = std::min(fb.width, x0 + kCmamStripWidth);
             const int prime = std::min(x0, prime_pixels);
