@@ -752,7 +752,8 @@ class Builder {
             return m;  // its other parameters are not read: no warning for each
         }
         if (e.params.find("type")) e.params.get_string("type", "");
-        e.params.check_unused("material " + q(t), m_warn, {"bumpmap"});
+        if (e.params.find("bumpmap")) m.bump = float_input(e, s, "bumpmap", 0);
+        e.params.check_unused("material " + q(t), m_warn, {});
         return m;
     }
 

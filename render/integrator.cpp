@@ -287,7 +287,12 @@ struct Tracer {
                 ctx.cmam_record = record_cmam_of(m, &cmam_record);
             Bsdf bsdf;
             Vec3 wo = -ray.dir;
-            if (!make_bsdf(scene, pick_mixed(m, ctx), h, ctx, &bsdf)) {
+            const Material& chosen = pick_mixed(m, ctx);
+            if (chosen.bump.node >= 0)  // pbrt-v3's bump map: the shading normal only
+                h.ns = bump_normal(scene, chosen.bump, h, ctx,
+                                   0.5f * (std::abs(hd.dudx) + std::abs(hd.dudy)),
+                                   0.5f * (std::abs(hd.dvdx) + std::abs(hd.dvdy)));
+            if (!make_bsdf(scene, chosen, h, ctx, &bsdf)) {
                 // Continue through: the footprint state moves to the hit point.
                 ray.org = offset_origin(h, ray.dir);
                 ray.diff.dodx = hd.dpdx;

@@ -128,6 +128,9 @@ struct Material {
     int mix[2] = {-1, -1};
     TexInput amount;
     bool remap_roughness = true;
+    // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
+    // node -1 and a constant: none (a constant displacement leaves the normal as it is here).
+    TexInput bump;
 };
 
 struct Light {

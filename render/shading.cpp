@@ -376,6 +376,33 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
     return out;
 }
 
+Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit,
+                 const TexContext& ctx, float du, float dv) {
+    if (!(du > 0)) du = 0.0005f;
+    if (!(dv > 0)) dv = 0.0005f;
+    Vec3 dpdu, dpdv;
+    hit.partials(&dpdu, &dpdv);
+    const Vec3 n = hit.ns, dndu = hit.normal_offset(dpdu), dndv = hit.normal_offset(dpdv);
+    // The displacement at the point and one step along u and along v (the world point moves
+    // with them, for the textures that read it).
+    auto displacement = [&](float su, float sv) {
+        TexContext c = ctx;
+        c.u = ctx.u + su;
+        c.v = ctx.v + sv;
+        c.p = ctx.p + su * dpdu + sv * dpdv;
+        return eval_texture(scene, bump, c).r;
+    };
+    const float d = displacement(0, 0);
+    const float ddu = (displacement(du, 0) - d) / du, ddv = (displacement(0, dv) - d) / dv;
+    const Vec3 bu = dpdu + ddu * n + d * dndu, bv = dpdv + ddv * n + d * dndv;
+    Vec3 nb = cross(bu, bv);
+    const float len = length(nb);
+    if (!(len > 0) || !std::isfinite(len)) return n;
+    nb = nb / len;
+    if (dot(nb, n) < 0) nb = -nb;  // the side of the unbumped shading normal
+    return faceforward(nb, hit.ng);
+}
+
 bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, const TexContext& ctx,
                Bsdf* b) {
     if (m.type == Material::Type::None) return false;

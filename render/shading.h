@@ -101,6 +101,12 @@ texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx);
 /// their value in all three channels.
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx);
 
+/// The shading normal of `hit` under pbrt-v3's bump mapping by the float texture `bump`: the
+/// surface displaced by d(u,v) along its normal, d's derivatives taken over half the ray
+/// differentials' (u,v) extent (`du`, `dv`; 0: pbrt-v3's 0.0005). On the geometric normal's side.
+Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit,
+                 const TexContext& ctx, float du, float dv);
+
 /// A BSDF instantiated at a hit (pbrt-v3 BxDF combinations of the supported materials).
 struct Bsdf {
     Frame frame;  // shading frame, z = shading normal
