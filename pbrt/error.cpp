@@ -54,6 +54,19 @@ SceneError::SceneError(const FileLoc& loc, const std::string& message)
 SceneError::SceneError(const std::string& message)
     : std::runtime_error(located({}, "error", message)), m_message(message) {}
 
+namespace {
+std::string joined(const std::vector<SceneError>& errors) {
+    std::string s;
+    for (const SceneError& e : errors) s += (s.empty() ? "" : "\n") + std::string(e.what());
+    return s;
+}
+}  // namespace
+
+SceneError::SceneError(const std::vector<SceneError>& errors)
+    : std::runtime_error(joined(errors)),
+      m_loc(errors.empty() ? FileLoc{} : errors.front().loc()),
+      m_message(errors.empty() ? std::string() : errors.front().message()) {}
+
 std::string format_warning(const FileLoc& loc, const std::string& message) {
     return located(loc, "warning", message);
 }

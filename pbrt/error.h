@@ -6,6 +6,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace cmam::pbrt {
 
@@ -24,6 +25,9 @@ class SceneError : public std::runtime_error {
   public:
     SceneError(const FileLoc& loc, const std::string& message);
     explicit SceneError(const std::string& message);  // not tied to a location
+    /// Several errors as one, in the given order: the first's location and message, and every
+    /// one's located text, a line each.
+    explicit SceneError(const std::vector<SceneError>& errors);
     const std::string& message() const { return m_message; }
     const FileLoc& loc() const { return m_loc; }
 

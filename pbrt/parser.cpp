@@ -124,7 +124,31 @@ class Parser {
     SceneDesc run(Tokenizer root) {
         m_desc.base_dir = std::filesystem::path(root.filename()).parent_path().string();
         push_file(std::move(root));
-        while (auto tok = next()) directive(*tok);
+        // After an error the parser skips to the next directive and goes on, so that one run
+        // reports every error it can find (up to kMaxErrors), in file order.
+        std::vector<SceneError> errors;
+        bool readable = true;  // false once the tokenizer itself failed: nothing more is read
+        while (readable && errors.size() < kMaxErrors) {
+            std::optional<Token> tok;
+            try {
+                tok = next();
+            } catch (const SceneError& e) {
+                errors.push_back(e);
+                break;
+            }
+            if (!tok) break;
+            try {
+                directive(*tok);
+            } catch (const SceneError& e) {
+                errors.push_back(e);
+                // A block that does not match leaves the nesting unknown: what follows would
+                // report that error again in other words.
+                const bool nesting =
+                    !tok->quoted && (tok->text.ends_with("Begin") || tok->text.ends_with("End"));
+                readable = !nesting && skip_to_directive(errors);
+            }
+        }
+        if (!errors.empty()) throw errors.size() == 1 ? errors.front() : SceneError(errors);
         if (!m_stack.empty()) {
             const StackEntry& e = m_stack.back();
             throw SceneError(e.loc, std::string(e.begin()) + " is never closed");
@@ -136,6 +160,25 @@ class Parser {
     }
 
   private:
+    static constexpr std::size_t kMaxErrors = 20;
+
+    // Skips the rest of a directive that failed: up to the next bare word that starts with a
+    // capital letter (every directive does; parameters are quoted, values quoted or numbers).
+    // False if the tokenizer failed on the way (its error is added).
+    bool skip_to_directive(std::vector<SceneError>& errors) {
+        try {
+            while (const Token* t = peek()) {
+                if (!t->quoted && !t->text.empty() && t->text[0] >= 'A' && t->text[0] <= 'Z')
+                    return true;
+                next();
+            }
+            return true;
+        } catch (const SceneError& e) {
+            errors.push_back(e);
+            return false;
+        }
+    }
+
     struct Source {
         Tokenizer tokens;
         std::string canonical;
@@ -256,6 +299,11 @@ class Parser {
         return t.text;
     }
     double expect_number(const Token& dir) {
+        // A directive where a number should be is left for the next directive (it is reported
+        // here, and the parser goes on from it).
+        if (const Token* p = peek();
+            p && !p->quoted && !p->text.empty() && p->text[0] >= 'A' && p->text[0] <= 'Z')
+            throw SceneError(p->loc, dir.text + " expects a number, got " + p->text);
         Token t = expect_any(dir, "a number");
         return to_number(t, dir.text);
     }

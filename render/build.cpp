@@ -42,20 +42,47 @@ class Builder {
         m_scene = std::make_unique<Scene>();
         m_scene->tags = m_opts.tags;
         m_scene->cmam = m_opts.cmam;
-        film();
-        camera();
-        sampler();
-        filter();
-        integrator();
-        if (m_desc.accelerator.given)
-            m_desc.accelerator.params.check_unused("Accelerator", m_warn,
-                                                   names_of(m_desc.accelerator));
-        for (std::size_t i = 0; i < m_desc.textures.size(); ++i) texture(m_desc.textures[i]);
-        for (const auto& m : m_desc.materials) m_scene->materials.push_back(material(m));
-        for (const auto& a : m_desc.area_lights) m_area_lights.push_back(area_light(a));
-        for (const auto& s : m_desc.shapes) shape(s, m_scene->primitives);
-        instances();
-        for (const auto& l : m_desc.lights) light(l);
+        // Each directive's problem is collected and building goes on, so that one run reports
+        // every error it can find (up to kMaxErrors): a missing file does not hide the next.
+        std::vector<SceneError> errors;
+        auto attempt = [&](auto&& build) {
+            if (errors.size() >= kMaxErrors) return;
+            try {
+                build();
+            } catch (const SceneError& e) {
+                errors.push_back(e);
+            }
+        };
+        attempt([&] { film(); });
+        attempt([&] { camera(); });
+        attempt([&] { sampler(); });
+        attempt([&] { filter(); });
+        attempt([&] { integrator(); });
+        attempt([&] {
+            if (m_desc.accelerator.given)
+                m_desc.accelerator.params.check_unused("Accelerator", m_warn,
+                                                       names_of(m_desc.accelerator));
+        });
+        // A texture, material or area light that fails keeps its index (a placeholder), so
+        // that what names it is still checked.
+        for (std::size_t i = 0; i < m_desc.textures.size(); ++i) {
+            attempt([&] { texture(m_desc.textures[i]); });
+            m_scene->textures.resize(i + 1);
+        }
+        for (const auto& m : m_desc.materials) {
+            Material mat;
+            attempt([&] { mat = material(m); });
+            m_scene->materials.push_back(mat);
+        }
+        for (const auto& a : m_desc.area_lights) {
+            Light l;
+            attempt([&] { l = area_light(a); });
+            m_area_lights.push_back(l);
+        }
+        for (const auto& s : m_desc.shapes) attempt([&] { shape(s, m_scene->primitives); });
+        attempt([&] { instances(); });
+        for (const auto& l : m_desc.lights) attempt([&] { light(l); });
+        if (!errors.empty()) throw errors.size() == 1 ? errors.front() : SceneError(errors);
         if (m_scene->lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) &&
             m_warn)
             m_warn(pbrt::format_warning(m_desc.camera.loc,
@@ -65,6 +92,7 @@ class Builder {
     }
 
   private:
+    static constexpr std::size_t kMaxErrors = 20;
     const pbrt::SceneDesc& m_desc;
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;

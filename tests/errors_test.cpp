@@ -1,0 +1,65 @@
+// One run reports every error it can find, each located, in order: the parser skips to the next
+// directive after a bad one, and scene building goes on past a bad texture, material, shape or
+// light.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+#include "pbrt/parser.h"
+#include "render/scene.h"
+
+using namespace cmam;
+
+namespace {
+std::string error_of(const std::string& text) {
+    try {
+        render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
+    } catch (const pbrt::SceneError& e) {
+        return e.what();
+    }
+    return "";
+}
+const std::string kHead = "Camera \"perspective\"\nWorldBegin\n";
+}  // namespace
+
+TEST(Errors, TheParserReportsEveryBadDirective) {
+    const std::string text = kHead +
+                             "Translate 1 2\n"
+                             "Shape \"sphere\" \"float radius\" \"x\"\n"
+                             "Frobnicate 3\n"
+                             "Rotate 1 2 3 4\n"
+                             "Scale 1\n"
+                             "WorldEnd\n";
+    const std::string e = error_of(text);
+    // Translate stops at the Shape on line 4, which is then parsed (its radius "x" is an
+    // error of its own); Scale stops at WorldEnd.
+    const auto l4 = e.find("t.pbrt:4:1: error: Translate expects a number, got Shape"),
+               l5 = e.find("t.pbrt:5:1: error: unknown directive Frobnicate"),
+               l8 = e.find("t.pbrt:8:1: error: Scale expects a number, got WorldEnd");
+    EXPECT_NE(l4, std::string::npos) << e;
+    EXPECT_NE(l5, std::string::npos) << e;
+    const auto radius = e.find("t.pbrt:4:31: error: float parameter \"radius\" expects a number");
+    EXPECT_NE(l8, std::string::npos) << e;
+    EXPECT_TRUE(l4 < radius && radius < l5 && l5 < l8) << e;
+    EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 3) << e;  // four lines, nothing more
+}
+
+TEST(Errors, BuildingReportsEveryBadTextureShapeAndLight) {
+    const std::string text = kHead +
+                             "Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" "
+                             "\"missing-a.png\"\n"                                      // line 3
+                             "Shape \"plymesh\" \"string filename\" \"missing.ply\"\n"  // line 4
+                             "Shape \"sphere\" \"float radius\" -1\n"                   // line 5
+                             "LightSource \"laser\"\n"                                  // line 6
+                             "WorldEnd\n";
+    const std::string e = error_of(text);
+    for (const char* want : {"t.pbrt:3:", "missing-a.png", "t.pbrt:4:", "missing.ply",
+                             "t.pbrt:5:", "t.pbrt:6:", "unsupported light \"laser\""})
+        EXPECT_NE(e.find(want), std::string::npos) << want << " in " << e;
+    EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 3) << e;
+}
+
+TEST(Errors, OneErrorIsReportedAlone) {
+    EXPECT_EQ(error_of(kHead + "Scale 1\nWorldEnd\n").find('\n'), std::string::npos);
+}
