@@ -96,7 +96,8 @@ const MipPyramid& FilteredTexture::pyramid() const {
     if (MipPyramid* p = m_pyr_ready.load(std::memory_order_acquire)) return *p;
     std::lock_guard<std::mutex> lock(m_build);
     if (!m_pyramid) {
-        m_pyramid = std::make_unique<MipPyramid>(m_image);
+        // Level 0 is the texture's own image, not a copy (m_image outlives m_pyramid).
+        m_pyramid = std::make_unique<MipPyramid>(MipPyramid::over(m_image));
         m_pyr_ready.store(m_pyramid.get(), std::memory_order_release);
     }
     return *m_pyramid;
@@ -114,7 +115,7 @@ const SummedAreaTable& FilteredTexture::sat() const {
 
 std::size_t FilteredTexture::memory_bytes() const {
     std::size_t n = m_image.memory_bytes();
-    if (pyramid_built()) n += m_pyramid->memory_bytes() - m_image.memory_bytes();
+    if (pyramid_built()) n += m_pyramid->memory_bytes();  // levels 1 and up
     if (sat_built()) n += m_sat->memory_bytes();
     for (std::size_t l = 1; l < m_level_sats.size(); ++l)
         if (SummedAreaTable* p = m_level_ready[l].load(std::memory_order_acquire))

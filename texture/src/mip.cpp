@@ -57,20 +57,31 @@ Image box_downsample(const Image& src, int w, int h) {
     return Image(w, h, C, std::move(out), src.wrap_s(), src.wrap_t());
 }
 
-MipPyramid::MipPyramid(const Image& base) {
-    const int W = base.width(), H = base.height();
-    int L = 1 + static_cast<int>(std::floor(std::log2(std::max(W, H))));
-    m_levels.reserve(static_cast<std::size_t>(L));
-    m_levels.push_back(base);
+MipPyramid::MipPyramid(const Image& base)
+    : m_owned_base(std::make_unique<Image>(base)), m_base(m_owned_base.get()) {
+    build_upper();
+}
+
+MipPyramid MipPyramid::over(const Image& base) {
+    MipPyramid p;
+    p.m_base = &base;
+    p.build_upper();
+    return p;
+}
+
+void MipPyramid::build_upper() {
+    const int W = m_base->width(), H = m_base->height();
+    const int L = 1 + static_cast<int>(std::floor(std::log2(std::max(W, H))));
+    m_upper.reserve(static_cast<std::size_t>(L - 1));
     for (int l = 1; l < L; ++l) {
-        int w = std::max(1, W >> l), h = std::max(1, H >> l);
-        m_levels.push_back(box_downsample(m_levels.back(), w, h));
+        const int w = std::max(1, W >> l), h = std::max(1, H >> l);
+        m_upper.push_back(box_downsample(level(l - 1), w, h));
     }
 }
 
 std::size_t MipPyramid::memory_bytes() const {
-    std::size_t n = 0;
-    for (const Image& i : m_levels) n += i.memory_bytes();
+    std::size_t n = m_owned_base ? m_owned_base->memory_bytes() : 0;
+    for (const Image& i : m_upper) n += i.memory_bytes();
     return n;
 }
 

@@ -6,6 +6,7 @@
 
 #include <cmam/texture/image.h>
 
+#include <memory>
 #include <vector>
 
 namespace cmam::texture {
@@ -15,9 +16,15 @@ class MipPyramid {
     MipPyramid() = default;
     /// Builds all levels, 1 + floor(log2(max(W,H))) of them, from `base` (copied).
     explicit MipPyramid(const Image& base);
+    /// The same with `base` itself as level 0, not copied: it must outlive the pyramid (a
+    /// texture's largest level is then stored once).
+    static MipPyramid over(const Image& base);
 
-    int levels() const { return static_cast<int>(m_levels.size()); }
-    const Image& level(int l) const { return m_levels[static_cast<std::size_t>(l)]; }
+    int levels() const { return m_base ? 1 + static_cast<int>(m_upper.size()) : 0; }
+    const Image& level(int l) const {
+        return l == 0 ? *m_base : m_upper[static_cast<std::size_t>(l - 1)];
+    }
+    /// Bytes the pyramid holds: every level, level 0 only when it was copied.
     std::size_t memory_bytes() const;
 
     /// Bilinear lookup at level `l` (lattice s' = u*W_l - 1/2 with that level's own size).
@@ -35,7 +42,11 @@ class MipPyramid {
     Texel trilinear_levels(double u, double v, int l, float f) const;
 
   private:
-    std::vector<Image> m_levels;
+    std::unique_ptr<Image> m_owned_base;  // level 0 when copied (on the heap: moves keep m_base)
+    const Image* m_base = nullptr;        // level 0
+    std::vector<Image> m_upper;           // levels 1 ..
+
+    void build_upper();
 };
 
 /// Box-downsamples `src` to `w` x `h` texels: output texel k covers source cells
