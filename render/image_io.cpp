@@ -62,13 +62,14 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
     bool gamma = gamma_opt.value_or(raw.is_8bit);
     if (gamma_used) *gamma_used = gamma;
     const int w = raw.width, h = raw.height, nc = raw.channels, out_c = is_float ? 1 : 3;
-    std::vector<float> texels(static_cast<std::size_t>(w) * h * out_c);
-    for (int y = 0; y < h; ++y) {
-        const int j = h - 1 - y;  // flip: v = 0 is the bottom row (pbrt-v3)
+    // Written row by row into the texture: the file's pixels and the texture are the only
+    // copies of the image in memory.
+    auto fill = [&](int j, float* row) {
+        const int y = h - 1 - j;  // flip: v = 0 is the bottom row (pbrt-v3)
         for (int x = 0; x < w; ++x) {
             const float* src = &raw.pixels[(static_cast<std::size_t>(y) * w + x) * nc];
             float rgb[3] = {src[0], nc >= 3 ? src[1] : src[0], nc >= 3 ? src[2] : src[0]};
-            float* dst = &texels[(static_cast<std::size_t>(j) * w + x) * out_c];
+            float* dst = &row[static_cast<std::size_t>(x) * out_c];
             if (is_float) {
                 float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
                 dst[0] = scale * (gamma ? texture::srgb_to_linear(yv) : yv);
@@ -77,8 +78,8 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
                     dst[c] = scale * (gamma ? texture::srgb_to_linear(rgb[c]) : rgb[c]);
             }
         }
-    }
-    return texture::Image(w, h, out_c, std::move(texels), wrap, wrap);
+    };
+    return texture::Image::from_rows(w, h, out_c, fill, wrap, wrap);
 }
 
 namespace {

@@ -80,13 +80,39 @@ TexelBuffer::~TexelBuffer() {
     std::free(m_data);
 }
 
+namespace {
+// `texels` when it holds width*height*channels floats (sizes the constructor accepts).
+const std::vector<float>& checked_texels(const std::vector<float>& texels, int width, int height,
+                                         int channels) {
+    if (width > 0 && height > 0 && channels >= 1 && channels <= 4 &&
+        texels.size() != static_cast<std::size_t>(width) * height * channels)
+        throw TextureError("texel count does not match width*height*channels");
+    return texels;
+}
+}  // namespace
+
 Image::Image(int width, int height, int channels, const std::vector<float>& texels, WrapMode wrap_s,
              WrapMode wrap_t)
+    : Image(
+          Rows{}, width, height, channels,
+          [&t = checked_texels(texels, width, height, channels), width, channels](int j,
+                                                                                  float* row) {
+              std::copy_n(&t[static_cast<std::size_t>(j) * width * channels],
+                          static_cast<std::size_t>(width) * channels, row);
+          },
+          wrap_s, wrap_t) {}
+
+Image Image::from_rows(int width, int height, int channels,
+                       const std::function<void(int, float*)>& fill, WrapMode wrap_s,
+                       WrapMode wrap_t) {
+    return Image(Rows{}, width, height, channels, fill, wrap_s, wrap_t);
+}
+
+Image::Image(Rows, int width, int height, int channels,
+             const std::function<void(int, float*)>& fill, WrapMode wrap_s, WrapMode wrap_t)
     : m_width(width), m_height(height), m_channels(channels), m_wrap_s(wrap_s), m_wrap_t(wrap_t) {
     if (width <= 0 || height <= 0) throw TextureError("image size must be positive");
     if (channels < 1 || channels > 4) throw TextureError("image must have 1 to 4 channels");
-    if (texels.size() != static_cast<std::size_t>(width) * height * channels)
-        throw TextureError("texel count does not match width*height*channels");
     m_tiles_x = static_cast<std::size_t>((width + kTile - 1) >> kTileLog2);
     const std::size_t tiles_y = static_cast<std::size_t>((height + kTile - 1) >> kTileLog2);
     m_texels = TexelBuffer(m_tiles_x * tiles_y * kTile * kTile * channels);
@@ -97,15 +123,18 @@ Image::Image(int width, int height, int channels, const std::vector<float>& texe
     for (std::size_t k = 0; k < m_row_offsets.size(); ++k)
         m_row_offsets[k] = row_offset(static_cast<int64_t>(k % height)) * channels;
     std::array<double, 4> sum{};
-    for (int j = 0; j < height; ++j)
+    std::vector<float> row(static_cast<std::size_t>(width) * channels);
+    for (int j = 0; j < height; ++j) {
+        fill(j, row.data());
         for (int i = 0; i < width; ++i) {
-            const float* src = &texels[(static_cast<std::size_t>(j) * width + i) * channels];
+            const float* src = &row[static_cast<std::size_t>(i) * channels];
             float* dst = const_cast<float*>(texel(i, j));
             for (int c = 0; c < channels; ++c) {
                 dst[c] = src[c];
                 sum[c] += src[c];
             }
         }
+    }
     double n = static_cast<double>(width) * height;
     for (int c = 0; c < channels; ++c) m_mean[c] = static_cast<float>(sum[c] / n);
 }

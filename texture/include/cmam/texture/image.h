@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -70,6 +71,11 @@ class Image {
     /// `texels` holds width*height*channels floats, row-major from row j = 0 (v = 0).
     Image(int width, int height, int channels, const std::vector<float>& texels,
           WrapMode wrap_s = WrapMode::Repeat, WrapMode wrap_t = WrapMode::Repeat);
+    /// The same, row by row: `fill(j, row)` writes row j's width*channels floats (j = 0 first).
+    /// No copy of the whole image is needed besides the image itself.
+    static Image from_rows(int width, int height, int channels,
+                           const std::function<void(int, float*)>& fill,
+                           WrapMode wrap_s = WrapMode::Repeat, WrapMode wrap_t = WrapMode::Repeat);
 
     int width() const { return m_width; }
     int height() const { return m_height; }
@@ -116,6 +122,10 @@ class Image {
     const Texel& mean() const { return m_mean; }
 
   private:
+    struct Rows {};  // selects the row-filling constructor
+    Image(Rows, int width, int height, int channels, const std::function<void(int, float*)>& fill,
+          WrapMode wrap_s, WrapMode wrap_t);
+
     int m_width = 0, m_height = 0, m_channels = 0;
     std::size_t m_tiles_x = 0;
     WrapMode m_wrap_s = WrapMode::Repeat, m_wrap_t = WrapMode::Repeat;
