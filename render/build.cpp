@@ -149,6 +149,15 @@ class Builder {
     }
     // A shape's or light's transform: every entry finite (NaN or infinite transforms once gave
     // black images).
+    // The inverse of `m`, or `message` at `loc` when m is singular.
+    static Mat4 inverse_or_error(const Mat4& m, const pbrt::FileLoc& loc, const char* message) {
+        try {
+            return m.inverse();
+        } catch (const std::domain_error&) {
+            throw SceneError(loc, message);
+        }
+    }
+
     static void finite_transform(const Mat4& m, const pbrt::FileLoc& loc, const char* what) {
         for (const auto& row : m.m)
             for (double v : row)
@@ -253,12 +262,8 @@ class Builder {
         if (e.params.get_float("lensradius", 0) != 0)
             warn(e.params.find("lensradius")->loc,
                  "lensradius ignored: cmam renders a pinhole camera");
-        Mat4 wc;
-        try {
-            wc = m_desc.camera_from_world.inverse();
-        } catch (const std::domain_error&) {
-            throw SceneError(e.loc, "the camera transform is singular");
-        }
+        const Mat4 wc =
+            inverse_or_error(m_desc.camera_from_world, e.loc, "the camera transform is singular");
         auto m = to34(wc);
         for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
         check_camera_rays(c, e.loc);
@@ -458,12 +463,8 @@ class Builder {
     // World -> texture space: the inverse of the transform where the texture was declared.
     void texture_space(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n) {
         finite_transform(t.world_from_texture, e.loc, "texture");
-        Mat4 inv;
-        try {
-            inv = t.world_from_texture.inverse();
-        } catch (const std::domain_error&) {
-            throw SceneError(e.loc, "the texture's transform is singular");
-        }
+        const Mat4 inv =
+            inverse_or_error(t.world_from_texture, e.loc, "the texture's transform is singular");
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 4; ++j) n->texture_from_world[4 * i + j] = float(inv.m[i][j]);
     }
@@ -795,12 +796,8 @@ class Builder {
         prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
         const std::vector<std::string> ignored = {"alpha", "shadowalpha"};
         if (e.type == "sphere" || e.type == "disk") {
-            Mat4 ow;
-            try {
-                ow = s.world_from_object.inverse();
-            } catch (const std::domain_error&) {
-                throw SceneError(e.loc, "the shape's transform is singular");
-            }
+            const Mat4 ow =
+                inverse_or_error(s.world_from_object, e.loc, "the shape's transform is singular");
             prim->world_from_object = to34(s.world_from_object);
             prim->object_from_world = to34(ow);
             double r = finite_float(e, "radius", 1, true);
@@ -992,12 +989,8 @@ class Builder {
             const std::size_t n = m_scene->objects[o].primitives.size();
             if (n == 0) continue;  // an empty object places nothing
             finite_transform(d.world_from_instance, d.loc, "object instance");
-            Mat4 inv;
-            try {
-                inv = d.world_from_instance.inverse();
-            } catch (const std::domain_error&) {
-                throw SceneError(d.loc, "the instance's transform is singular");
-            }
+            const Mat4 inv = inverse_or_error(d.world_from_instance, d.loc,
+                                              "the instance's transform is singular");
             Instance in;
             in.object = static_cast<uint32_t>(o);
             const auto w = to34(d.world_from_instance), iw = to34(inv);
@@ -1104,12 +1097,8 @@ class Builder {
     }
     // The linear part of the light's transform's inverse (directions from world to light).
     static std::array<float, 9> light_from_world(const Entity& e, const Mat4& world_from_light) {
-        Mat4 inv;
-        try {
-            inv = world_from_light.inverse();
-        } catch (const std::domain_error&) {
-            throw SceneError(e.loc, "the light's transform is singular");
-        }
+        const Mat4 inv =
+            inverse_or_error(world_from_light, e.loc, "the light's transform is singular");
         std::array<float, 9> lw{};
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) lw[3 * i + j] = float(inv.m[i][j]);
