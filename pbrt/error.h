@@ -2,6 +2,7 @@
 // Every problem found in a scene file carries FILE:LINE:COL; the library throws, main prints.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <stdexcept>
@@ -26,7 +27,7 @@ class SceneError : public std::runtime_error {
     SceneError(const FileLoc& loc, const std::string& message);
     explicit SceneError(const std::string& message);  // not tied to a location
     /// Several errors as one, in the given order: the first's location and message, and every
-    /// one's located text, a line each.
+    /// one's located text, a line each (one error gives that error's own text).
     explicit SceneError(const std::vector<SceneError>& errors);
     const std::string& message() const { return m_message; }
     const FileLoc& loc() const { return m_loc; }
@@ -35,6 +36,9 @@ class SceneError : public std::runtime_error {
     FileLoc m_loc;
     std::string m_message;
 };
+
+/// How many errors the parser and the scene builder collect before they stop.
+inline constexpr std::size_t kMaxReportedErrors = 20;
 
 /// Receives located warnings ("file:line:col: warning: message").
 using WarningSink = std::function<void(const std::string&)>;

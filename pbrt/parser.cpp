@@ -125,10 +125,10 @@ class Parser {
         m_desc.base_dir = std::filesystem::path(root.filename()).parent_path().string();
         push_file(std::move(root));
         // After an error the parser skips to the next directive and goes on, so that one run
-        // reports every error it can find (up to kMaxErrors), in file order.
+        // reports every error it can find (up to kMaxReportedErrors), in file order.
         std::vector<SceneError> errors;
         bool readable = true;  // false once the tokenizer itself failed: nothing more is read
-        while (readable && errors.size() < kMaxErrors) {
+        while (readable && errors.size() < kMaxReportedErrors) {
             std::optional<Token> tok;
             try {
                 tok = next();
@@ -148,7 +148,7 @@ class Parser {
                 readable = !nesting && skip_to_directive(errors);
             }
         }
-        if (!errors.empty()) throw errors.size() == 1 ? errors.front() : SceneError(errors);
+        if (!errors.empty()) throw SceneError(errors);
         if (!m_stack.empty()) {
             const StackEntry& e = m_stack.back();
             throw SceneError(e.loc, std::string(e.begin()) + " is never closed");
@@ -160,16 +160,18 @@ class Parser {
     }
 
   private:
-    static constexpr std::size_t kMaxErrors = 20;
+    // A bare word starting with a capital letter: what every directive is (parameters are
+    // quoted, values quoted or numbers).
+    static bool is_directive_word(const Token& t) {
+        return !t.quoted && !t.text.empty() && t.text[0] >= 'A' && t.text[0] <= 'Z';
+    }
 
-    // Skips the rest of a directive that failed: up to the next bare word that starts with a
-    // capital letter (every directive does; parameters are quoted, values quoted or numbers).
+    // Skips the rest of a directive that failed: up to the next directive word.
     // False if the tokenizer failed on the way (its error is added).
     bool skip_to_directive(std::vector<SceneError>& errors) {
         try {
             while (const Token* t = peek()) {
-                if (!t->quoted && !t->text.empty() && t->text[0] >= 'A' && t->text[0] <= 'Z')
-                    return true;
+                if (is_directive_word(*t)) return true;
                 next();
             }
             return true;
@@ -301,8 +303,7 @@ class Parser {
     double expect_number(const Token& dir) {
         // A directive where a number should be is left for the next directive (it is reported
         // here, and the parser goes on from it).
-        if (const Token* p = peek();
-            p && !p->quoted && !p->text.empty() && p->text[0] >= 'A' && p->text[0] <= 'Z')
+        if (const Token* p = peek(); p && is_directive_word(*p))
             throw SceneError(p->loc, dir.text + " expects a number, got " + p->text);
         Token t = expect_any(dir, "a number");
         return to_number(t, dir.text);

@@ -43,10 +43,11 @@ class Builder {
         m_scene->tags = m_opts.tags;
         m_scene->cmam = m_opts.cmam;
         // Each directive's problem is collected and building goes on, so that one run reports
-        // every error it can find (up to kMaxErrors): a missing file does not hide the next.
+        // every error it can find (up to pbrt::kMaxReportedErrors): a missing file does not hide
+        // the next.
         std::vector<SceneError> errors;
         auto attempt = [&](auto&& build) {
-            if (errors.size() >= kMaxErrors) return;
+            if (errors.size() >= pbrt::kMaxReportedErrors) return;
             try {
                 build();
             } catch (const SceneError& e) {
@@ -82,7 +83,7 @@ class Builder {
         for (const auto& s : m_desc.shapes) attempt([&] { shape(s, m_scene->primitives); });
         attempt([&] { instances(); });
         for (const auto& l : m_desc.lights) attempt([&] { light(l); });
-        if (!errors.empty()) throw errors.size() == 1 ? errors.front() : SceneError(errors);
+        if (!errors.empty()) throw SceneError(errors);
         if (m_scene->lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) &&
             m_warn)
             m_warn(pbrt::format_warning(m_desc.camera.loc,
@@ -92,7 +93,6 @@ class Builder {
     }
 
   private:
-    static constexpr std::size_t kMaxErrors = 20;
     const pbrt::SceneDesc& m_desc;
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;

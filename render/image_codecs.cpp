@@ -609,13 +609,13 @@ bool starts_with(const unsigned char* head, std::size_t n, const char* magic, st
     return n >= m && std::memcmp(head, magic, m) == 0;
 }
 
+}  // namespace
+
 std::string lower_extension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     return ext;
 }
-
-}  // namespace
 
 RawImage decode(const std::string& path, const SizeCheck& check) {
     unsigned char head[8] = {};

@@ -27,6 +27,9 @@ using SizeCheck = std::function<void(const RawImage&)>;
 /// which has no signature). Throws CodecError.
 RawImage decode(const std::string& path, const SizeCheck& check);
 
+/// The file name's extension in lower case, with the dot (".png"); "" if none.
+std::string lower_extension(const std::string& path);
+
 /// The output formats, by lower-case extension with the dot.
 enum class Output { Exr, Pfm, Png, Jpeg, Tga, Bmp, Hdr, Tiff, Unsupported };
 Output output_format(const std::string& ext);

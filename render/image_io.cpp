@@ -84,12 +84,6 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
 
 namespace {
 
-std::string lower_extension(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
-
 std::string cannot_write(const std::string& path, const std::string& why) {
     return "cannot write \"" + path + "\": " + why;
 }
@@ -238,7 +232,7 @@ void write_encoded(const std::string& path, const std::string& ext, Encode&& enc
 
 void write_image(const std::string& path, int w, int h, const std::vector<float>& rgb,
                  const std::vector<std::string>& channel_names) {
-    const std::string ext = lower_extension(path);
+    const std::string ext = codec::lower_extension(path);
     const fs::path target(path);
     const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
     if (!fs::is_directory(dir))
