@@ -363,6 +363,25 @@ std::vector<std::string> exr_channels(const Imf::ChannelList& list) {
     throw CodecError("the file has no channels");
 }
 
+// The size of a value of one of OpenEXR's fixed-size attribute types; -1 for the others.
+int fixed_exr_size(const std::string& type) {
+    static const std::pair<const char*, int> kSizes[] = {{"box2i", 16},      {"box2f", 16},
+                                                         {"compression", 1}, {"lineOrder", 1},
+                                                         {"envmap", 1},      {"deepImageState", 1},
+                                                         {"float", 4},       {"int", 4},
+                                                         {"double", 8},      {"v2i", 8},
+                                                         {"v2f", 8},         {"v2d", 16},
+                                                         {"v3i", 12},        {"v3f", 12},
+                                                         {"v3d", 24},        {"m33f", 36},
+                                                         {"m33d", 72},       {"m44f", 64},
+                                                         {"m44d", 128},      {"chromaticities", 32},
+                                                         {"tiledesc", 9},    {"rational", 8},
+                                                         {"timecode", 8},    {"keycode", 28}};
+    for (const auto& [name, bytes] : kSizes)
+        if (type == name) return bytes;
+    return -1;
+}
+
 // Walks the (first) header's attributes before OpenEXR does, so that what OpenEXR would
 // allocate from them is bounded first: an attribute claiming more bytes than the file holds is
 // refused, the data window must be there, every channel's sampling must be sane, and the data
@@ -405,9 +424,10 @@ void precheck_exr(const std::string& path, const SizeCheck& check) {
             w = std::int64_t(box[2]) - box[0] + 1;
             h = std::int64_t(box[3]) - box[1] + 1;
             have_window = true;
-        } else if (name == "channels" && type == "chlist") {
+        } else if (type == "chlist") {
             // name, pixel type (int), pLinear and 3 reserved bytes, x and y sampling (ints).
-            channels = 0;
+            // Any attribute of this type is walked: OpenEXR reads each to its terminator.
+            std::int64_t count = 0;
             std::string ch;
             while (in.tellg() < at + size) {
                 if (!read_string(ch, max_name)) throw corrupt("channel list");
@@ -416,8 +436,22 @@ void precheck_exr(const std::string& path, const SizeCheck& check) {
                 if (!in.read(reinterpret_cast<char*>(f), 16)) throw corrupt("channel list");
                 if (f[0] < 0 || f[0] > 2 || f[2] < 1 || f[2] > 64 || f[3] < 1 || f[3] > 64)
                     throw corrupt("channel \"" + ch + "\"");
-                ++channels;
+                ++count;
             }
+            // OpenEXR reads the list to its terminator, not to the declared size.
+            if (in.tellg() != at + size) throw corrupt("channel list");
+            if (name == "channels") channels = count;
+        } else if (const int fixed = fixed_exr_size(type); fixed >= 0 && size != fixed) {
+            // OpenEXR reads a value of a fixed-size type by its type, not by the declared size:
+            // a different size would put it elsewhere in the file than this walk.
+            throw corrupt("attribute \"" + name + "\" of type " + type + " has " +
+                          std::to_string(size) + " bytes");
+        } else if (type == "preview") {
+            // Width and height, then that many RGBA bytes, which OpenEXR allocates.
+            std::uint32_t wh[2] = {0, 0};
+            in.read(reinterpret_cast<char*>(wh), 8);
+            if (size < 8 || 8 + 4 * std::uint64_t(wh[0]) * wh[1] != std::uint64_t(size))
+                throw corrupt("preview image");
         }
         in.seekg(at + size);
     }
