@@ -89,7 +89,7 @@ void check_footprint_aov(const render::Scene& scene, const std::string& out) {
     for (const render::TextureNode& n : scene.textures) {
         if (n.kind != render::TextureNode::Kind::Image) continue;
         image = true;
-        footprint = footprint || n.lod != render::Lod::None;
+        footprint = footprint || n.lod != render::FootprintMethod::None;
     }
     if (!image)
         throw std::invalid_argument(
@@ -164,7 +164,7 @@ int run_render(const RenderArgs& a) {
     bo.spp_override = a.spp;
     note_spp_rounding(a.spp);
     if (!a.lod.empty()) {
-        bo.lod = render::parse_lod(a.lod);
+        bo.lod = render::parse_footprint_method(a.lod);
         if (!bo.lod)
             throw std::invalid_argument(
                 "--lod: unknown \"" + a.lod +

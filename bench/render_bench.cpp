@@ -28,7 +28,7 @@ std::unique_ptr<render::Scene> demo_scene(render::BuildOptions bo = {}) {
 
 // The demo scene with one footprint source and filter (--lod / --filter), its pyramids and
 // tables built (outside any timing).
-std::unique_ptr<render::Scene> lod_scene(render::Lod lod, texture::FilterKind filter) {
+std::unique_ptr<render::Scene> lod_scene(render::FootprintMethod lod, texture::FilterKind filter) {
     render::BuildOptions bo;
     bo.lod = lod;
     bo.filter = filter;
@@ -43,7 +43,8 @@ std::unique_ptr<render::Scene> lod_scene(render::Lod lod, texture::FilterKind fi
 }
 
 // Whole render of the demo scene with one footprint source and filter.
-void BM_RenderLod(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+void BM_RenderLod(benchmark::State& state, render::FootprintMethod lod,
+                  texture::FilterKind filter) {
     const auto scene = lod_scene(lod, filter);
     for (auto _ : state) {
         render::Framebuffer fb = render::render(*scene, {}, nullptr);
@@ -83,17 +84,18 @@ void paired(benchmark::State& state, const render::Scene& first, const render::S
                                     1);
 }
 
-void BM_RenderLodVsNone(benchmark::State& state, render::Lod lod, texture::FilterKind filter) {
+void BM_RenderLodVsNone(benchmark::State& state, render::FootprintMethod lod,
+                        texture::FilterKind filter) {
     const auto scene = lod_scene(lod, filter),
-               none = lod_scene(render::Lod::None, texture::FilterKind::Bilinear);
+               none = lod_scene(render::FootprintMethod::None, texture::FilterKind::Bilinear);
     paired(state, *scene, *none, "overhead");
 }
 
 // The exact area filter against EWA with ray differentials (pbrt-v3's default), paired.
 // Counter "area_vs_ewa": area's render time over EWA's, minus one, in percent.
 void BM_RenderAreaVsEwa(benchmark::State& state) {
-    const auto area = lod_scene(render::Lod::Differentials, texture::FilterKind::Area),
-               ewa = lod_scene(render::Lod::Differentials, texture::FilterKind::Ewa);
+    const auto area = lod_scene(render::FootprintMethod::Differentials, texture::FilterKind::Area),
+               ewa = lod_scene(render::FootprintMethod::Differentials, texture::FilterKind::Ewa);
     paired(state, *area, *ewa, "area_vs_ewa");
 }
 
@@ -186,28 +188,31 @@ BENCHMARK(BM_BareEmbreeDemo)->Unit(benchmark::kMillisecond)->UseRealTime()->MinT
 // The footprint methods timed against --lod none (names as in the output).
 struct Method {
     const char* name;
-    render::Lod lod;
+    render::FootprintMethod lod;
     texture::FilterKind filter;
 };
 constexpr Method kMethods[] = {
-    {"cmam_trilinear", render::Lod::Cmam, texture::FilterKind::Trilinear},
-    {"cmam_sat", render::Lod::Cmam, texture::FilterKind::Sat},
-    {"cmam_ewa", render::Lod::Cmam, texture::FilterKind::Ewa},
-    {"differentials_ewa", render::Lod::Differentials, texture::FilterKind::Ewa},
-    {"differentials_trilinear", render::Lod::Differentials, texture::FilterKind::Trilinear},
-    {"differentials_area", render::Lod::Differentials, texture::FilterKind::Area},
-    {"cones_trilinear", render::Lod::Cones, texture::FilterKind::Trilinear},
-    {"cones_aniso_ewa", render::Lod::ConesAniso, texture::FilterKind::Ewa},
-    {"cones_aniso_area", render::Lod::ConesAniso, texture::FilterKind::Area}};
+    {"cmam_trilinear", render::FootprintMethod::Cmam, texture::FilterKind::Trilinear},
+    {"cmam_sat", render::FootprintMethod::Cmam, texture::FilterKind::Sat},
+    {"cmam_ewa", render::FootprintMethod::Cmam, texture::FilterKind::Ewa},
+    {"differentials_ewa", render::FootprintMethod::Differentials, texture::FilterKind::Ewa},
+    {"differentials_trilinear", render::FootprintMethod::Differentials,
+     texture::FilterKind::Trilinear},
+    {"differentials_area", render::FootprintMethod::Differentials, texture::FilterKind::Area},
+    {"cones_trilinear", render::FootprintMethod::Cones, texture::FilterKind::Trilinear},
+    {"cones_aniso_ewa", render::FootprintMethod::ConesAniso, texture::FilterKind::Ewa},
+    {"cones_aniso_area", render::FootprintMethod::ConesAniso, texture::FilterKind::Area}};
 
 // Each method alone (BM_RenderLod, after --lod none), then each against --lod none alternately.
 void register_methods() {
-    auto add = [](const std::string& name, auto fn, render::Lod lod, texture::FilterKind filter) {
+    auto add = [](const std::string& name, auto fn, render::FootprintMethod lod,
+                  texture::FilterKind filter) {
         return benchmark::RegisterBenchmark(name.c_str(), fn, lod, filter)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
     };
-    add("BM_RenderLod/none", BM_RenderLod, render::Lod::None, texture::FilterKind::Bilinear)
+    add("BM_RenderLod/none", BM_RenderLod, render::FootprintMethod::None,
+        texture::FilterKind::Bilinear)
         ->MinTime(1.0);
     for (const Method& m : kMethods)
         add(std::string("BM_RenderLod/") + m.name, BM_RenderLod, m.lod, m.filter)->MinTime(1.0);

@@ -26,25 +26,25 @@ namespace {
 // The footprint sources of method names: "SOURCE+FILTER".
 struct Source {
     const char* name;
-    render::Lod lod;
+    render::FootprintMethod lod;
     void (*adjust)(render::BuildOptions&);  // may be null
 };
 const Source kSources[] = {
-    {"differentials", render::Lod::Differentials, nullptr},
-    {"cones", render::Lod::Cones, nullptr},
-    {"cones-aniso", render::Lod::ConesAniso, nullptr},
+    {"differentials", render::FootprintMethod::Differentials, nullptr},
+    {"cones", render::FootprintMethod::Cones, nullptr},
+    {"cones-aniso", render::FootprintMethod::ConesAniso, nullptr},
     // Paper mode: scanline tags, average on a miss, conjugate ellipse.
-    {"cmam", render::Lod::Cmam, nullptr},
-    {"cmam-literal", render::Lod::Cmam,
+    {"cmam", render::FootprintMethod::Cmam, nullptr},
+    {"cmam-literal", render::FootprintMethod::Cmam,
      [](render::BuildOptions& b) { b.cmam.adjacent_only = false; }},
-    {"cmam-point", render::Lod::Cmam,
+    {"cmam-point", render::FootprintMethod::Cmam,
      [](render::BuildOptions& b) { b.cmam.miss = texture::CmamMiss::Point; }},
-    {"cmam-pixel-hull", render::Lod::Cmam,
+    {"cmam-pixel-hull", render::FootprintMethod::Cmam,
      [](render::BuildOptions& b) {
          b.tags = render::TagPolicy::Pixel;
          b.cmam.hull = true;
      }},
-    {"cmam2d", render::Lod::Cmam, [](render::BuildOptions& b) { b.cmam.two_d = true; }},
+    {"cmam2d", render::FootprintMethod::Cmam, [](render::BuildOptions& b) { b.cmam.two_d = true; }},
 };
 
 }  // namespace
@@ -67,7 +67,7 @@ std::optional<Method> parse_method(const std::string& name) {
     Method m;
     m.name = name;
     if (name == "none") {
-        m.build.lod = render::Lod::None;
+        m.build.lod = render::FootprintMethod::None;
         return m;
     }
     auto plus = name.find('+');
@@ -219,7 +219,7 @@ class SceneEvaluation {
         fs::path gt_texture = cache / (sr.name + "-" + key + "-texture.exr");
         fs::path gt_untextured = cache / (sr.name + "-" + key + "-untextured.exr");
         render::BuildOptions gt_opts;
-        gt_opts.lod = render::Lod::None;
+        gt_opts.lod = render::FootprintMethod::None;
         gt_opts.filter = texture::FilterKind::Bilinear;
         sr.reference_spp = rendered_spp(o.reference_spp);
         sr.reference_cached =

@@ -537,17 +537,16 @@ class Builder {
             }
             if (const auto* lp = e.params.find("lod")) {
                 std::string l = e.params.get_string("lod", "");
-                auto k = parse_lod(l);
+                auto k = parse_footprint_method(l);
                 if (!k)
-                    throw SceneError(lp->loc, "unknown lod " + q(l) +
-                                                  " (expected \"none\", \"differentials\", "
-                                                  "\"cones\", \"cones-aniso\" or \"cmam\")");
+                    throw SceneError(lp->loc, "unknown lod " + q(l) + " (expected " +
+                                                  kFootprintMethodNames.list("\"") + ")");
                 n.lod = *k;
             }
             if (m_opts.filter) n.filter.kind = *m_opts.filter;
             if (m_opts.lod) n.lod = *m_opts.lod;
             // With ray differentials, trilinear measures the footprint as pbrt-v3 does.
-            n.filter.pbrt_trilinear_width = n.lod == Lod::Differentials;
+            n.filter.pbrt_trilinear_width = n.lod == FootprintMethod::Differentials;
             if (!(n.filter.max_aniso >= 1))
                 throw SceneError(e.params.find("maxanisotropy")->loc,
                                  "maxanisotropy must be at least 1");
@@ -654,15 +653,16 @@ class Builder {
         // Non-uv mappings take their footprints from dP/dx and dP/dy.
         if (n.mapping != TextureNode::Mapping::Uv &&
             (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
-            n.lod == Lod::Differentials)
+            n.lod == FootprintMethod::Differentials)
             m_scene->needs_differentials = true;
         e.params.check_unused(what, m_warn);
         if (n.kind == TextureNode::Kind::Image ||
             (n.kind == TextureNode::Kind::Checkerboard && n.closed_form)) {
-            if (n.lod == Lod::Differentials) m_scene->needs_differentials = true;
-            if (n.lod == Lod::Cones || n.lod == Lod::ConesAniso) m_scene->needs_cones = true;
-            if (n.lod == Lod::ConesAniso) m_scene->needs_cones_aniso = true;
-            if (n.lod == Lod::Cmam) m_scene->uses_cmam = true;
+            if (n.lod == FootprintMethod::Differentials) m_scene->needs_differentials = true;
+            if (n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso)
+                m_scene->needs_cones = true;
+            if (n.lod == FootprintMethod::ConesAniso) m_scene->needs_cones_aniso = true;
+            if (n.lod == FootprintMethod::Cmam) m_scene->uses_cmam = true;
         }
         m_scene->textures.push_back(n);
     }
@@ -1166,7 +1166,7 @@ class Builder {
                 // Escaping rays filter the map over their ray differentials' footprint, with
                 // the image textures' filter (EWA unless overridden); other footprint sources
                 // point-sample it as pbrt-v3 does.
-                l.env_footprint = !m_opts.lod || *m_opts.lod == Lod::Differentials;
+                l.env_footprint = !m_opts.lod || *m_opts.lod == FootprintMethod::Differentials;
                 if (l.env_footprint) m_scene->needs_differentials = true;
             }
             e.params.get_int("samples",
@@ -1213,38 +1213,6 @@ class Builder {
 };
 
 }  // namespace
-
-std::optional<Lod> parse_lod(std::string_view n) {
-    if (n == "none") return Lod::None;
-    if (n == "differentials") return Lod::Differentials;
-    if (n == "cones") return Lod::Cones;
-    if (n == "cones-aniso") return Lod::ConesAniso;
-    if (n == "cmam") return Lod::Cmam;
-    return std::nullopt;
-}
-std::string_view to_string(Lod lod) {
-    switch (lod) {
-        case Lod::None:
-            return "none";
-        case Lod::Differentials:
-            return "differentials";
-        case Lod::Cones:
-            return "cones";
-        case Lod::ConesAniso:
-            return "cones-aniso";
-        case Lod::Cmam:
-            return "cmam";
-    }
-    return "?";
-}
-std::optional<TagPolicy> parse_tag_policy(std::string_view n) {
-    if (n == "scanline") return TagPolicy::Scanline;
-    if (n == "pixel") return TagPolicy::Pixel;
-    return std::nullopt;
-}
-std::string_view to_string(TagPolicy p) {
-    return p == TagPolicy::Pixel ? "pixel" : "scanline";
-}
 
 void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
     const auto& m = world_from_camera;

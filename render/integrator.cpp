@@ -7,8 +7,8 @@
 #include <memory>
 #include <thread>
 
-#include "render/cones.h"
-#include "render/differentials.h"
+#include "render/footprint/cones.h"
+#include "render/footprint/differentials.h"
 #include "render/shading.h"
 
 namespace cmam::render {
@@ -394,7 +394,7 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     // Footprint: semi-axis lengths in level-0 texels of the first image texture, and its level.
     const TextureNode* n = first_image(scene, m.kd);
     if (!n) return;
-    if (n->lod == Lod::Cmam) {
+    if (n->lod == FootprintMethod::Cmam) {
         // The region the CMAM built from its matching samples (level-0 texels; none on a
         // miss) and the MIP level its filter read.
         const CmamRecord* r = ctx.cmam_record;
@@ -424,7 +424,7 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
 // lookup records what it filtered (null for other materials).
 CmamRecord* Tracer::record_cmam_of(const Material& m, CmamRecord* record) const {
     const TextureNode* n = first_image(scene, m.kd);
-    if (!n || n->lod != Lod::Cmam) return nullptr;
+    if (!n || n->lod != FootprintMethod::Cmam) return nullptr;
     record->node = static_cast<int>(n - scene.textures.data());
     return record;
 }

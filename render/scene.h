@@ -19,6 +19,7 @@
 #include "pbrt/error.h"
 #include "pbrt/scene_desc.h"
 #include "render/envmap.h"
+#include "render/footprint/method.h"
 #include "render/math.h"
 
 namespace cmam::render {
@@ -38,16 +39,6 @@ struct Camera {
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
     void generate_ray(float px, float py, Vec3* org, Vec3* dir) const;
 };
-
-/// Where a texture lookup's footprint comes from ("level of detail" source).
-enum class Lod : uint8_t { None, Differentials, Cones, ConesAniso, Cmam };
-std::optional<Lod> parse_lod(std::string_view name);
-std::string_view to_string(Lod lod);
-
-/// Which rays share a CMAM tag ID (algorithms.md §6.2 item 2).
-enum class TagPolicy : uint8_t { Scanline, Pixel };
-std::optional<TagPolicy> parse_tag_policy(std::string_view name);
-std::string_view to_string(TagPolicy p);
 
 /// Limits on the film and the samples a scene (or --spp) may ask for, checked in 64 bits before
 /// anything is allocated; beyond them building the scene is an error naming the values.
@@ -113,9 +104,9 @@ struct TextureNode {
     float omega = 0.5f, scale = 1, variation = 0.2f;  // Fbm, Wrinkled (omega), Marble
     const texture::FilteredTexture* image = nullptr;  // Image: linear, scale applied
     texture::FilterOptions filter{};                  // Image: pbrt-v3's trilinear / maxanisotropy
-    Lod lod = Lod::Differentials;                     // Image, Checkerboard: footprint source
-    bool closed_form = true;                          // Checkerboard: aamode "closedform"
-    TexInput tex1, tex2, amount;                      // Checkerboard, Scale, Mix
+    FootprintMethod lod = FootprintMethod::Differentials;  // Image, Checkerboard: footprint source
+    bool closed_form = true;                               // Checkerboard: aamode "closedform"
+    TexInput tex1, tex2, amount;                           // Checkerboard, Scale, Mix
 };
 
 struct Material {
@@ -301,7 +292,7 @@ struct BuildOptions {
     /// inputs: the "untextured" render that separates geometric edges from texture detail.
     bool untextured = false;
     // Overrides for every image texture (the scene file's choices otherwise).
-    std::optional<Lod> lod;
+    std::optional<FootprintMethod> lod;
     std::optional<texture::FilterKind> filter;
     TagPolicy tags = TagPolicy::Scanline;
     texture::CmamOptions cmam;

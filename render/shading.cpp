@@ -23,13 +23,13 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
     texture::Footprint fp;
     switch (n.lod) {
-        case Lod::Differentials:
+        case FootprintMethod::Differentials:
             fp = ctx.footprint;
             break;
-        case Lod::Cones:
+        case FootprintMethod::Cones:
             fp = ctx.cone;
             break;
-        case Lod::ConesAniso:
+        case FootprintMethod::ConesAniso:
             fp = ctx.cone_aniso;
             break;
         default:
@@ -39,7 +39,7 @@ texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
         // The area filter integrates a parallelogram: a cone's cross-section (a disc or an
         // ellipse of diameters a, b) becomes the one with equal second moments, sides
         // (sqrt 3 / 2) a and (sqrt 3 / 2) b (algorithms.md §5.2; measured best at 1 spp).
-        const bool cone = n.lod == Lod::Cones || n.lod == Lod::ConesAniso;
+        const bool cone = n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso;
         const double k = cone && n.filter.kind == texture::FilterKind::Area ? kConeToArea : 1.0;
         fp.axis_a = {fp.axis_a.u * n.su * k, fp.axis_a.v * n.sv * k};
         fp.axis_b = {fp.axis_b.u * n.su * k, fp.axis_b.v * n.sv * k};
@@ -89,7 +89,7 @@ texture::Vec2d node_st(const TextureNode& n, const TexContext& ctx, texture::Foo
     const texture::Vec2d st = mapped_st(n, ctx.p);
     if (!fp) return st;
     *fp = {};
-    if (n.lod != Lod::Differentials ||
+    if (n.lod != FootprintMethod::Differentials ||
         (dot(ctx.dpdx, ctx.dpdx) == 0 && dot(ctx.dpdy, ctx.dpdy) == 0))
         return st;
     texture::Vec2d axis[2];
@@ -151,7 +151,7 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
             const texture::Vec2d st = node_st(n, ctx, &fp);
             double s = st.u, t = st.v;
             texture::Texel x;
-            if (n.lod == Lod::Cmam && ctx.cmam) {
+            if (n.lod == FootprintMethod::Cmam && ctx.cmam) {
                 // The CMAM sits between the texture and the parameterization: tag and (s,t) in.
                 texture::CmamOptions o = scene.cmam;
                 o.filter = n.filter.kind;
@@ -171,7 +171,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                     ctx.counts->cmam_2d_without_above += o.two_d && !rec->region.used_above;
                 }
             } else {
-                if (n.filter.kind == texture::FilterKind::Area && n.lod == Lod::Differentials &&
+                if (n.filter.kind == texture::FilterKind::Area &&
+                    n.lod == FootprintMethod::Differentials &&
                     n.mapping == TextureNode::Mapping::Uv &&
                     ctx.footprint.kind == texture::Footprint::Kind::Axes) {
                     s += n.su * ctx.stratum_offset.u;

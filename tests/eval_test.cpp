@@ -192,7 +192,7 @@ TEST(GroundTruth, TGt1MatchesTheExactIntegral) {
     pbrt::SceneDesc d = pbrt::parse_file((dir / "gt.pbrt").string());
     render::BuildOptions bo;
     bo.spp_override = 64 * 64;
-    bo.lod = render::Lod::None;
+    bo.lod = render::FootprintMethod::None;
     bo.filter = texture::FilterKind::Nearest;
     auto s = render::build_scene(d, bo, {});
     render::RenderOptions ro;

@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "render/cones.h"
-#include "render/differentials.h"
+#include "render/footprint/cones.h"
+#include "render/footprint/differentials.h"
 #include "render/integrator.h"
 #include "render/shading.h"
 #include "scene_util.h"

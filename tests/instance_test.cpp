@@ -66,7 +66,7 @@ std::string flattened_scene() {
     return s + "WorldEnd\n";
 }
 
-std::vector<float> render_text(const std::string& text, std::optional<Lod> lod,
+std::vector<float> render_text(const std::string& text, std::optional<FootprintMethod> lod,
                                texture::FilterKind filter) {
     BuildOptions bo;
     bo.spp_override = 4;
@@ -108,13 +108,14 @@ TEST(Instancing, ObjectIsBuiltOnceAndPlacedByEachInstance) {
 TEST(Instancing, ImagesMatchTheFlattenedScene) {
     using texture::FilterKind;
     struct Case {
-        std::optional<Lod> lod;
+        std::optional<FootprintMethod> lod;
         FilterKind filter;
     };
-    for (const Case& c :
-         {Case{Lod::Differentials, FilterKind::Ewa}, Case{Lod::Cones, FilterKind::Trilinear},
-          Case{Lod::ConesAniso, FilterKind::Area}, Case{Lod::Cmam, FilterKind::Sat},
-          Case{Lod::None, FilterKind::Trilinear}}) {
+    for (const Case& c : {Case{FootprintMethod::Differentials, FilterKind::Ewa},
+                          Case{FootprintMethod::Cones, FilterKind::Trilinear},
+                          Case{FootprintMethod::ConesAniso, FilterKind::Area},
+                          Case{FootprintMethod::Cmam, FilterKind::Sat},
+                          Case{FootprintMethod::None, FilterKind::Trilinear}}) {
         SCOPED_TRACE(std::string(to_string(*c.lod)) + "+" +
                      std::string(texture::to_string(c.filter)));
         const std::vector<float> a = render_text(instanced_scene(), c.lod, c.filter);

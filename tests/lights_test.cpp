@@ -176,7 +176,7 @@ TEST(EnvironmentMap, EscapingRaysFilterTheMapOverTheirDifferentials) {
     EXPECT_NEAR(env.radiance(d, &dx, &dy).r, 0.5f, 0.05f);
     // --lod other than differentials point-samples the map, as pbrt-v3 does.
     BuildOptions o;
-    o.lod = Lod::None;
+    o.lod = FootprintMethod::None;
     auto p = render::build_scene(
         pbrt::parse_string(
             camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""),

@@ -209,7 +209,8 @@ TEST(Scenes, EveryBundledSceneBuilds) {
 namespace {
 // Rows 100..180 of the paper's scene 1 (the floor from just below the horizon), rendered with
 // the given footprint source, filter and samples per pixel.
-std::vector<float> scene1_floor(int spp, Lod lod, texture::FilterKind filter, bool two_d = false) {
+std::vector<float> scene1_floor(int spp, FootprintMethod lod, texture::FilterKind filter,
+                                bool two_d = false) {
     static const pbrt::SceneDesc d =
         pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/paper/scene1.pbrt");
     BuildOptions bo;
@@ -237,7 +238,7 @@ TEST(Cmam, IdenticalImagesForOneAndTwoThreadsWithEitherTagPolicy) {
              {texture::FilterKind::Trilinear, texture::FilterKind::Sat, texture::FilterKind::Ewa}) {
             BuildOptions bo;
             bo.spp_override = tags == TagPolicy::Pixel ? 4 : 1;
-            bo.lod = Lod::Cmam;
+            bo.lod = FootprintMethod::Cmam;
             bo.filter = filter;
             bo.tags = tags;
             auto s = build_scene(d, bo, {});
@@ -258,10 +259,10 @@ TEST(Cmam, ReducesTheErrorOfARecedingTexturedPlane) {
     // The paper's scene 1 at low resolution: CMAM-filtered 1-spp renders are closer to a
     // supersampled point-sampled reference than the 1-spp point-sampled render.
     using texture::FilterKind;
-    auto ref = scene1_floor(64, Lod::None, FilterKind::Bilinear);
-    double off = rmse(ref, scene1_floor(1, Lod::None, FilterKind::Bilinear));
-    double tri = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Trilinear));
-    double ewa = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Ewa));
+    auto ref = scene1_floor(64, FootprintMethod::None, FilterKind::Bilinear);
+    double off = rmse(ref, scene1_floor(1, FootprintMethod::None, FilterKind::Bilinear));
+    double tri = rmse(ref, scene1_floor(1, FootprintMethod::Cmam, FilterKind::Trilinear));
+    double ewa = rmse(ref, scene1_floor(1, FootprintMethod::Cmam, FilterKind::Ewa));
     EXPECT_LT(tri, 0.75 * off) << tri << " vs " << off;
     EXPECT_LT(ewa, 0.75 * off) << ewa << " vs " << off;
 }
@@ -270,9 +271,9 @@ TEST(Cmam, TwoDimensionalCmamFixesTheCollinearSatBoxes) {
     // At 1 spp with scanline tags the paper's cached samples lie along the row, so the SAT box
     // is one texel tall; the 2-D CMAM adds the pixel above and filters vertically too.
     using texture::FilterKind;
-    auto ref = scene1_floor(64, Lod::None, FilterKind::Bilinear);
-    double one_d = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Sat));
-    double two_d = rmse(ref, scene1_floor(1, Lod::Cmam, FilterKind::Sat, true));
+    auto ref = scene1_floor(64, FootprintMethod::None, FilterKind::Bilinear);
+    double one_d = rmse(ref, scene1_floor(1, FootprintMethod::Cmam, FilterKind::Sat));
+    double two_d = rmse(ref, scene1_floor(1, FootprintMethod::Cmam, FilterKind::Sat, true));
     EXPECT_LT(two_d, 0.8 * one_d) << two_d << " vs " << one_d;
 }
 
@@ -282,10 +283,10 @@ TEST(Cmam, ScanlineTagsFollowSampleRowsSoErrorFallsWithSamples) {
     // ray differentials scaled by 1/sqrt(spp) do. (Tagging whole pixel rows made the vector to
     // the sample above a full pixel long at any spp, and the error stayed where 1 spp left it.)
     using texture::FilterKind;
-    auto ref = scene1_floor(64, Lod::None, FilterKind::Bilinear);
+    auto ref = scene1_floor(64, FootprintMethod::None, FilterKind::Bilinear);
     for (auto f : {FilterKind::Trilinear, FilterKind::Ewa}) {
-        double one = rmse(ref, scene1_floor(1, Lod::Cmam, f, true));
-        double sixteen = rmse(ref, scene1_floor(16, Lod::Cmam, f, true));
+        double one = rmse(ref, scene1_floor(1, FootprintMethod::Cmam, f, true));
+        double sixteen = rmse(ref, scene1_floor(16, FootprintMethod::Cmam, f, true));
         // (Measured 0.70 and 0.74 of the 1-spp error, since every row has its row above at 1
         // spp too; whole-pixel-row tags gave about 1.)
         EXPECT_LT(sixteen, 0.8 * one) << texture::to_string(f) << ": " << sixteen << " vs " << one;

@@ -9,37 +9,22 @@
 namespace cmam::texture {
 
 std::optional<CmamMiss> parse_cmam_miss(std::string_view n) {
-    if (n == "average") return CmamMiss::Average;
-    if (n == "point") return CmamMiss::Point;
-    return std::nullopt;
+    return kCmamMissNames.parse(n);
 }
 std::optional<CmamEllipse> parse_cmam_ellipse(std::string_view n) {
-    if (n == "conjugate") return CmamEllipse::Conjugate;
-    if (n == "orthogonal") return CmamEllipse::Orthogonal;
-    if (n == "orthogonalised") return CmamEllipse::Orthogonalised;
-    return std::nullopt;
+    return kCmamEllipseNames.parse(n);
 }
 std::optional<CmamSatMiss> parse_cmam_sat_miss(std::string_view n) {
-    if (n == "average") return CmamSatMiss::Average;
-    if (n == "paper-literal") return CmamSatMiss::PaperLiteral;
-    return std::nullopt;
+    return kCmamSatMissNames.parse(n);
 }
 std::string_view to_string(CmamMiss m) {
-    return m == CmamMiss::Average ? "average" : "point";
+    return kCmamMissNames.name(m);
 }
 std::string_view to_string(CmamEllipse e) {
-    switch (e) {
-        case CmamEllipse::Conjugate:
-            return "conjugate";
-        case CmamEllipse::Orthogonal:
-            return "orthogonal";
-        case CmamEllipse::Orthogonalised:
-            return "orthogonalised";
-    }
-    return "?";
+    return kCmamEllipseNames.name(e);
 }
 std::string_view to_string(CmamSatMiss m) {
-    return m == CmamSatMiss::Average ? "average" : "paper-literal";
+    return kCmamSatMissNames.name(m);
 }
 
 CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int matches,

@@ -10,42 +10,15 @@
 namespace cmam::texture {
 
 std::optional<FilterKind> parse_filter(std::string_view n) {
-    if (n == "nearest") return FilterKind::Nearest;
-    if (n == "bilinear") return FilterKind::Bilinear;
-    if (n == "trilinear") return FilterKind::Trilinear;
-    if (n == "sat") return FilterKind::Sat;
-    if (n == "ewa") return FilterKind::Ewa;
-    if (n == "area") return FilterKind::Area;
-    return std::nullopt;
+    return kFilterNames.parse(n);
 }
 
 std::string_view to_string(FilterKind k) {
-    switch (k) {
-        case FilterKind::Nearest:
-            return "nearest";
-        case FilterKind::Bilinear:
-            return "bilinear";
-        case FilterKind::Trilinear:
-            return "trilinear";
-        case FilterKind::Sat:
-            return "sat";
-        case FilterKind::Ewa:
-            return "ewa";
-        case FilterKind::Area:
-            return "area";
-    }
-    return "?";
+    return kFilterNames.name(k);
 }
 
 std::string filter_names(std::string_view quote) {
-    std::string out;
-    for (int k = 0; k < kFilterKinds; ++k) {
-        if (k > 0) out += k + 1 == kFilterKinds ? " or " : ", ";
-        out += quote;
-        out += to_string(FilterKind(k));
-        out += quote;
-    }
-    return out;
+    return kFilterNames.list(quote);
 }
 
 FilteredTexture::FilteredTexture(Image level0) : m_image(std::move(level0)) {

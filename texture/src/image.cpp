@@ -16,25 +16,11 @@
 namespace cmam::texture {
 
 std::optional<WrapMode> parse_wrap_mode(std::string_view name) {
-    if (name == "repeat") return WrapMode::Repeat;
-    if (name == "clamp") return WrapMode::Clamp;
-    if (name == "black") return WrapMode::Black;
-    if (name == "mirror") return WrapMode::Mirror;
-    return std::nullopt;
+    return kWrapModeNames.parse(name);
 }
 
 std::string_view to_string(WrapMode mode) {
-    switch (mode) {
-        case WrapMode::Repeat:
-            return "repeat";
-        case WrapMode::Clamp:
-            return "clamp";
-        case WrapMode::Black:
-            return "black";
-        case WrapMode::Mirror:
-            return "mirror";
-    }
-    return "?";
+    return kWrapModeNames.name(mode);
 }
 
 float srgb_to_linear(float c) {

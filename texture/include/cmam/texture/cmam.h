@@ -20,6 +20,15 @@ enum class CmamMiss : uint8_t { Average, Point };
 /// SAT on a miss: the whole-texture mean, or the paper's literal origin-to-(u,v) rectangle.
 enum class CmamSatMiss : uint8_t { Average, PaperLiteral };
 
+inline constexpr NameTable kCmamMissNames{Named<CmamMiss>{CmamMiss::Average, "average"},
+                                          Named{CmamMiss::Point, "point"}};
+inline constexpr NameTable kCmamEllipseNames{
+    Named<CmamEllipse>{CmamEllipse::Conjugate, "conjugate"},
+    Named{CmamEllipse::Orthogonal, "orthogonal"},
+    Named{CmamEllipse::Orthogonalised, "orthogonalised"}};
+inline constexpr NameTable kCmamSatMissNames{Named<CmamSatMiss>{CmamSatMiss::Average, "average"},
+                                             Named{CmamSatMiss::PaperLiteral, "paper-literal"}};
+
 std::optional<CmamMiss> parse_cmam_miss(std::string_view);
 std::optional<CmamEllipse> parse_cmam_ellipse(std::string_view);
 std::optional<CmamSatMiss> parse_cmam_sat_miss(std::string_view);

@@ -6,6 +6,7 @@
 #include <cmam/texture/ewa.h>
 #include <cmam/texture/footprint.h>
 #include <cmam/texture/mip.h>
+#include <cmam/texture/names.h>
 #include <cmam/texture/sat.h>
 
 #include <atomic>
@@ -24,7 +25,16 @@ namespace cmam::texture {
 enum class FilterKind : uint8_t { Nearest, Bilinear, Trilinear, Sat, Ewa, Area };
 inline constexpr int kFilterKinds = 6;
 
-/// Parses "nearest", "bilinear", "trilinear", "sat", "ewa", "area"; nullopt otherwise.
+/// The filters' names: "nearest", "bilinear", "trilinear", "sat", "ewa", "area".
+inline constexpr NameTable kFilterNames{Named<FilterKind>{FilterKind::Nearest, "nearest"},
+                                        Named{FilterKind::Bilinear, "bilinear"},
+                                        Named{FilterKind::Trilinear, "trilinear"},
+                                        Named{FilterKind::Sat, "sat"},
+                                        Named{FilterKind::Ewa, "ewa"},
+                                        Named{FilterKind::Area, "area"}};
+static_assert(kFilterNames.entries.size() == kFilterKinds);
+
+/// kFilterNames.parse; nullopt for an unknown name.
 std::optional<FilterKind> parse_filter(std::string_view name);
 std::string_view to_string(FilterKind kind);
 /// Every filter's name, for messages: "nearest, bilinear, trilinear, sat, ewa or area", each

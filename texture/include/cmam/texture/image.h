@@ -4,6 +4,8 @@
 // Implements algorithms.md §0 (conventions) and §1 (texel fetch).
 #pragma once
 
+#include <cmam/texture/names.h>
+
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -25,7 +27,11 @@ class TextureError : public std::runtime_error {
 /// How texel indices outside [0,n) are mapped (algorithms.md §0).
 enum class WrapMode : uint8_t { Repeat, Clamp, Black, Mirror };
 
-/// Parses "repeat", "clamp", "black" or "mirror"; nullopt otherwise.
+inline constexpr NameTable kWrapModeNames{
+    Named<WrapMode>{WrapMode::Repeat, "repeat"}, Named{WrapMode::Clamp, "clamp"},
+    Named{WrapMode::Black, "black"}, Named{WrapMode::Mirror, "mirror"}};
+
+/// kWrapModeNames.parse; nullopt for an unknown name.
 std::optional<WrapMode> parse_wrap_mode(std::string_view name);
 std::string_view to_string(WrapMode mode);
 

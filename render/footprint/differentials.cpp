@@ -1,4 +1,4 @@
-#include "render/differentials.h"
+#include "render/footprint/differentials.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "render/cones.h"
+#include "render/footprint/cones.h"
 
 #include <cmath>
 
