@@ -131,9 +131,8 @@ void BM_BareEmbreeDemo(benchmark::State& state) {
                 for (int py = r.begin(); py < r.end(); ++py)
                     for (int px = film.x0; px < film.x1; ++px)
                         for (int s = 0; s < nx * ny; ++s) {
-                            render::Vec3 o, d;
-                            scene->camera.generate_ray(px + (s % nx + 0.5f) / nx,
-                                                       py + (s / nx + 0.5f) / ny, &o, &d);
+                            const auto [o, d] = scene->camera.generate_ray(
+                                px + (s % nx + 0.5f) / nx, py + (s / nx + 0.5f) / ny);
                             RTCRayHit rh{};
                             rh.ray.org_x = o.x;
                             rh.ray.org_y = o.y;

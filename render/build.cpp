@@ -282,8 +282,7 @@ class Builder {
         };
         for (int corner = 0; corner < 4; ++corner) {
             const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
-            Vec3 org, dir;
-            c.generate_ray(px, py, &org, &dir);
+            const auto [org, dir] = c.generate_ray(px, py);
             const std::string at = " at raster position (" + pbrt::number_text(px) + ", " +
                                    pbrt::number_text(py) + ")";
             for (float x : {org.x, org.y, org.z})
@@ -642,7 +641,7 @@ class Builder {
                          "luminance of its colour");
             }
             // Their octaves follow the footprint, as in pbrt-v3: ray differentials are traced.
-            m_scene->needs_differentials = true;
+            m_scene->footprint_methods.add(FootprintMethod::Differentials);
         } else {
             throw SceneError(e.loc, "unsupported texture class " + q(e.type) +
                                         " (supported: \"imagemap\", \"checkerboard\", "
@@ -654,16 +653,11 @@ class Builder {
         if (n.mapping != TextureNode::Mapping::Uv &&
             (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
             n.lod == FootprintMethod::Differentials)
-            m_scene->needs_differentials = true;
+            m_scene->footprint_methods.add(FootprintMethod::Differentials);
         e.params.check_unused(what, m_warn);
         if (n.kind == TextureNode::Kind::Image ||
-            (n.kind == TextureNode::Kind::Checkerboard && n.closed_form)) {
-            if (n.lod == FootprintMethod::Differentials) m_scene->needs_differentials = true;
-            if (n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso)
-                m_scene->needs_cones = true;
-            if (n.lod == FootprintMethod::ConesAniso) m_scene->needs_cones_aniso = true;
-            if (n.lod == FootprintMethod::Cmam) m_scene->uses_cmam = true;
-        }
+            (n.kind == TextureNode::Kind::Checkerboard && n.closed_form))
+            m_scene->footprint_methods.add(n.lod);
         m_scene->textures.push_back(n);
     }
 
@@ -1167,7 +1161,7 @@ class Builder {
                 // the image textures' filter (EWA unless overridden); other footprint sources
                 // point-sample it as pbrt-v3 does.
                 l.env_footprint = !m_opts.lod || *m_opts.lod == FootprintMethod::Differentials;
-                if (l.env_footprint) m_scene->needs_differentials = true;
+                if (l.env_footprint) m_scene->footprint_methods.add(FootprintMethod::Differentials);
             }
             e.params.get_int("samples",
                              1);  // pbrt-v3's sample count hint; one sample per lookup here
@@ -1214,31 +1208,27 @@ class Builder {
 
 }  // namespace
 
-void Camera::generate_ray(float px, float py, Vec3* org, Vec3* dir) const {
+CameraRay Camera::generate_ray(float px, float py) const {
     const auto& m = world_from_camera;
     if (environment) {
         const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;
         const Vec3 d(std::sin(theta) * std::cos(phi), std::cos(theta),
                      std::sin(theta) * std::sin(phi));
-        *org = Vec3(m[3], m[7], m[11]);
-        *dir = normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
-                              m[4] * d.x + m[5] * d.y + m[6] * d.z,
-                              m[8] * d.x + m[9] * d.y + m[10] * d.z));
-        return;
+        return {Vec3(m[3], m[7], m[11]), normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
+                                                        m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                                                        m[8] * d.x + m[9] * d.y + m[10] * d.z))};
     }
     float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
     if (orthographic) {
-        *org = Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7],
-                    m[8] * sx + m[9] * sy + m[11]);
-        *dir = normalize(Vec3(m[2], m[6], m[10]));
-        return;
+        return {Vec3(m[0] * sx + m[1] * sy + m[3], m[4] * sx + m[5] * sy + m[7],
+                     m[8] * sx + m[9] * sy + m[11]),
+                normalize(Vec3(m[2], m[6], m[10]))};
     }
     Vec3 d(sx * tan_half_fov, sy * tan_half_fov, 1);
-    *org = Vec3(m[3], m[7], m[11]);
-    *dir =
-        normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
-                       m[8] * d.x + m[9] * d.y + m[10] * d.z));
+    return {Vec3(m[3], m[7], m[11]), normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
+                                                    m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                                                    m[8] * d.x + m[9] * d.y + m[10] * d.z))};
 }
 
 std::size_t Scene::texture_memory_bytes() const {

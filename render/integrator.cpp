@@ -7,8 +7,7 @@
 #include <memory>
 #include <thread>
 
-#include "render/footprint/cones.h"
-#include "render/footprint/differentials.h"
+#include "render/footprint/footprint.h"
 #include "render/shading.h"
 
 namespace cmam::render {
@@ -68,13 +67,10 @@ struct Aov {
 
 struct Tracer {
     const Scene& scene;
+    const FootprintProducers& footprints;
     RayCounts* counts;
     Rng& rng;
-    texture::RayTag tag{};         // the camera ray's tag; the level follows the depth
-    CmamRowState* cmam = nullptr;  // the row's CMAM caches
-    // From the camera sample to its stratum's centre, in stratum steps (x, y): the same screen
-    // offset at every hit of the path, mapped to uv by that hit's differentials.
-    float to_stratum_x = 0, to_stratum_y = 0;
+    CmamRowState* cmam = nullptr;  // the strip's CMAM caches
 
     // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
     // over the ray differential's footprint when the ray carries one.
@@ -237,53 +233,30 @@ struct Tracer {
     /// A ray with the footprint state it carries.
     struct Ray {
         Vec3 org, dir;
-        RayDifferential diff;
-        RayCone cone;
-        uint64_t path = 1;  // which specular bounces led here (TexContext::path)
+        RayFootprint fp;
     };
 
     Rgb li(Ray ray, int depth) {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             SurfaceHit h;
             if (!scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), &h))
-                return escaped(ray.dir, ray.diff);
+                return escaped(ray.dir, ray.fp.diff);
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-            texture::RayTag t = tag;
-            t.level = static_cast<uint32_t>(depth);
             TexContext ctx;
             ctx.u = h.u;
             ctx.v = h.v;
-            ctx.tag = t;
+            ctx.p = h.p;
+            ctx.footprints = footprints.at_hit(ray.fp, ray.dir, h);
             ctx.counts = counts ? &counts->lookups : nullptr;
             ctx.object = h.object_id;
             ctx.cmam = cmam;
-            ctx.path = ray.path;
-            ctx.p = h.p;
-            HitDifferential hd;
-            if (scene.needs_differentials) {
-                hd = transfer(ray.diff, ray.dir, h);
-                if (hd.valid) {
-                    ctx.dpdx = hd.dpdx;
-                    ctx.dpdy = hd.dpdy;
-                    ctx.footprint =
-                        texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
-                    ctx.stratum_offset = {hd.dudx * to_stratum_x + hd.dudy * to_stratum_y,
-                                          hd.dvdx * to_stratum_x + hd.dvdy * to_stratum_y};
-                } else if (counts && ray.diff.valid)
-                    ++counts->dropped_differentials;
-            }
-            if (scene.needs_cones) {
-                float w = cone_uv_width(ray.cone, ray.dir, h);
-                ctx.cone = texture::Footprint::axes({w, 0}, {0, w});
-            }
-            if (scene.needs_cones_aniso) {
-                float ax[4];
-                cone_uv_axes(ray.cone, ray.dir, h, ax);
-                ctx.cone_aniso = texture::Footprint::axes({ax[0], ax[1]}, {ax[2], ax[3]});
-            }
+            const HitFootprint& at = ctx.footprints;
+            const HitDifferential& hd = at.diff;
+            if (counts && at.dropped) ++counts->dropped_differentials;
             CmamRecord cmam_record;  // the footprint AOV of a CMAM texture
-            if (aov && !aov->recorded && aov->kind == AovKind::Footprint && scene.uses_cmam)
+            if (aov && !aov->recorded && aov->kind == AovKind::Footprint &&
+                footprints.uses(FootprintMethod::Cmam))
                 ctx.cmam_record = record_cmam_of(m, &cmam_record);
             Bsdf bsdf;
             Vec3 wo = -ray.dir;
@@ -295,10 +268,7 @@ struct Tracer {
             if (!make_bsdf(scene, chosen, h, ctx, &bsdf)) {
                 // Continue through: the footprint state moves to the hit point.
                 ray.org = offset_origin(h, ray.dir);
-                ray.diff.dodx = hd.dpdx;
-                ray.diff.dody = hd.dpdy;
-                ray.diff.valid = hd.valid;
-                ray.cone.width = cone_width_at(ray.cone, h.t);
+                ray.fp = footprints.passed_through(ray.fp, at, h);
                 continue;
             }
             if (m.type == Material::Type::Mix) {
@@ -311,8 +281,8 @@ struct Tracer {
             Rgb L = emitted(h, wo);
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
-                L += specular_reflect(ray, h, hd, bsdf, wo, depth);
-                L += specular_transmit(ray, h, hd, bsdf, wo, depth);
+                L += specular_reflect(ray, h, at, bsdf, wo, depth);
+                L += specular_transmit(ray, h, at, bsdf, wo, depth);
             }
             return L;
         }
@@ -325,8 +295,8 @@ struct Tracer {
         return li(next, depth + 1);
     }
 
-    Rgb specular_reflect(const Ray& ray, const SurfaceHit& h, const HitDifferential& hd,
-                         const Bsdf& b, const Vec3& wo, int depth) {
+    Rgb specular_reflect(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
+                         const Vec3& wo, int depth) {
         if (b.kr.is_black()) return {};
         const Vec3& n = h.ns;
         float cos_o = dot(wo, n);
@@ -334,13 +304,11 @@ struct Tracer {
         if (dot(wi, n) == 0) return {};
         float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
         if (fr == 0) return {};
-        Ray next{{}, wi, {}, {}, ray.path * 2};
-        if (scene.needs_differentials) next.diff = render::reflect(ray.diff, hd, ray.dir, h);
-        if (scene.needs_cones) next.cone = reflect_cone(ray.cone, ray.dir, h);
+        Ray next{{}, wi, footprints.reflected(ray.fp, at, ray.dir, h)};
         return b.kr * fr * spawn(h, next, depth);
     }
 
-    Rgb specular_transmit(const Ray& ray, const SurfaceHit& h, const HitDifferential& hd,
+    Rgb specular_transmit(const Ray& ray, const SurfaceHit& h, const HitFootprint& at,
                           const Bsdf& b, const Vec3& wo, int depth) {
         if (b.kt.is_black()) return {};
         const Vec3& n = h.ns;
@@ -352,10 +320,7 @@ struct Tracer {
         float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};
-        Ray next{{}, wt, {}, {}, ray.path * 2 + 1};
-        if (scene.needs_differentials)
-            next.diff = render::refract(ray.diff, hd, ray.dir, h, eta_i / eta_t);
-        if (scene.needs_cones) next.cone = refract_cone(ray.cone, ray.dir, h, eta_i / eta_t);
+        Ray next{{}, wt, footprints.refracted(ray.fp, at, ray.dir, h, eta_i / eta_t)};
         return b.kt * ft * spawn(h, next, depth);
     }
 
@@ -436,34 +401,14 @@ uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
-// The environment camera's ray differential: the rays one pixel right and down, differenced
-// (pbrt-v3's default for cameras without a closed form), scaled by `scale`.
-RayDifferential environment_differential(const Camera& c, float px, float py, const Vec3& dir,
-                                         float scale) {
-    RayDifferential rd;
-    Vec3 org, dx, dy;
-    c.generate_ray(px + 1, py, &org, &dx);
-    c.generate_ray(px, py + 1, &org, &dy);
-    rd.valid = true;
-    rd.dddx = (dx - dir) * scale;
-    rd.dddy = (dy - dir) * scale;
-    return rd;
-}
-
-struct CameraSample {
-    Vec3 org, dir;
-    RayDifferential diff;
-    RayCone cone;
-    float to_stratum_x = 0, to_stratum_y = 0;  // to the stratum's centre, in stratum steps
-};
-
-Rgb trace_one(const Scene& scene, const CameraSample& cs, uint64_t seed, RayCounts* counts,
-              texture::RayTag tag = {}, CmamRowState* cmam = nullptr, Aov* aov = nullptr) {
+Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
+              const Vec3& dir, const RayFootprint& fp, uint64_t seed, RayCounts* counts,
+              CmamRowState* cmam = nullptr, Aov* aov = nullptr) {
     Rng rng(seed);
-    Tracer t{scene, counts, rng, tag, cmam, cs.to_stratum_x, cs.to_stratum_y};
+    Tracer t{scene, footprints, counts, rng, cmam};
     t.aov = aov;
     if (counts) ++counts->camera;
-    return t.li({cs.org, cs.dir, cs.diff, cs.cone}, 0);
+    return t.li({org, dir, fp}, 0);
 }
 
 }  // namespace
@@ -471,8 +416,8 @@ Rgb trace_one(const Scene& scene, const CameraSample& cs, uint64_t seed, RayCoun
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
                    RenderStats* stats) {
     RayCounts c;
-    CameraSample cs{org, dir, {}, {}};
-    Rgb L = trace_one(scene, cs, seed, &c);
+    const FootprintProducers footprints(scene.footprint_methods, scene.camera, 1);
+    Rgb L = trace_one(scene, footprints, org, dir, {}, seed, &c);
     c.add_to(stats);
     return L;
 }
@@ -512,13 +457,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     fb.rgb.assign(static_cast<std::size_t>(fb.width) * fb.height * 3, 0.0f);
     const SamplerSettings& smp = scene.sampler;
     const int nx = smp.xsamples, ny = smp.ysamples, spp = nx * ny;
-    const float footprint_scale = 1 / std::sqrt(float(spp));  // pbrt-v3: differentials / sqrt(spp)
-    // The environment camera's pixel spans 2 pi / xres by pi / yres radians.
-    const RayCone camera_spread =
-        scene.camera.environment
-            ? RayCone{0, std::min(2 * kPi / scene.camera.xres, kPi / scene.camera.yres) *
-                             footprint_scale}
-            : camera_cone(scene.camera, footprint_scale);
+    const FootprintProducers footprints(scene.footprint_methods, scene.camera, spp);
     if (options.aov == AovKind::Footprint) fb.channel_names = {"major", "minor", "lambda"};
 
     std::unique_ptr<tbb::global_control> limit;
@@ -558,16 +497,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
             const int col = c0 + i, px = film.x0 + col, sample = sy * nx + sx;
             const float* j = &jitter[(static_cast<std::size_t>(i) * spp + sample) * 2];
             const float fx = px + (sx + j[0]) / nx, fy = py + (sy + j[1]) / ny;
-            CameraSample cs;
-            scene.camera.generate_ray(fx, fy, &cs.org, &cs.dir);
-            if (scene.needs_differentials)
-                cs.diff =
-                    scene.camera.environment
-                        ? environment_differential(scene.camera, fx, fy, cs.dir, footprint_scale)
-                        : camera_differential(scene.camera, fx, fy, footprint_scale);
-            cs.cone = camera_spread;
-            cs.to_stratum_x = 0.5f - j[0];
-            cs.to_stratum_y = 0.5f - j[1];
+            const CameraRay ray = scene.camera.generate_ray(fx, fy);
             texture::RayTag tag;
             if (sub_rows) {
                 tag.id = static_cast<uint32_t>(py * ny + sy);
@@ -580,9 +510,12 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                 tag.seq = static_cast<uint32_t>(sample);
             }
             Aov aov{options.aov};
-            Rgb L = trace_one(scene, cs, mix_seed(seeds[i], uint64_t(sample) + 1),
-                              i < prime ? nullptr : &counts, tag, &cmam,
-                              options.aov == AovKind::None ? nullptr : &aov);
+            const RayFootprint fp =
+                footprints.camera_ray(fx, fy, ray.dir, tag, 0.5f - j[0], 0.5f - j[1]);
+            Rgb L =
+                trace_one(scene, footprints, ray.org, ray.dir, fp,
+                          mix_seed(seeds[i], uint64_t(sample) + 1), i < prime ? nullptr : &counts,
+                          &cmam, options.aov == AovKind::None ? nullptr : &aov);
             if (options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
             if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
             double* acc = &sum[static_cast<std::size_t>(i) * 3];
@@ -606,7 +539,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         counts.add_to(stats);
     };
 
-    if (!scene.uses_cmam) {
+    if (!scene.footprint_methods.has(FootprintMethod::Cmam)) {
         // Rows go in fixed blocks of 8, each row whole: the image is the same for any thread
         // count.
         constexpr int kBlockRows = 8;

@@ -24,6 +24,11 @@
 
 namespace cmam::render {
 
+/// A camera ray: its origin and unit direction.
+struct CameraRay {
+    Vec3 org, dir;
+};
+
 /// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), its
 /// orthographic camera (the screen window is the view in camera units, rays along +z), or its
 /// environment camera (the whole sphere in lat-long: theta = pi y / yres from camera +y,
@@ -37,7 +42,7 @@ struct Camera {
     int xres = 640, yres = 480;
 
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
-    void generate_ray(float px, float py, Vec3* org, Vec3* dir) const;
+    CameraRay generate_ray(float px, float py) const;
 };
 
 /// Limits on the film and the samples a scene (or --spp) may ask for, checked in 64 bits before
@@ -265,9 +270,9 @@ class Scene {
         images;  // loaded once per settings
     Material default_material;
     TagPolicy tags = TagPolicy::Scanline;  // CMAM ray tagging
-    // Which footprint producers some texture asks for (the tracer computes only those).
-    bool needs_differentials = false, needs_cones = false, needs_cones_aniso = false;
-    bool uses_cmam = false;     // some texture's footprint comes from the CMAM
+    // The footprint methods some texture (or environment map) uses: the tracer runs only
+    // their producers.
+    FootprintMethods footprint_methods;
     texture::CmamOptions cmam;  // CMAM policies (the filter comes from each texture)
 
     /// Creates the Embree scene from `primitives` and `instances` (one Embree scene per object,

@@ -6,9 +6,7 @@ namespace cmam::render {
 
 texture::Texel lookup_image(const texture::FilteredTexture& image,
                             const texture::FilterOptions& filter, double s, double t,
-                            const texture::Footprint& footprint, texture::RayTag tag,
-                            LookupCounts* counts) {
-    (void)tag;  // consumed by the CMAM, which sits in front of this call
+                            const texture::Footprint& footprint, LookupCounts* counts) {
     if (!counts) return image.lookup(s, t, footprint, filter);
     if (footprint.kind == texture::Footprint::Kind::None)
         ++counts->point_sampled;
@@ -21,20 +19,7 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
 }
 
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
-    texture::Footprint fp;
-    switch (n.lod) {
-        case FootprintMethod::Differentials:
-            fp = ctx.footprint;
-            break;
-        case FootprintMethod::Cones:
-            fp = ctx.cone;
-            break;
-        case FootprintMethod::ConesAniso:
-            fp = ctx.cone_aniso;
-            break;
-        default:
-            return {};
-    }
+    texture::Footprint fp = ctx.footprints.of(n.lod);
     if (fp.kind == texture::Footprint::Kind::Axes) {
         // The area filter integrates a parallelogram: a cone's cross-section (a disc or an
         // ellipse of diameters a, b) becomes the one with equal second moments, sides
@@ -90,10 +75,11 @@ texture::Vec2d node_st(const TextureNode& n, const TexContext& ctx, texture::Foo
     if (!fp) return st;
     *fp = {};
     if (n.lod != FootprintMethod::Differentials ||
-        (dot(ctx.dpdx, ctx.dpdx) == 0 && dot(ctx.dpdy, ctx.dpdy) == 0))
+        (dot(ctx.footprints.dpdx, ctx.footprints.dpdx) == 0 &&
+         dot(ctx.footprints.dpdy, ctx.footprints.dpdy) == 0))
         return st;
     texture::Vec2d axis[2];
-    const Vec3 dp[2] = {ctx.dpdx, ctx.dpdy};
+    const Vec3 dp[2] = {ctx.footprints.dpdx, ctx.footprints.dpdy};
     for (int k = 0; k < 2; ++k) {
         if (n.mapping == TextureNode::Mapping::Planar) {
             axis[k] = {dot(dp[k], n.v1), dot(dp[k], n.v2)};
@@ -121,8 +107,8 @@ float noise2(float x, float y) {
 // reached by extrapolating the first two).
 Rgb marble(const TextureNode& n, const TexContext& ctx) {
     const Vec3 p = texture_point(n, ctx.p) * n.scale;
-    const Vec3 dx = texture_vector(n, ctx.dpdx) * n.scale,
-               dy = texture_vector(n, ctx.dpdy) * n.scale;
+    const Vec3 dx = texture_vector(n, ctx.footprints.dpdx) * n.scale,
+               dy = texture_vector(n, ctx.footprints.dpdy) * n.scale;
     float t = 0.5f + 0.5f * std::sin(p.y + n.variation * fbm(p, dx, dy, n.omega, n.octaves));
     static const Rgb c[9] = {{.58f, .58f, .6f}, {.58f, .58f, .6f}, {.58f, .58f, .6f},
                              {.5f, .5f, .5f},   {.6f, .59f, .58f}, {.58f, .58f, .6f},
@@ -160,10 +146,11 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 CmamRecord* rec =
                     ctx.cmam_record && ctx.cmam_record->node == in.node ? ctx.cmam_record : &own;
                 const bool want = ctx.counts || rec != &own;
-                x = texture::cmam_lookup(
-                    *n.image, ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node), ctx.path),
-                    ctx.tag, s, t, o, want ? &rec->info : nullptr,
-                    want && (o.two_d || rec != &own) ? &rec->region : nullptr);
+                x = texture::cmam_lookup(*n.image,
+                                         ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node),
+                                                         ctx.footprints.path),
+                                         ctx.footprints.tag, s, t, o, want ? &rec->info : nullptr,
+                                         want && (o.two_d || rec != &own) ? &rec->region : nullptr);
                 rec->filled = true;
                 if (ctx.counts) {
                     ++ctx.counts->by_filter[static_cast<int>(o.filter)];
@@ -174,11 +161,11 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 if (n.filter.kind == texture::FilterKind::Area &&
                     n.lod == FootprintMethod::Differentials &&
                     n.mapping == TextureNode::Mapping::Uv &&
-                    ctx.footprint.kind == texture::Footprint::Kind::Axes) {
-                    s += n.su * ctx.stratum_offset.u;
-                    t += n.sv * ctx.stratum_offset.v;
+                    ctx.footprints.axes.kind == texture::Footprint::Kind::Axes) {
+                    s += n.su * ctx.footprints.stratum_offset.u;
+                    t += n.sv * ctx.footprints.stratum_offset.v;
                 }
-                x = lookup_image(*n.image, n.filter, s, t, fp, ctx.tag, ctx.counts);
+                x = lookup_image(*n.image, n.filter, s, t, fp, ctx.counts);
             }
             if (n.image->image().channels() == 1) return Rgb(x[0]);
             return Rgb(x[0], x[1], x[2]);
@@ -245,8 +232,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
         case TextureNode::Kind::Fbm:
         case TextureNode::Kind::Wrinkled:
         case TextureNode::Kind::Windy: {
-            const Vec3 p = texture_point(n, ctx.p), dx = texture_vector(n, ctx.dpdx),
-                       dy = texture_vector(n, ctx.dpdy);
+            const Vec3 p = texture_point(n, ctx.p), dx = texture_vector(n, ctx.footprints.dpdx),
+                       dy = texture_vector(n, ctx.footprints.dpdy);
             if (n.kind == TextureNode::Kind::Fbm) return Rgb(fbm(p, dx, dy, n.omega, n.octaves));
             if (n.kind == TextureNode::Kind::Wrinkled)
                 return Rgb(turbulence(p, dx, dy, n.omega, n.octaves));

@@ -3,6 +3,7 @@
 // reach the filtering library.
 #pragma once
 
+#include "render/footprint/footprint.h"
 #include "render/scene.h"
 
 namespace cmam::render {
@@ -61,33 +62,21 @@ class CmamRowState {
 
 /// What a texture lookup knows about the shading point.
 struct TexContext {
-    float u = 0, v = 0;              // surface (u,v) of the hit
-    texture::Footprint footprint{};  // ray differentials' footprint (None: point sample)
-    // Ray differentials: from the hit to the centre of the sample's stratum (uv), the first-order
-    // image of the sample's jitter. The area filter integrates the stratum itself, centred there,
-    // so that a pixel's strata tile it (algorithms.md §5.2).
-    texture::Vec2d stratum_offset{};
-    texture::Footprint cone{};        // isotropic ray cone footprint
-    texture::Footprint cone_aniso{};  // anisotropic ray cone footprint
-    texture::RayTag tag{};            // the ray's tag (ID, recursion level)
-    LookupCounts* counts = nullptr;   // optional statistics
-    uint32_t object = 0;              // the primitive hit (the CMAM's textured object)
-    // The ray's path: 1 for camera rays, then 2p for the reflected and 2p + 1 for the refracted
-    // child of path p (the CMAM keeps a cache per path).
-    uint64_t path = 1;
-    CmamRowState* cmam = nullptr;       // the row's CMAM caches (null: no CMAM)
+    float u = 0, v = 0;  // surface (u,v) of the hit
+    Vec3 p{};            // the hit in world space (3-D textures and the non-uv mappings)
+    // The footprint producers' footprints at the hit, with the ray's tag and path (the CMAM's).
+    HitFootprint footprints;
+    LookupCounts* counts = nullptr;     // optional statistics
+    uint32_t object = 0;                // the primitive hit (the CMAM's textured object)
+    CmamRowState* cmam = nullptr;       // the strip's CMAM caches (null: no CMAM)
     CmamRecord* cmam_record = nullptr;  // optional: what a CMAM lookup filtered
-    // The hit in world space and, with ray differentials, its screen derivatives (zero
-    // without): what 3-D textures and the non-uv mappings read.
-    Vec3 p{}, dpdx{}, dpdy{};
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the
 /// footprint mapped through the same (u,v) -> (s,t) scale.
 texture::Texel lookup_image(const texture::FilteredTexture& image,
                             const texture::FilterOptions& filter, double s, double t,
-                            const texture::Footprint& footprint, texture::RayTag tag,
-                            LookupCounts* counts);
+                            const texture::Footprint& footprint, LookupCounts* counts);
 
 /// A ray cone's elliptical cross-section with diameters a, b has the second moments of the
 /// parallelogram with sides (sqrt 3 / 2) a, (sqrt 3 / 2) b: what the area filter integrates.

@@ -21,12 +21,11 @@ TEST(Camera, CentreAndEdgesOfASquareImage) {
         "LookAt 0 0 0  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 90 "
         "Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 100 WorldBegin "
         "WorldEnd");
-    Vec3 o, d;
-    s->camera.generate_ray(50, 50, &o, &d);
+    Vec3 d = s->camera.generate_ray(50, 50).dir;
     expect_dir(d, Vec3(0, 0, 1));
-    s->camera.generate_ray(0, 50, &o, &d);  // left edge: 45 degrees to the left (-x)
+    d = s->camera.generate_ray(0, 50).dir;  // left edge: 45 degrees to the left (-x)
     expect_dir(d, Vec3(-1, 0, 1));
-    s->camera.generate_ray(50, 0, &o, &d);  // top row looks up
+    d = s->camera.generate_ray(50, 0).dir;  // top row looks up
     expect_dir(d, Vec3(0, 1, 1));
 }
 
@@ -36,17 +35,17 @@ TEST(Camera, FovSpansTheShorterAxis) {
             "Camera \"perspective\" \"float fov\" 60 Film \"image\" \"integer xresolution\" " +
             std::to_string(xr) + " \"integer yresolution\" " + std::to_string(yr) +
             " WorldBegin WorldEnd");
-        Vec3 o, d;
+        Vec3 d;
         float t = float(std::tan(30 * kDeg));
         if (xr > yr) {
-            s->camera.generate_ray(float(xr) / 2, 0, &o, &d);
+            d = s->camera.generate_ray(float(xr) / 2, 0).dir;
             expect_dir(d, Vec3(0, t, 1));
-            s->camera.generate_ray(float(xr), float(yr) / 2, &o, &d);
+            d = s->camera.generate_ray(float(xr), float(yr) / 2).dir;
             expect_dir(d, Vec3(2 * t, 0, 1));
         } else {
-            s->camera.generate_ray(0, float(yr) / 2, &o, &d);
+            d = s->camera.generate_ray(0, float(yr) / 2).dir;
             expect_dir(d, Vec3(-t, 0, 1));
-            s->camera.generate_ray(float(xr) / 2, 0, &o, &d);
+            d = s->camera.generate_ray(float(xr) / 2, 0).dir;
             expect_dir(d, Vec3(0, 2 * t, 1));
         }
     }
@@ -57,13 +56,12 @@ TEST(Camera, LookAtPlacesTheCamera) {
         "LookAt 1 2 3  1 2 -7  0 1 0 Camera \"perspective\" Film \"image\" \"integer xresolution\" "
         "10 "
         "\"integer yresolution\" 10 WorldBegin WorldEnd");
-    Vec3 o, d;
-    s->camera.generate_ray(5, 5, &o, &d);
+    auto [o, d] = s->camera.generate_ray(5, 5);
     EXPECT_NEAR(o.x, 1, 1e-6);
     EXPECT_NEAR(o.y, 2, 1e-6);
     EXPECT_NEAR(o.z, 3, 1e-6);
     expect_dir(d, Vec3(0, 0, -1));
-    s->camera.generate_ray(0, 5, &o, &d);  // looking down -z with +y up: screen left is world +x
+    d = s->camera.generate_ray(0, 5).dir;  // looking down -z with +y up: screen left is world +x
     EXPECT_GT(d.x, 0.5f);
 }
 
@@ -73,8 +71,7 @@ TEST(Camera, ScreenWindowAndCrop) {
         "Film \"image\" \"integer xresolution\" 10 \"integer yresolution\" 10 \"float cropwindow\" "
         "[0.5 1 0 0.25] "
         "WorldBegin WorldEnd");
-    Vec3 o, d;
-    s->camera.generate_ray(0, 10, &o, &d);  // bottom-left of the window is screen (0,0)
+    Vec3 d = s->camera.generate_ray(0, 10).dir;  // bottom-left of the window is screen (0,0)
     expect_dir(d, Vec3(0, 0, 1));
     EXPECT_EQ(s->film.x0, 5);
     EXPECT_EQ(s->film.x1, 10);

@@ -27,10 +27,10 @@ void expect_vec(const Vec3& a, const Vec3& b, double tol, const char* what) {
     EXPECT_NEAR(a.z, b.z, tol) << what;
 }
 SurfaceHit hit_at(const Scene& s, float px, float py, Vec3* d) {
-    Vec3 o;
-    s.camera.generate_ray(px, py, &o, d);
+    const CameraRay r = s.camera.generate_ray(px, py);
+    *d = r.dir;
     SurfaceHit h;
-    EXPECT_TRUE(s.intersect(o, *d, 0, 1e30f, &h));
+    EXPECT_TRUE(s.intersect(r.org, r.dir, 0, 1e30f, &h));
     return h;
 }
 }  // namespace
@@ -144,10 +144,9 @@ TEST(Cones, TRc1AndAgreementWithDifferentialsOnAFrontoParallelPlane) {
     EXPECT_NEAR(std::log2(w * 1024), std::log2(10.0), 1e-4);
     HitDifferential hd = transfer(camera_differential(s->camera, 256, 256, 1), d, h);
     EXPECT_NEAR(w, std::hypot(hd.dudx, hd.dvdx), 1e-4 * w);
-    float ax[4];
-    cone_uv_axes(c, d, h, ax);
-    EXPECT_NEAR(std::hypot(ax[0], ax[1]), w, 1e-3 * w);
-    EXPECT_NEAR(std::hypot(ax[2], ax[3]), w, 1e-3 * w);
+    const texture::Footprint ax = cone_uv_axes(c, d, h);
+    EXPECT_NEAR(std::hypot(ax.axis_a.u, ax.axis_a.v), w, 1e-3 * w);
+    EXPECT_NEAR(std::hypot(ax.axis_b.u, ax.axis_b.v), w, 1e-3 * w);
 }
 
 TEST(Cones, AnisotropicAxesFollowDifferentialsOnATiltedPlane) {
@@ -159,10 +158,11 @@ TEST(Cones, AnisotropicAxesFollowDifferentialsOnATiltedPlane) {
     Vec3 d;
     SurfaceHit h = hit_at(*s, 300, 312, &d);
     HitDifferential hd = transfer(camera_differential(s->camera, 300, 312, 1), d, h);
-    float ax[4];
-    cone_uv_axes(camera_cone(s->camera, 1), d, h, ax);
-    double cone_major = std::max(std::hypot(ax[0], ax[1]), std::hypot(ax[2], ax[3])) * 1024;
-    double cone_minor = std::min(std::hypot(ax[0], ax[1]), std::hypot(ax[2], ax[3])) * 1024;
+    const texture::Footprint ax = cone_uv_axes(camera_cone(s->camera, 1), d, h);
+    const double la = std::hypot(ax.axis_a.u, ax.axis_a.v),
+                 lb = std::hypot(ax.axis_b.u, ax.axis_b.v);
+    double cone_major = std::max(la, lb) * 1024;
+    double cone_minor = std::min(la, lb) * 1024;
     double diff_x = std::hypot(hd.dudx, hd.dvdx) * 1024,
            diff_y = std::hypot(hd.dudy, hd.dvdy) * 1024;
     double diff_major = std::max(diff_x, diff_y), diff_minor = std::min(diff_x, diff_y);
@@ -198,9 +198,9 @@ TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {
     ctx.v = 0.3f;
     EXPECT_EQ(eval_texture(*s, in, ctx).r,
               1.0f);  // no footprint: point sample of check (2,2): tex1
-    ctx.footprint = texture::Footprint::axes({0.5, 0}, {0, 0.5});  // 4 checks wide
+    ctx.footprints.axes = texture::Footprint::axes({0.5, 0}, {0, 0.5});  // 4 checks wide
     EXPECT_NEAR(eval_texture(*s, in, ctx).r, 0.5, 1e-6);
-    ctx.footprint = texture::Footprint::axes({0.001, 0}, {0, 0.001});  // inside one check
+    ctx.footprints.axes = texture::Footprint::axes({0.001, 0}, {0, 0.001});  // inside one check
     EXPECT_EQ(eval_texture(*s, in, ctx).r, 1.0f);
 }
 

@@ -165,7 +165,7 @@ TEST(EnvironmentMap, EscapingRaysFilterTheMapOverTheirDifferentials) {
         camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""), "t.pbrt",
         1);
     ASSERT_TRUE(s->lights[0].env_footprint);
-    EXPECT_TRUE(s->needs_differentials);
+    EXPECT_TRUE(s->footprint_methods.has(FootprintMethod::Differentials));
     const EnvironmentMap& env = *s->lights[0].env;
     // phi at the centre of texel column 10, theta at the centre of row 64.
     const float phi = 2 * kPi * 10.5f / 256, theta = kPi * 64.5f / 128;
@@ -316,12 +316,11 @@ TEST(EnvironmentCamera, LatLongDirectionsAsPbrtV3) {
         "\"float radius\" 5 WorldEnd",
         "t.pbrt", 1);
     ASSERT_TRUE(s->camera.environment);
-    Vec3 o, d;
-    s->camera.generate_ray(0, 10, &o, &d);  // theta = pi/2, phi = 0
+    Vec3 d = s->camera.generate_ray(0, 10).dir;  // theta = pi/2, phi = 0
     EXPECT_NEAR(d.x, 1, 1e-5f);
-    s->camera.generate_ray(10, 10, &o, &d);  // phi = pi/2: +z
+    d = s->camera.generate_ray(10, 10).dir;  // phi = pi/2: +z
     EXPECT_NEAR(d.z, 1, 1e-5f);
-    s->camera.generate_ray(7, 0, &o, &d);  // the top row looks along +y
+    d = s->camera.generate_ray(7, 0).dir;  // the top row looks along +y
     EXPECT_NEAR(d.y, 1, 1e-5f);
     // Rendering from inside a sphere: every pixel sees it, lit by the sky.
     const Framebuffer fb = render::render(*s, {}, nullptr);

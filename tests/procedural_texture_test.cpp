@@ -117,7 +117,8 @@ TEST(ProceduralTexture, NoiseTexturesAreFiniteAndVary) {
     for (const char* cls : {"fbm", "wrinkled", "windy", "marble"}) {
         SCOPED_TRACE(cls);
         auto s = with_texture(std::string("Texture \"t\" \"spectrum\" \"") + cls + "\"");
-        EXPECT_TRUE(s->needs_differentials);  // their octaves follow the footprint
+        EXPECT_TRUE(s->footprint_methods.has(
+            FootprintMethod::Differentials));  // their octaves follow the footprint
         float lo = 1e9f, hi = -1e9f;
         for (int i = 0; i < 500; ++i) {
             const Rgb c = at(*s, 0, 0, Vec3(i * 0.0371f, 0.2f + i * 0.0113f, -i * 0.023f));

@@ -39,8 +39,7 @@ TEST(Analytic, LambertianPlaneUnderAPointLight) {
     double worst = 0;
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 32; ++x) {
-            Vec3 org, dir;
-            s->camera.generate_ray(x + 0.5f, y + 0.5f, &org, &dir);
+            const auto [org, dir] = s->camera.generate_ray(x + 0.5f, y + 0.5f);
             Vec3 p = org + dir * (-org.z / dir.z);
             Vec3 d = Vec3(1, 2, 3) - p;
             float d2 = dot(d, d);

@@ -61,7 +61,7 @@ float cone_uv_width(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {
     return w / (dn * density(hit));
 }
 
-void cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit, float axes[4]) {
+texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {
     const Vec3& n = hit.ng;
     float r = 0.5f * std::abs(cone_width_at(cone, hit.t));
     float dn = clamp_cos(dot(n, d));
@@ -78,7 +78,7 @@ void cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit, flo
     float g[4];
     hit.uv_offset(a1, &g[0], &g[1]);
     hit.uv_offset(a2, &g[2], &g[3]);
-    for (int k = 0; k < 4; ++k) axes[k] = 2 * g[k];
+    return texture::Footprint::axes({2 * g[0], 2 * g[1]}, {2 * g[2], 2 * g[3]});
 }
 
 RayCone reflect_cone(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {

@@ -4,6 +4,8 @@
 // Surface curvature widens reflected cones; refraction follows the cone's boundary rays.
 #pragma once
 
+#include <cmam/texture/footprint.h>
+
 #include "render/scene.h"
 
 namespace cmam::render {
@@ -25,7 +27,7 @@ float surface_curvature(const SurfaceHit& hit);
 /// Isotropic footprint radius in (u,v) units at the hit: |w| / (|d.n| sqrt|dP/du x dP/dv|).
 float cone_uv_width(const RayCone& cone, const Vec3& d, const SurfaceHit& hit);
 /// Anisotropic footprint axes (2 g1, 2 g2) in (u,v) units (JCGT 2021, with its factor 2).
-void cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit, float axes[4]);
+texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit);
 
 /// Cone after a perfect reflection at `hit` (width kept, spread + 2 beta).
 RayCone reflect_cone(const RayCone& cone, const Vec3& d, const SurfaceHit& hit);

@@ -27,6 +27,16 @@ inline std::string_view to_string(FootprintMethod m) {
     return kFootprintMethodNames.name(m);
 }
 
+/// The set of footprint methods a scene's textures use (recorded while the scene is built).
+class FootprintMethods {
+  public:
+    void add(FootprintMethod m) { m_bits |= uint8_t(1u << static_cast<unsigned>(m)); }
+    bool has(FootprintMethod m) const { return m_bits & (1u << static_cast<unsigned>(m)); }
+
+  private:
+    uint8_t m_bits = 0;
+};
+
 /// Which rays share a CMAM tag ID (algorithms.md §6.2 item 2).
 enum class TagPolicy : uint8_t { Scanline, Pixel };
 inline constexpr texture::NameTable kTagPolicyNames{

@@ -1,0 +1,133 @@
+#include "render/footprint/footprint.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cmam::render {
+
+namespace {
+
+// The environment camera's ray differential: the rays one pixel right and down, differenced
+// (pbrt-v3's default for cameras without a closed form), scaled by `scale`.
+RayDifferential environment_differential(const Camera& c, float px, float py, const Vec3& dir,
+                                         float scale) {
+    RayDifferential rd;
+    rd.valid = true;
+    rd.dddx = (c.generate_ray(px + 1, py).dir - dir) * scale;
+    rd.dddy = (c.generate_ray(px, py + 1).dir - dir) * scale;
+    return rd;
+}
+
+// Every camera ray's cone: the environment camera's pixel spans 2 pi / xres by pi / yres
+// radians; the other cameras' as camera_cone says.
+RayCone camera_ray_cone(const Camera& c, float scale) {
+    if (c.environment) return RayCone{0, std::min(2 * kPi / c.xres, kPi / c.yres) * scale};
+    return camera_cone(c, scale);
+}
+
+}  // namespace
+
+const texture::Footprint& HitFootprint::of(FootprintMethod method) const {
+    static const texture::Footprint none{};
+    switch (method) {
+        case FootprintMethod::Differentials:
+            return axes;
+        case FootprintMethod::Cones:
+            return cone;
+        case FootprintMethod::ConesAniso:
+            return cone_aniso;
+        case FootprintMethod::None:
+        case FootprintMethod::Cmam:
+            break;
+    }
+    return none;
+}
+
+FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp)
+    : m_methods(methods),
+      m_camera(camera),
+      m_scale(1 / std::sqrt(float(spp))),
+      m_camera_cone(camera_ray_cone(camera, m_scale)),
+      m_differentials(methods.has(FootprintMethod::Differentials)),
+      m_cones(methods.has(FootprintMethod::Cones) || methods.has(FootprintMethod::ConesAniso)),
+      m_cones_aniso(methods.has(FootprintMethod::ConesAniso)) {}
+
+RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
+                                            texture::RayTag tag, float to_stratum_x,
+                                            float to_stratum_y) const {
+    RayFootprint r;
+    if (m_differentials)
+        r.diff = m_camera.environment ? environment_differential(m_camera, fx, fy, dir, m_scale)
+                                      : camera_differential(m_camera, fx, fy, m_scale);
+    r.cone = m_camera_cone;
+    r.tag = tag;
+    r.to_stratum_x = to_stratum_x;
+    r.to_stratum_y = to_stratum_y;
+    return r;
+}
+
+HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir,
+                                        const SurfaceHit& hit) const {
+    HitFootprint f;
+    f.tag = ray.tag;
+    f.path = ray.path;
+    if (m_differentials) {
+        f.diff = transfer(ray.diff, dir, hit);
+        const HitDifferential& hd = f.diff;
+        if (hd.valid) {
+            f.dpdx = hd.dpdx;
+            f.dpdy = hd.dpdy;
+            f.axes = texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
+            f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
+                                hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
+        } else
+            f.dropped = ray.diff.valid;
+    }
+    if (m_cones) {
+        const float w = cone_uv_width(ray.cone, dir, hit);
+        f.cone = texture::Footprint::axes({w, 0}, {0, w});
+    }
+    if (m_cones_aniso) f.cone_aniso = cone_uv_axes(ray.cone, dir, hit);
+    return f;
+}
+
+namespace {
+RayFootprint child_of(const RayFootprint& ray, uint64_t path) {
+    RayFootprint c;
+    c.tag = ray.tag;
+    ++c.tag.level;
+    c.path = path;
+    c.to_stratum_x = ray.to_stratum_x;
+    c.to_stratum_y = ray.to_stratum_y;
+    return c;
+}
+}  // namespace
+
+RayFootprint FootprintProducers::reflected(const RayFootprint& ray, const HitFootprint& at,
+                                           const Vec3& dir, const SurfaceHit& hit) const {
+    RayFootprint c = child_of(ray, ray.path * 2);
+    if (m_differentials) c.diff = reflect(ray.diff, at.diff, dir, hit);
+    if (m_cones) c.cone = reflect_cone(ray.cone, dir, hit);
+    return c;
+}
+
+RayFootprint FootprintProducers::refracted(const RayFootprint& ray, const HitFootprint& at,
+                                           const Vec3& dir, const SurfaceHit& hit,
+                                           float eta) const {
+    RayFootprint c = child_of(ray, ray.path * 2 + 1);
+    if (m_differentials) c.diff = refract(ray.diff, at.diff, dir, hit, eta);
+    if (m_cones) c.cone = refract_cone(ray.cone, dir, hit, eta);
+    return c;
+}
+
+RayFootprint FootprintProducers::passed_through(const RayFootprint& ray, const HitFootprint& at,
+                                                const SurfaceHit& hit) const {
+    RayFootprint r = ray;
+    r.diff.dodx = at.diff.dpdx;
+    r.diff.dody = at.diff.dpdy;
+    r.diff.valid = at.diff.valid;
+    r.cone.width = cone_width_at(ray.cone, hit.t);
+    return r;
+}
+
+}  // namespace cmam::render

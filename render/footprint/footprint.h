@@ -1,0 +1,86 @@
+// render — the tracer's side of the footprint seam (docs/architecture.md).
+// A ray carries one RayFootprint: its ray differential, its ray cone, and what the CMAM reads
+// of it (its tag and its path). The integrator hands every event of a ray's life to one
+// FootprintProducers object: the camera ray, a hit, a reflection, a refraction, a pass through
+// a surface without a material. At a hit the producers turn the ray's state into texture-space
+// footprints (texture::Footprint), which the filters consume; producers no texture uses are not
+// computed. algorithms.md §7 (differentials), §8 (cones), §6 (the CMAM's tags).
+#pragma once
+
+#include <cmam/texture/cmam.h>
+#include <cmam/texture/footprint.h>
+
+#include <cstdint>
+
+#include "render/footprint/cones.h"
+#include "render/footprint/differentials.h"
+#include "render/footprint/method.h"
+#include "render/scene.h"
+
+namespace cmam::render {
+
+/// The footprint state a ray carries from event to event.
+struct RayFootprint {
+    RayDifferential diff;  // valid only when some texture uses ray differentials
+    RayCone cone;
+    texture::RayTag tag;  // the camera sample's tag; tag.level is the ray's specular depth
+    // Which specular bounces led here: 1 for camera rays, then 2p for the reflected and 2p + 1
+    // for the refracted child of path p (the CMAM keeps a cache per path).
+    uint64_t path = 1;
+    // From the camera sample to its stratum's centre, in stratum steps (x, y): the same screen
+    // offset at every hit of the path, mapped to (u,v) by that hit's differentials.
+    float to_stratum_x = 0, to_stratum_y = 0;
+};
+
+/// The producers' footprints at one hit, in the surface's (u,v) units.
+struct HitFootprint {
+    HitDifferential diff;  // as transferred (invalid: no footprint from differentials)
+    // The hit's screen derivatives dP/dx, dP/dy when the differentials are valid, zero
+    // otherwise: what 3-D textures and the non-uv mappings read.
+    Vec3 dpdx{}, dpdy{};
+    texture::Footprint axes{};      // ray differentials' Jacobian columns (None: point sample)
+    texture::Vec2d stratum_offset;  // differentials: from the hit to the stratum's centre
+    texture::Footprint cone{};      // isotropic ray cone
+    texture::Footprint cone_aniso{};
+    texture::RayTag tag;  // the ray's tag at this depth
+    uint64_t path = 1;
+    bool dropped = false;  // the ray carried differentials, but they failed at this hit
+
+    /// The footprint `method` gives here (None for point sampling and for the CMAM, which
+    /// builds its own from its cache).
+    const texture::Footprint& of(FootprintMethod method) const;
+};
+
+/// The footprint producers of one render: one call per event of a ray.
+class FootprintProducers {
+  public:
+    /// For `methods` over `camera`, `spp` samples per pixel (pbrt-v3 scales a camera sample's
+    /// footprint by 1/sqrt(spp)).
+    FootprintProducers(FootprintMethods methods, const Camera& camera, int spp);
+
+    /// The state of the camera ray through raster position (fx, fy), direction `dir`.
+    RayFootprint camera_ray(float fx, float fy, const Vec3& dir, texture::RayTag tag,
+                            float to_stratum_x, float to_stratum_y) const;
+    /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`.
+    HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit) const;
+    /// The child ray's state after a perfect reflection at `hit`.
+    RayFootprint reflected(const RayFootprint& ray, const HitFootprint& at, const Vec3& dir,
+                           const SurfaceHit& hit) const;
+    /// The child ray's state after refraction at `hit`, relative index eta = n_i / n_t.
+    RayFootprint refracted(const RayFootprint& ray, const HitFootprint& at, const Vec3& dir,
+                           const SurfaceHit& hit, float eta) const;
+    /// The same ray's state after it passes through `hit` (a surface without a material).
+    RayFootprint passed_through(const RayFootprint& ray, const HitFootprint& at,
+                                const SurfaceHit& hit) const;
+
+    bool uses(FootprintMethod m) const { return m_methods.has(m); }
+
+  private:
+    FootprintMethods m_methods;
+    const Camera& m_camera;
+    float m_scale;          // 1/sqrt(spp)
+    RayCone m_camera_cone;  // every camera ray's cone
+    bool m_differentials, m_cones, m_cones_aniso;
+};
+
+}  // namespace cmam::render
