@@ -24,7 +24,7 @@ float Distribution1D::pdf(int cell) const {
     return float(std::max(0.0f, m_func[static_cast<std::size_t>(cell)]) / m_integral);
 }
 
-float Distribution1D::sample(float u, float* pdf_out, int* cell) const {
+Distribution1D::Sample Distribution1D::sample(float u) const {
     // The last cell whose cdf start is at or below u (cells of zero weight are never chosen:
     // their start equals the next cell's).
     const auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), u);
@@ -32,9 +32,7 @@ float Distribution1D::sample(float u, float* pdf_out, int* cell) const {
     const int k = std::clamp(static_cast<int>(it - m_cdf.begin()) - 1, 0, n - 1);
     const double width = double(m_cdf[k + 1]) - m_cdf[k];
     const double t = width > 0 ? (double(u) - m_cdf[k]) / width : 0.5;
-    *cell = k;
-    *pdf_out = pdf(k);
-    return std::min(float((k + std::clamp(t, 0.0, 1.0)) / n), 0x1.fffffep-1f);
+    return {std::min(float((k + std::clamp(t, 0.0, 1.0)) / n), 0x1.fffffep-1f), pdf(k), k};
 }
 
 Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv) {
@@ -48,13 +46,10 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv
     m_marginal = Distribution1D(std::move(marginal));
 }
 
-std::array<float, 2> Distribution2D::sample(float u1, float u2, float* pdf) const {
-    float pv, pu;
-    int row, col;
-    const float v = m_marginal.sample(u2, &pv, &row);
-    const float u = m_rows[static_cast<std::size_t>(row)].sample(u1, &pu, &col);
-    *pdf = pu * pv;
-    return {u, v};
+Distribution2D::Sample Distribution2D::sample(float u1, float u2) const {
+    const Distribution1D::Sample v = m_marginal.sample(u2);
+    const Distribution1D::Sample u = m_rows[static_cast<std::size_t>(v.cell)].sample(u1);
+    return {{u.x, v.x}, u.pdf * v.pdf};
 }
 
 float Distribution2D::pdf(float u, float v) const {
@@ -162,21 +157,21 @@ Rgb EnvironmentMap::radiance(const Vec3& dir, const Vec3* dddx, const Vec3* dddy
     return {x[0], x[1], x[2]};
 }
 
-Rgb EnvironmentMap::sample(float u1, float u2, Vec3* wi, float* pdf) const {
-    *pdf = 0;
+EnvironmentMap::Sample EnvironmentMap::sample(float u1, float u2) const {
     if (m_dist.empty()) return {};
-    float map_pdf;
-    const auto uv = m_dist.sample(u1, u2, &map_pdf);
+    const auto [uv, map_pdf] = m_dist.sample(u1, u2);
     if (map_pdf == 0) return {};
     const float theta = uv[1] * kPi, phi = uv[0] * 2 * kPi;
     const float sin_theta = std::sin(theta);
     if (sin_theta == 0) return {};
     // d(omega) = sin(theta) dtheta dphi = 2 pi^2 sin(theta) du dv.
-    *pdf = map_pdf / (2 * kPi * kPi * sin_theta);
-    *wi =
+    Sample s;
+    s.pdf = map_pdf / (2 * kPi * kPi * sin_theta);
+    s.wi =
         normalize(transform3(m_world_from_light, Vec3(sin_theta * std::cos(phi),
                                                       sin_theta * std::sin(phi), std::cos(theta))));
-    return at(uv[0], uv[1]);
+    s.radiance = at(uv[0], uv[1]);
+    return s;
 }
 
 float EnvironmentMap::pdf(const Vec3& dir) const {

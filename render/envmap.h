@@ -21,8 +21,13 @@ class Distribution1D {
     int size() const { return static_cast<int>(m_func.size()); }
     /// The weights' integral over [0,1) (their mean).
     double integral() const { return m_integral; }
-    /// Maps a uniform number in [0,1) to x in [0,1) with density pdf(x); `cell` gets x's cell.
-    float sample(float u, float* pdf, int* cell) const;
+    struct Sample {
+        float x;    // in [0,1)
+        float pdf;  // the density at x
+        int cell;   // x's cell
+    };
+    /// Maps a uniform number in [0,1) to x in [0,1) with its density and cell.
+    Sample sample(float u) const;
     float pdf(int cell) const;
 
   private:
@@ -38,8 +43,11 @@ class Distribution2D {
     Distribution2D() = default;
     Distribution2D(const std::vector<float>& weights, int nu, int nv);
     bool empty() const { return m_marginal.size() == 0 || m_marginal.integral() == 0; }
-    /// (u,v) in [0,1)^2 with density *pdf with respect to du dv.
-    std::array<float, 2> sample(float u1, float u2, float* pdf) const;
+    struct Sample {
+        std::array<float, 2> uv;  // in [0,1)^2
+        float pdf;                // with respect to du dv
+    };
+    Sample sample(float u1, float u2) const;
     float pdf(float u, float v) const;
 
   private:
@@ -62,9 +70,13 @@ class EnvironmentMap {
     Rgb radiance(const Vec3& dir, const Vec3* dddx = nullptr, const Vec3* dddy = nullptr) const;
     /// The filter for lookups with a footprint (default EWA, pbrt-v3's imagemap default).
     void set_filter(const texture::FilterOptions& filter) { m_filter = filter; }
-    /// Samples a world direction towards the map by its luminance; returns its radiance and
-    /// the density with respect to solid angle (0: nothing to sample).
-    Rgb sample(float u1, float u2, Vec3* wi, float* pdf) const;
+    struct Sample {
+        Rgb radiance;
+        Vec3 wi;        // the world direction towards the map
+        float pdf = 0;  // with respect to solid angle (0: nothing sampled)
+    };
+    /// Samples a world direction towards the map by its luminance.
+    Sample sample(float u1, float u2) const;
     /// Density sample() gives the world direction `dir`, with respect to solid angle.
     float pdf(const Vec3& dir) const;
     const texture::FilteredTexture& image() const { return *m_image; }

@@ -367,8 +367,8 @@ bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) c
     return ray.tfar < 0;
 }
 
-bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
-                      SurfaceHit* out) const {
+std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, float tmin,
+                                           float tmax) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};
@@ -383,16 +383,17 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
     rh.ray.mask = 0xffffffffu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_scene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
 
-    SurfaceHit& h = *out;
+    std::optional<SurfaceHit> hit(std::in_place);
+    SurfaceHit& h = *hit;
     h.t = rh.ray.tfar;
     if (rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
         h.instance = nullptr;
         h.prim = primitives[rh.hit.geomID].get();
         h.object_id = h.prim->id;
         local_hit(org, dir, rh.hit, &h);
-        return true;
+        return hit;
     }
     // In an instance: the hit is found in the object's space, then placed in the world.
     const Instance& in = instances[rh.hit.instID[0] - primitives.size()];
@@ -404,16 +405,16 @@ bool Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
     h.ns_object = h.ns;
     h.ng = normalize(in.to_world_normal(h.ng));
     h.ns = normalize(in.to_world_normal(h.ns));
-    return true;
+    return hit;
 }
 
-void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const {
-    *pdf = 0;
+SurfaceSample Primitive::sample_area(float u1, float u2) const {
+    SurfaceSample out;
     if (kind == Kind::Triangles) {
         // A triangle by area (area_cdf), then a point uniform in it; u1 is reused within the
         // chosen triangle's span.
         const double total = area_cdf.empty() ? 0 : area_cdf.back();
-        if (!(total > 0)) return;
+        if (!(total > 0)) return out;
         const double x = double(u1) * total;
         const auto it = std::upper_bound(area_cdf.begin(), area_cdf.end(), x);
         const std::size_t ntri = area_cdf.size() - 1;
@@ -424,16 +425,16 @@ void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) co
         const float su = std::sqrt(r), b0 = 1 - su, b1 = u2 * su, b2 = 1 - b0 - b1;
         const uint32_t i0 = indices[3 * t], i1 = indices[3 * t + 1], i2 = indices[3 * t + 2];
         const Vec3 &p0 = positions[i0], &p1 = positions[i1], &p2 = positions[i2];
-        *p = b0 * p0 + b1 * p1 + b2 * p2;
+        out.p = b0 * p0 + b1 * p1 + b2 * p2;
         Vec3 ng = normalize(cross(p0 - p2, p1 - p2));
         if (flip) ng = -ng;
         if (!normals.empty()) {  // oriented as intersect() orients hits
             const Vec3 ns = b0 * normals[i0] + b1 * normals[i1] + b2 * normals[i2];
             if (length(ns) > 0) ng = faceforward(ng, flip ? -ns : ns);
         }
-        *n = ng;
-        *pdf = float(1 / total);
-        return;
+        out.n = ng;
+        out.pdf = float(1 / total);
+        return out;
     }
     // Quadrics: (u1,u2) map to a point uniform by object-space area (Archimedes' z for the
     // sphere, r^2 for the disk, phi for both). The world-space area element is |dP/du1 x
@@ -460,11 +461,12 @@ void Primitive::sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) co
     const D3 cw = xform_normal(object_from_world, cross_obj);
     const double area_element =
         std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
-    if (!(area_element > 0) || !std::isfinite(area_element)) return;
-    *p = to_vec(xform_point(world_from_object, po));
+    if (!(area_element > 0) || !std::isfinite(area_element)) return out;
+    out.p = to_vec(xform_point(world_from_object, po));
     Vec3 nw = normalize(to_vec(cw));
-    *n = flip ? -nw : nw;
-    *pdf = float(1 / area_element);
+    out.n = flip ? -nw : nw;
+    out.pdf = float(1 / area_element);
+    return out;
 }
 
 bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
@@ -484,13 +486,12 @@ bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
     return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
 }
 
-bool Primitive::sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n,
-                            float* pdf) const {
+std::optional<SurfaceSample> Primitive::sample_cone(const Vec3& ref, float u1, float u2) const {
     const float R = sphere_radius;
-    if (!(R > 0)) return false;
+    if (!(R > 0)) return std::nullopt;
     const Vec3 to_c = sphere_center - ref;
     const float d2 = dot(to_c, to_c);
-    if (!(d2 > R * R * 1.0001f)) return false;
+    if (!(d2 > R * R * 1.0001f)) return std::nullopt;
     const float dc = std::sqrt(d2);
     // The cone's half-angle: sin^2 = R^2 / d^2; 1 - cos written as sin^2 / (1 + cos), which
     // keeps its precision for small, distant spheres.
@@ -504,14 +505,15 @@ bool Primitive::sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* 
         Vec3(std::sqrt(sin2_t) * std::cos(phi), std::sqrt(sin2_t) * std::sin(phi), cos_t));
     // The nearer intersection along wi: t = d cos - sqrt(R^2 - d^2 sin^2).
     const float t = dc * cos_t - std::sqrt(std::max(0.0f, R * R - d2 * sin2_t));
-    *p = ref + wi * t;
-    const Vec3 out = normalize(*p - sphere_center);
-    *n = flip ? -out : out;
-    *pdf = 1 / (2 * kPi * one_minus_cos_max);
-    return true;
+    SurfaceSample out;
+    out.p = ref + wi * t;
+    const Vec3 n = normalize(out.p - sphere_center);
+    out.n = flip ? -n : n;
+    out.pdf = 1 / (2 * kPi * one_minus_cos_max);
+    return out;
 }
 
-void SurfaceHit::local_partials(Vec3* dpdu, Vec3* dpdv) const {
+Partials SurfaceHit::local_partials() const {
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
@@ -528,14 +530,10 @@ void SurfaceHit::local_partials(Vec3* dpdu, Vec3* dpdv) const {
         float det = du02 * dv12 - dv02 * du12;
         if (std::abs(det) < 1e-12f) {  // degenerate uv: any frame of the plane
             Frame f = Frame::from_z(normalize(cross(dp02, dp12)));
-            *dpdu = f.s;
-            *dpdv = f.t;
-            return;
+            return {f.s, f.t};
         }
         float inv = 1 / det;
-        *dpdu = (dv12 * dp02 - dv02 * dp12) * inv;
-        *dpdv = (du02 * dp12 - du12 * dp02) * inv;
-        return;
+        return {(dv12 * dp02 - dv02 * dp12) * inv, (du02 * dp12 - du12 * dp02) * inv};
     }
     const D3& p = p_object;
     D3 du, dv;
@@ -553,53 +551,45 @@ void SurfaceHit::local_partials(Vec3* dpdu, Vec3* dpdv) const {
         double k = r_hit > 0 ? (pr.inner_radius - pr.radius) / r_hit : 0;
         dv = {p[0] * k, p[1] * k, 0};
     }
-    *dpdu = to_vec(xform_vector(pr.world_from_object, du));
-    *dpdv = to_vec(xform_vector(pr.world_from_object, dv));
+    return {to_vec(xform_vector(pr.world_from_object, du)),
+            to_vec(xform_vector(pr.world_from_object, dv))};
 }
 
 namespace {
 // Barycentric differentials of triangle `tri`: (db1, db2) for a world offset dp in its plane.
-void barycentric_offsets(const Primitive& pr, uint32_t tri, const Vec3& dp, float* db1,
-                         float* db2) {
+std::pair<float, float> barycentric_offsets(const Primitive& pr, uint32_t tri, const Vec3& dp) {
     const Vec3& p0 = pr.positions[pr.indices[3 * tri]];
     Vec3 e1 = pr.positions[pr.indices[3 * tri + 1]] - p0,
          e2 = pr.positions[pr.indices[3 * tri + 2]] - p0;
     Vec3 n = cross(e1, e2);
     Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
-    *db1 = dot(l1, dp) / dot(l1, e1);
-    *db2 = dot(l2, dp) / dot(l2, e2);
+    return {dot(l1, dp) / dot(l1, e1), dot(l2, dp) / dot(l2, e2)};
 }
 }  // namespace
 
-void SurfaceHit::local_uv_offset(const Vec3& dp, float* du, float* dv) const {
+UvDelta SurfaceHit::local_uv_offset(const Vec3& dp) const {
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {
         // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
-        float db1, db2;
-        barycentric_offsets(pr, triangle, dp, &db1, &db2);
+        const auto [db1, db2] = barycentric_offsets(pr, triangle, dp);
         std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
         if (!pr.uvs.empty()) {
             uv0 = pr.uvs[i0];
             uv1 = pr.uvs[i1];
             uv2 = pr.uvs[i2];
         }
-        *du = db1 * (uv1[0] - uv0[0]) + db2 * (uv2[0] - uv0[0]);
-        *dv = db1 * (uv1[1] - uv0[1]) + db2 * (uv2[1] - uv0[1]);
-        return;
+        return {db1 * (uv1[0] - uv0[0]) + db2 * (uv2[0] - uv0[0]),
+                db1 * (uv1[1] - uv0[1]) + db2 * (uv2[1] - uv0[1])};
     }
     // Least squares: [dpdu dpdv] (du dv)^T = dP.
-    Vec3 a, b;
-    local_partials(&a, &b);
+    const auto [a, b] = local_partials();
     double aa = dot(a, a), ab = dot(a, b), bb = dot(b, b), ad = dot(a, dp), bd = dot(b, dp);
     double det = aa * bb - ab * ab;
-    if (!(std::abs(det) > 0) || !std::isfinite(det)) {
-        *du = *dv = 0;
-        return;
-    }
-    *du = static_cast<float>((bb * ad - ab * bd) / det);
-    *dv = static_cast<float>((aa * bd - ab * ad) / det);
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) return {};
+    return {static_cast<float>((bb * ad - ab * bd) / det),
+            static_cast<float>((aa * bd - ab * ad) / det)};
 }
 
 Vec3 SurfaceHit::local_normal_offset(const Vec3& dp) const {
@@ -608,8 +598,7 @@ Vec3 SurfaceHit::local_normal_offset(const Vec3& dp) const {
         if (pr.normals.empty()) return Vec3(0, 0, 0);  // flat: the normal is constant
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
-        float db1, db2;
-        barycentric_offsets(pr, triangle, dp, &db1, &db2);
+        const auto [db1, db2] = barycentric_offsets(pr, triangle, dp);
         float b0 = 1 - b1 - b2;
         Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
         Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];
@@ -625,16 +614,14 @@ Vec3 SurfaceHit::local_normal_offset(const Vec3& dp) const {
     return pr.flip ? -d : d;
 }
 
-void SurfaceHit::partials(Vec3* dpdu, Vec3* dpdv) const {
-    local_partials(dpdu, dpdv);
-    if (instance) {
-        *dpdu = instance->to_world_vector(*dpdu);
-        *dpdv = instance->to_world_vector(*dpdv);
-    }
+Partials SurfaceHit::partials() const {
+    const Partials local = local_partials();
+    if (!instance) return local;
+    return {instance->to_world_vector(local.dpdu), instance->to_world_vector(local.dpdv)};
 }
 
-void SurfaceHit::uv_offset(const Vec3& dp, float* du, float* dv) const {
-    local_uv_offset(instance ? instance->to_object_vector(dp) : dp, du, dv);
+UvDelta SurfaceHit::uv_offset(const Vec3& dp) const {
+    return local_uv_offset(instance ? instance->to_object_vector(dp) : dp);
 }
 
 Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {

@@ -154,8 +154,11 @@ struct Tracer {
                     case Light::Type::Infinite: {
                         if (light.env) {  // by the map's luminance
                             float u1 = rng.next_float(), u2 = rng.next_float();
-                            li = light.intensity * light.env->sample(u1, u2, &wi, &pdf);
-                            if (pdf == 0) continue;
+                            const EnvironmentMap::Sample s = light.env->sample(u1, u2);
+                            if (s.pdf == 0) continue;
+                            li = light.intensity * s.radiance;
+                            wi = s.wi;
+                            pdf = s.pdf;
                             break;
                         }
                         // Cosine-weighted about the geometric normal on wo's side: the same
@@ -177,20 +180,19 @@ struct Tracer {
                         // its density converted to solid angle.
                         const Primitive& prim =
                             *scene.primitives[static_cast<std::size_t>(light.prim)];
-                        float u1 = rng.next_float(), u2 = rng.next_float(), pdf_area;
-                        Vec3 p, n;
-                        const bool cone = prim.sample_cone(h.p, u1, u2, &p, &n, &pdf);
-                        if (!cone) prim.sample_area(u1, u2, &p, &n, &pdf_area);
-                        if (!cone && pdf_area == 0) continue;
-                        Vec3 d = p - h.p;
+                        const float u1 = rng.next_float(), u2 = rng.next_float();
+                        const std::optional<SurfaceSample> cone = prim.sample_cone(h.p, u1, u2);
+                        const SurfaceSample s = cone ? *cone : prim.sample_area(u1, u2);
+                        if (!cone && s.pdf == 0) continue;
+                        Vec3 d = s.p - h.p;
                         float d2 = dot(d, d);
                         if (d2 == 0) continue;
                         dist = std::sqrt(d2);
                         wi = d / dist;
-                        float cos_l = dot(n, -wi);
+                        float cos_l = dot(s.n, -wi);
                         if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
-                        if (!cone) pdf = pdf_area * d2 / std::abs(cos_l);
-                        target = p;
+                        pdf = cone ? s.pdf : s.pdf * d2 / std::abs(cos_l);
+                        target = s.p;
                         li = light.intensity;
                         break;
                     }
@@ -238,9 +240,10 @@ struct Tracer {
 
     Rgb li(Ray ray, int depth) {
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
-            SurfaceHit h;
-            if (!scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), &h))
-                return escaped(ray.dir, ray.fp.diff);
+            std::optional<SurfaceHit> hit =
+                scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity());
+            if (!hit) return escaped(ray.dir, ray.fp.diff);
+            SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
             TexContext ctx;
@@ -258,19 +261,20 @@ struct Tracer {
             if (aov && !aov->recorded && aov->kind == AovKind::Footprint &&
                 footprints.uses(FootprintMethod::Cmam))
                 ctx.cmam_record = record_cmam_of(m, &cmam_record);
-            Bsdf bsdf;
             Vec3 wo = -ray.dir;
             const Material& chosen = pick_mixed(m, ctx);
             if (chosen.bump.node >= 0)  // pbrt-v3's bump map: the shading normal only
                 h.ns = bump_normal(scene, chosen.bump, h, ctx,
                                    0.5f * (std::abs(hd.dudx) + std::abs(hd.dudy)),
                                    0.5f * (std::abs(hd.dvdx) + std::abs(hd.dvdy)));
-            if (!make_bsdf(scene, chosen, h, ctx, &bsdf)) {
+            std::optional<Bsdf> made = make_bsdf(scene, chosen, h, ctx);
+            if (!made) {
                 // Continue through: the footprint state moves to the hit point.
                 ray.org = offset_origin(h, ray.dir);
                 ray.fp = footprints.passed_through(ray.fp, at, h);
                 continue;
             }
+            Bsdf& bsdf = *made;
             if (m.type == Material::Type::Mix) {
                 bsdf.kd = bsdf.kd * mix_weight;
                 bsdf.ks = bsdf.ks * mix_weight;
@@ -315,8 +319,10 @@ struct Tracer {
         float cos_o = dot(wo, n);
         bool entering = cos_o > 0;
         float eta_i = entering ? 1.0f : b.eta, eta_t = entering ? b.eta : 1.0f;
-        Vec3 wt;
-        if (!render::refract(wo, faceforward(n, wo), eta_i / eta_t, &wt)) return {};
+        const std::optional<Vec3> refracted =
+            render::refract(wo, faceforward(n, wo), eta_i / eta_t);
+        if (!refracted) return {};
+        const Vec3 wt = *refracted;
         float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};

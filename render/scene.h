@@ -146,6 +146,22 @@ struct Light {
 
 class Scene;
 
+/// A point sampled on a surface: position, oriented geometric normal, and density (0: none).
+struct SurfaceSample {
+    Vec3 p, n;
+    float pdf = 0;
+};
+
+/// Surface partial derivatives dP/du and dP/dv.
+struct Partials {
+    Vec3 dpdu, dpdv;
+};
+
+/// A change of surface (u,v).
+struct UvDelta {
+    float du = 0, dv = 0;
+};
+
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).
 struct Primitive {
     enum class Kind { Triangles, Sphere, Disk };
@@ -185,11 +201,11 @@ struct Primitive {
 
     /// A point on the surface, uniform by area, from uniform numbers in [0,1): its position,
     /// oriented geometric normal and density with respect to area (0 when none).
-    void sample_area(float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
+    SurfaceSample sample_area(float u1, float u2) const;
     /// For a point `ref` outside a whole round sphere: a point on it seen from `ref`, uniform in
     /// the cone of directions the sphere subtends, with its density with respect to solid angle.
-    /// False (nothing sampled) for other shapes and for points inside.
-    bool sample_cone(const Vec3& ref, float u1, float u2, Vec3* p, Vec3* n, float* pdf) const;
+    /// Nothing for other shapes and for points inside.
+    std::optional<SurfaceSample> sample_cone(const Vec3& ref, float u1, float u2) const;
 };
 
 /// An object's primitives, in the object's own space, with their own Embree scene, which every
@@ -230,16 +246,16 @@ struct SurfaceHit {
     std::array<double, 3> p_object{};    // quadrics: the hit in object space
 
     /// Surface partial derivatives dP/du and dP/dv in world space.
-    void partials(Vec3* dpdu, Vec3* dpdv) const;
+    Partials partials() const;
     /// (du, dv) for a world-space offset dP in the tangent plane (barycentric differentials on
     /// triangles, least squares on dP/du, dP/dv elsewhere).
-    void uv_offset(const Vec3& dp, float* du, float* dv) const;
+    UvDelta uv_offset(const Vec3& dp) const;
     /// Change of the (unit) shading normal for a world-space offset dP along the surface.
     Vec3 normal_offset(const Vec3& dp) const;
 
     // The same in the primitive's own space (an instance's object space; else the world).
-    void local_partials(Vec3* dpdu, Vec3* dpdv) const;
-    void local_uv_offset(const Vec3& dp, float* du, float* dv) const;
+    Partials local_partials() const;
+    UvDelta local_uv_offset(const Vec3& dp) const;
     Vec3 local_normal_offset(const Vec3& dp) const;
 };
 
@@ -278,8 +294,9 @@ class Scene {
     /// Creates the Embree scene from `primitives` and `instances` (one Embree scene per object,
     /// shared by its instances); call once after filling them.
     void commit();
-    /// Nearest hit along org + t dir, t in (tmin, tmax).
-    bool intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax, SurfaceHit* hit) const;
+    /// Nearest hit along org + t dir, t in (tmin, tmax); nothing when the ray hits nothing.
+    std::optional<SurfaceHit> intersect(const Vec3& org, const Vec3& dir, float tmin,
+                                        float tmax) const;
     /// True when anything lies along org + t dir, t in (tmin, tmax).
     bool occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const;
     RTCScene embree_scene() const { return m_scene; }

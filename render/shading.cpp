@@ -272,14 +272,13 @@ float fresnel_dielectric(float cos_i, float eta_i, float eta_t) {
     return (r_parl * r_parl + r_perp * r_perp) / 2;
 }
 
-bool refract(const Vec3& wi, const Vec3& n, float eta, Vec3* wt) {
+std::optional<Vec3> refract(const Vec3& wi, const Vec3& n, float eta) {
     float cos_i = dot(n, wi);
     float sin2_i = std::max(0.0f, 1 - cos_i * cos_i);
     float sin2_t = eta * eta * sin2_i;
-    if (sin2_t >= 1) return false;
+    if (sin2_t >= 1) return std::nullopt;
     float cos_t = std::sqrt(1 - sin2_t);
-    *wt = eta * -wi + (eta * cos_i - cos_t) * n;
-    return true;
+    return eta * -wi + (eta * cos_i - cos_t) * n;
 }
 
 namespace {
@@ -368,8 +367,7 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
                  const TexContext& ctx, float du, float dv) {
     if (!(du > 0)) du = 0.0005f;
     if (!(dv > 0)) dv = 0.0005f;
-    Vec3 dpdu, dpdv;
-    hit.partials(&dpdu, &dpdv);
+    const auto [dpdu, dpdv] = hit.partials();
     const Vec3 n = hit.ns, dndu = hit.normal_offset(dpdu), dndv = hit.normal_offset(dpdv);
     // The displacement at the point and one step along u and along v (the world point moves
     // with them, for the textures that read it).
@@ -391,47 +389,47 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
     return faceforward(nb, hit.ng);
 }
 
-bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, const TexContext& ctx,
-               Bsdf* b) {
-    if (m.type == Material::Type::None) return false;
-    *b = Bsdf{};
-    b->frame = Frame::from_z(hit.ns);
-    b->ng = hit.ng;
+std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit,
+                              const TexContext& ctx) {
+    if (m.type == Material::Type::None) return std::nullopt;
+    Bsdf b;
+    b.frame = Frame::from_z(hit.ns);
+    b.ng = hit.ng;
     switch (m.type) {
         case Material::Type::Matte: {
-            b->kd = clamp0(eval_texture(scene, m.kd, ctx));
+            b.kd = clamp0(eval_texture(scene, m.kd, ctx));
             float sigma = eval_texture(scene, m.sigma, ctx).r;
             if (sigma != 0) {
                 float s = sigma * kPi / 180, s2 = s * s;
-                b->on_a = 1 - s2 / (2 * (s2 + 0.33f));
-                b->on_b = 0.45f * s2 / (s2 + 0.09f);
+                b.on_a = 1 - s2 / (2 * (s2 + 0.33f));
+                b.on_b = 0.45f * s2 / (s2 + 0.09f);
             }
             break;
         }
         case Material::Type::Plastic: {
-            b->kd = clamp0(eval_texture(scene, m.kd, ctx));
-            b->ks = clamp0(eval_texture(scene, m.ks, ctx));
+            b.kd = clamp0(eval_texture(scene, m.kd, ctx));
+            b.ks = clamp0(eval_texture(scene, m.ks, ctx));
             float rough = eval_texture(scene, m.roughness, ctx).r;
-            b->alpha = m.remap_roughness ? roughness_to_alpha(rough) : rough;
+            b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : rough;
             break;
         }
         case Material::Type::Mirror:
-            b->kr = clamp0(eval_texture(scene, m.kr, ctx));
-            b->fresnel_noop = true;
+            b.kr = clamp0(eval_texture(scene, m.kr, ctx));
+            b.fresnel_noop = true;
             break;
         case Material::Type::Glass:
-            b->kr = clamp0(eval_texture(scene, m.kr, ctx));
-            b->kt = clamp0(eval_texture(scene, m.kt, ctx));
-            b->eta = eval_texture(scene, m.eta, ctx).r;
+            b.kr = clamp0(eval_texture(scene, m.kr, ctx));
+            b.kt = clamp0(eval_texture(scene, m.kt, ctx));
+            b.eta = eval_texture(scene, m.eta, ctx).r;
             break;
         case Material::Type::Uber: {
-            b->kd = clamp0(eval_texture(scene, m.kd, ctx));
-            b->ks = clamp0(eval_texture(scene, m.ks, ctx));
+            b.kd = clamp0(eval_texture(scene, m.kd, ctx));
+            b.ks = clamp0(eval_texture(scene, m.ks, ctx));
             float rough = eval_texture(scene, m.roughness, ctx).r;
-            b->alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
-            b->kr = clamp0(eval_texture(scene, m.kr, ctx));
-            b->kt = clamp0(eval_texture(scene, m.kt, ctx));
-            b->eta = eval_texture(scene, m.eta, ctx).r;
+            b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
+            b.kr = clamp0(eval_texture(scene, m.kr, ctx));
+            b.kt = clamp0(eval_texture(scene, m.kt, ctx));
+            b.eta = eval_texture(scene, m.eta, ctx).r;
             break;
         }
         case Material::Type::Metal: {
@@ -440,18 +438,18 @@ bool make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit, con
             auto r0 = [](float n_, float k_) {
                 return ((n_ - 1) * (n_ - 1) + k_ * k_) / ((n_ + 1) * (n_ + 1) + k_ * k_);
             };
-            b->conductor = true;
-            b->f0 = clamp0(Rgb(r0(n.r, k.r), r0(n.g, k.g), r0(n.b, k.b)));
-            b->ks = Rgb(1);
+            b.conductor = true;
+            b.f0 = clamp0(Rgb(r0(n.r, k.r), r0(n.g, k.g), r0(n.b, k.b)));
+            b.ks = Rgb(1);
             float rough = eval_texture(scene, m.roughness, ctx).r;
-            b->alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
+            b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
             break;
         }
         case Material::Type::None:
         case Material::Type::Mix:  // the integrator picks one of its materials first
-            return false;
+            return std::nullopt;
     }
-    return true;
+    return b;
 }
 
 }  // namespace cmam::render

@@ -125,14 +125,14 @@ struct Bsdf {
 
 /// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose
 /// materials the integrator chooses between).
-bool make_bsdf(const Scene& scene, const Material& material, const SurfaceHit& hit,
-               const TexContext& ctx, Bsdf* bsdf);
+std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& material, const SurfaceHit& hit,
+                              const TexContext& ctx);
 
 /// Unpolarised Fresnel reflectance of a dielectric interface (pbrt-v3 FrDielectric).
 float fresnel_dielectric(float cos_theta_i, float eta_i, float eta_t);
 
 /// Refracts `wi` (pointing away from the surface) through normal `n` on its side with relative
 /// index eta = eta_i/eta_t; false on total internal reflection.
-bool refract(const Vec3& wi, const Vec3& n, float eta, Vec3* wt);
+std::optional<Vec3> refract(const Vec3& wi, const Vec3& n, float eta);
 
 }  // namespace cmam::render

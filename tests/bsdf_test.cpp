@@ -23,12 +23,13 @@ TEST(Fresnel, DielectricReferenceValues) {
 TEST(Refract, SnellsLawAndTotalInternalReflection) {
     Vec3 n(0, 0, 1);
     Vec3 wi = normalize(Vec3(1, 0, 1));  // 45 degrees, pointing away from the surface
-    Vec3 wt;
-    ASSERT_TRUE(refract(wi, n, 1 / 1.5f, &wt));
+    const std::optional<Vec3> refracted = refract(wi, n, 1 / 1.5f);
+    ASSERT_TRUE(refracted.has_value());
+    const Vec3 wt = *refracted;
     EXPECT_NEAR(length(wt), 1, 1e-6);
     EXPECT_NEAR(-wt.x, std::sin(0.785398f) / 1.5f, 1e-6);  // sin(theta_t) = sin(theta_i)/eta
     EXPECT_LT(wt.z, 0);
-    EXPECT_FALSE(refract(wi, n, 1.5f, &wt));  // inside glass at 45 degrees: TIR
+    EXPECT_FALSE(refract(wi, n, 1.5f).has_value());  // inside glass at 45 degrees: TIR
 }
 
 TEST(Bsdf, LambertianIsKdOverPiOnlyInReflection) {
@@ -99,11 +100,12 @@ Bsdf bsdf_of(const std::string& material, std::vector<std::string>* warnings = n
     auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {}, [&](const std::string& w) {
         if (warnings) warnings->push_back(w);
     });
-    SurfaceHit h;
-    EXPECT_TRUE(s->intersect(Vec3(0, 0, 5), Vec3(0, 0, -1), 0, 100, &h));
-    Bsdf b;
-    EXPECT_TRUE(make_bsdf(*s, s->materials.at(0), h, TexContext{}, &b));
-    return b;
+    const std::optional<SurfaceHit> h = s->intersect(Vec3(0, 0, 5), Vec3(0, 0, -1), 0, 100);
+    EXPECT_TRUE(h.has_value());
+    const std::optional<Bsdf> b =
+        make_bsdf(*s, s->materials.at(0), h.value_or(SurfaceHit{}), TexContext{});
+    EXPECT_TRUE(b.has_value());
+    return b.value_or(Bsdf{});
 }
 }  // namespace
 

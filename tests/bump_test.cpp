@@ -36,8 +36,9 @@ TEST(Bump, ALinearDisplacementTiltsTheNormalByItsSlope) {
     auto s = bumped_quad("\"texture bumpmap\" \"d\"");
     const Material& m = s->materials.back();
     ASSERT_GE(m.bump.node, 0);
-    SurfaceHit h;
-    ASSERT_TRUE(s->intersect(Vec3(0.2f, 0.1f, 5), Vec3(0, 0, -1), 0, 100, &h));
+    const std::optional<SurfaceHit> hit = s->intersect(Vec3(0.2f, 0.1f, 5), Vec3(0, 0, -1), 0, 100);
+    ASSERT_TRUE(hit.has_value());
+    const SurfaceHit& h = *hit;
     TexContext ctx;
     ctx.u = h.u;
     ctx.v = h.v;

@@ -29,9 +29,9 @@ void expect_vec(const Vec3& a, const Vec3& b, double tol, const char* what) {
 SurfaceHit hit_at(const Scene& s, float px, float py, Vec3* d) {
     const CameraRay r = s.camera.generate_ray(px, py);
     *d = r.dir;
-    SurfaceHit h;
-    EXPECT_TRUE(s.intersect(r.org, r.dir, 0, 1e30f, &h));
-    return h;
+    const std::optional<SurfaceHit> h = s.intersect(r.org, r.dir, 0, 1e30f);
+    EXPECT_TRUE(h.has_value());
+    return h.value_or(SurfaceHit{});
 }
 }  // namespace
 
@@ -88,9 +88,9 @@ Vec3 secondary(const Scene& s, float px, float py, bool refracted, float eta,
     if (out) *out = h;
     Vec3 wo = -d, n = h.ns;
     if (!refracted) return -wo + 2 * dot(wo, n) * n;
-    Vec3 wt;
-    EXPECT_TRUE(render::refract(wo, faceforward(n, wo), eta, &wt));
-    return wt;
+    const std::optional<Vec3> wt = render::refract(wo, faceforward(n, wo), eta);
+    EXPECT_TRUE(wt.has_value());
+    return wt.value_or(Vec3{});
 }
 }  // namespace
 

@@ -89,14 +89,17 @@ TEST(Instancing, ObjectIsBuiltOnceAndPlacedByEachInstance) {
     EXPECT_EQ(s->instances[1].first_id, 3u);
     EXPECT_EQ(s->instances[2].first_id, 5u);
     // A ray down onto the first instance's sphere hits it at the top, in the world.
-    SurfaceHit h;
-    ASSERT_TRUE(s->intersect(Vec3(-1.8f, 5, 0), Vec3(0, -1, 0), 0, 100, &h));
+    std::optional<SurfaceHit> hit = s->intersect(Vec3(-1.8f, 5, 0), Vec3(0, -1, 0), 0, 100);
+    ASSERT_TRUE(hit.has_value());
+    SurfaceHit h = *hit;
     EXPECT_EQ(h.instance, &s->instances[0]);
     EXPECT_EQ(h.object_id, 2u);
     EXPECT_NEAR(h.p.y, 1.6, 1e-5);
     EXPECT_NEAR(h.ns.y, 1, 1e-5);
     // The mirrored, non-uniformly scaled instance: the sphere's top at 0.8 * 1.6.
-    ASSERT_TRUE(s->intersect(Vec3(1.8f, 5, 0.3f), Vec3(0, -1, 0), 0, 100, &h));
+    hit = s->intersect(Vec3(1.8f, 5, 0.3f), Vec3(0, -1, 0), 0, 100);
+    ASSERT_TRUE(hit.has_value());
+    h = *hit;
     EXPECT_EQ(h.instance, &s->instances[2]);
     EXPECT_NEAR(h.p.y, 0.8 * 1.6, 1e-5);
     EXPECT_NEAR(h.ng.y, 1, 1e-5);

@@ -17,9 +17,9 @@ std::unique_ptr<render::Scene> world(const std::string& body) {
     return test::scene_from("Camera \"perspective\" WorldBegin " + body + " WorldEnd");
 }
 SurfaceHit hit(const render::Scene& s, Vec3 o, Vec3 d) {
-    SurfaceHit h;
-    EXPECT_TRUE(s.intersect(o, render::normalize(d), 0, 1e30f, &h));
-    return h;
+    const std::optional<SurfaceHit> h = s.intersect(o, render::normalize(d), 0, 1e30f);
+    EXPECT_TRUE(h.has_value());
+    return h.value_or(SurfaceHit{});
 }
 }  // namespace
 
@@ -45,9 +45,8 @@ TEST(Sphere, PartialSphereSkipsTheCutAndShowsTheInside) {
     SurfaceHit h = hit(*s, Vec3(0.01f, 0.01f, 5), Vec3(0, 0, -1));
     EXPECT_NEAR(h.t, 6, 1e-3);  // the cap above z = 0.5 is gone: hits the far side
     EXPECT_LT(h.ng.z, -0.99f);  // outward normal of the far side, seen from inside
-    render::SurfaceHit none;
-    EXPECT_FALSE(s->intersect(Vec3(0, -5, 0), Vec3(0, 1, 0), 0, 1e30f, &none) && none.p.y < 0)
-        << "phi > 180 degrees must not be hit";
+    const std::optional<SurfaceHit> none = s->intersect(Vec3(0, -5, 0), Vec3(0, 1, 0), 0, 1e30f);
+    EXPECT_FALSE(none && none->p.y < 0) << "phi > 180 degrees must not be hit";
 }
 
 TEST(Sphere, TransformedAndReversed) {
@@ -66,9 +65,7 @@ TEST(Disk, UvAndNormal) {
     EXPECT_NEAR(h.u, 0, 1e-6);
     EXPECT_NEAR(h.v, 0.5, 1e-6);  // (radius - r) / (radius - innerradius)
     EXPECT_NEAR(h.ng.z, 1, 1e-6);
-    render::SurfaceHit none;
-    EXPECT_FALSE(
-        s->intersect(Vec3(0.5f, 0, 3), Vec3(0, 0, -1), 0, 1e30f, &none));  // inside the hole
+    EXPECT_FALSE(s->intersect(Vec3(0.5f, 0, 3), Vec3(0, 0, -1), 0, 1e30f));  // inside the hole
 }
 
 TEST(Triangle, BarycentricUvAndDefaultUv) {

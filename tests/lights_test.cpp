@@ -138,9 +138,7 @@ TEST(EnvironmentMap, ImportanceSamplingIsUnbiasedAndItsPdfIsConsistent) {
     };
     int checked = 0, pdf_mismatches = 0;
     for (int k = 0; k < N; ++k) {
-        Vec3 wi;
-        float pdf;
-        const Rgb L = env.sample(uni(), uni(), &wi, &pdf);
+        const auto [L, wi, pdf] = env.sample(uni(), uni());
         if (pdf == 0) continue;
         est += L.luminance() * std::max(0.0f, dot(wi, n)) / pdf;
         if (k % 997 == 0) {  // the sample's radiance and density are those of its direction

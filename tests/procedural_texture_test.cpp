@@ -173,9 +173,9 @@ TEST(AlphaMask, CutOutsFollowTheMaskForCameraAndShadowRays) {
             "\"integer indices\" [0 1 2 0 2 3] WorldEnd");
     };
     auto hit_z = [](const Scene& s, float x, float y) {
-        SurfaceHit h;
-        EXPECT_TRUE(s.intersect(Vec3(x, y, 5), Vec3(0, 0, -1), 0, 100, &h));
-        return h.p.z;
+        const std::optional<SurfaceHit> h = s.intersect(Vec3(x, y, 5), Vec3(0, 0, -1), 0, 100);
+        EXPECT_TRUE(h.has_value());
+        return h ? h->p.z : 0.0f;
     };
     auto none = scene("\"float alpha\" 0");
     EXPECT_NEAR(hit_z(*none, 0.3f, 0.3f), 0, 1e-5f);  // not there

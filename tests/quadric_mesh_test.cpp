@@ -20,9 +20,9 @@ std::unique_ptr<Scene> shape(const std::string& s) {
 // height z, towards the z axis.
 SurfaceHit hit_towards_axis(const Scene& s, float phi, float z) {
     const Vec3 dir(-std::cos(phi), -std::sin(phi), 0);
-    SurfaceHit h;
-    EXPECT_TRUE(s.intersect(Vec3(0, 0, z) - 10 * dir, dir, 0, 100, &h));
-    return h;
+    const std::optional<SurfaceHit> h = s.intersect(Vec3(0, 0, z) - 10 * dir, dir, 0, 100);
+    EXPECT_TRUE(h.has_value());
+    return h.value_or(SurfaceHit{});
 }
 
 }  // namespace

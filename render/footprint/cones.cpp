@@ -20,8 +20,7 @@ float surface_curvature(const SurfaceHit& hit) {
     const Primitive& pr = *hit.prim;
     if (pr.kind == Primitive::Kind::Sphere) {
         // Exact: 1/r in object space, scaled by the transform's mean scale along the surface.
-        Vec3 dpdu, dpdv;
-        hit.partials(&dpdu, &dpdv);
+        const auto [dpdu, dpdv] = hit.partials();
         double s = std::sqrt(
             length(cross(dpdu, dpdv)) /
             (pr.phi_max * std::abs(pr.theta_zmax - pr.theta_zmin) * pr.radius * pr.radius *
@@ -46,8 +45,7 @@ float surface_curvature(const SurfaceHit& hit) {
 
 namespace {
 float density(const SurfaceHit& hit) {  // sqrt of world area per unit (u,v) area
-    Vec3 dpdu, dpdv;
-    hit.partials(&dpdu, &dpdv);
+    const auto [dpdu, dpdv] = hit.partials();
     return std::sqrt(length(cross(dpdu, dpdv)));
 }
 float clamp_cos(float c) {
@@ -75,10 +73,8 @@ texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const Surfac
         a1 = normalize(along) * (r / std::abs(dn));  // elongated along the incidence plane
         a2 = normalize(cross(n, a1)) * r;
     }
-    float g[4];
-    hit.uv_offset(a1, &g[0], &g[1]);
-    hit.uv_offset(a2, &g[2], &g[3]);
-    return texture::Footprint::axes({2 * g[0], 2 * g[1]}, {2 * g[2], 2 * g[3]});
+    const UvDelta g1 = hit.uv_offset(a1), g2 = hit.uv_offset(a2);
+    return texture::Footprint::axes({2 * g1.du, 2 * g1.dv}, {2 * g2.du, 2 * g2.dv});
 }
 
 RayCone reflect_cone(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {

@@ -45,8 +45,11 @@ HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const Surfac
     Vec3 ox = ray.dodx + t * ray.dddx, oy = ray.dody + t * ray.dddy;
     h.dpdx = ox + (-dot(ox, n) / dn) * d;
     h.dpdy = oy + (-dot(oy, n) / dn) * d;
-    hit.uv_offset(h.dpdx, &h.dudx, &h.dvdx);
-    hit.uv_offset(h.dpdy, &h.dudy, &h.dvdy);
+    const UvDelta x = hit.uv_offset(h.dpdx), y = hit.uv_offset(h.dpdy);
+    h.dudx = x.du;
+    h.dvdx = x.dv;
+    h.dudy = y.du;
+    h.dvdy = y.dv;
     h.valid = finite(h.dpdx) && finite(h.dpdy) && std::isfinite(h.dudx) && std::isfinite(h.dvdx) &&
               std::isfinite(h.dudy) && std::isfinite(h.dvdy);
     return h;
