@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "render/error.h"
 #include "render/scene.h"
 #include "render/shading.h"
 
@@ -161,7 +162,7 @@ void alpha_occluded_filter(const RTCFilterFunctionNArguments* args) {
 }
 
 void embree_error(void*, RTCError code, const char* str) {
-    throw std::runtime_error(std::string("Embree error ") + std::to_string(code) + ": " +
+    throw RenderError(std::string("Embree error ") + std::to_string(code) + ": " +
                              (str ? str : ""));
 }
 
@@ -268,7 +269,7 @@ Scene::Scene() {
 #else
     m_device = rtcNewDevice(nullptr);
 #endif
-    if (!m_device) throw std::runtime_error("cannot create the Embree device");
+    if (!m_device) throw RenderError("cannot create the Embree device");
     rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
 }
 

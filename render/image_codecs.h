@@ -13,11 +13,9 @@
 
 namespace cmam::render::codec {
 
-/// A reason a file cannot be read or an image encoded (without the file's name).
-class CodecError : public std::runtime_error {
-  public:
-    using std::runtime_error::runtime_error;
-};
+/// A reason a file cannot be read or an image encoded (without the file's name); image_io.cpp
+/// adds the name.
+using CodecError = RenderError;
 
 /// Called with the image's size and channels (pixels still empty) before the pixels are
 /// allocated; throws CodecError to refuse the image.

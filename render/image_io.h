@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "render/error.h"
+
 namespace cmam::render {
 
-class ImageIoError : public std::runtime_error {
-  public:
-    using std::runtime_error::runtime_error;
-};
+/// Image files that cannot be read or written: RenderError, with the file's name and the reason.
+using ImageIoError = RenderError;
 
 /// Pixels as read from a file: top row first, `channels` floats per pixel, values as stored
 /// (8-bit data scaled to [0,1], no colour conversion).

@@ -11,6 +11,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "render/error.h"
+
 namespace cmam::render {
 
 namespace {
@@ -111,7 +113,7 @@ void check_render_memory(const Scene& scene, std::optional<std::size_t> limit) {
     const char* hint = need.film >= need.textures
                            ? "a smaller --resolution or --crop needs less"
                            : "the trilinear or EWA filter builds fewer tables than sat and area";
-    throw std::runtime_error("the render needs about " + format_bytes(need.total()) +
+    throw RenderError("the render needs about " + format_bytes(need.total()) +
                              " more (film " + format_bytes(need.film) +
                              ", texture pyramids and tables " + format_bytes(need.textures) +
                              ") on top of the " + format_bytes(have) +

@@ -29,7 +29,7 @@ std::size_t memory_limit();
 /// What the process has resident now.
 std::size_t resident_memory();
 
-/// Refuses (std::runtime_error, with the sizes) a render that would take the process over
+/// Refuses (RenderError, with the sizes) a render that would take the process over
 /// `limit` bytes (nullopt: memory_limit()).
 void check_render_memory(const Scene& scene, std::optional<std::size_t> limit);
 
