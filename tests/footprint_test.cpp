@@ -1,6 +1,8 @@
 // Ray differentials and ray cones against central finite differences of the actual ray tracer
 // (camera, intersection, reflection, refraction), plus the numbers of algorithms.md §12
 // (T-RD-1, T-RC-1) and the agreement of cones with differentials.
+#include "render/footprint/footprint.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -184,6 +186,62 @@ TEST(Cones, ReflectionOffAConvexMirrorSpreadsTheCone) {
     RayCone t = refract_cone(c, d, h, 1 / 1.5f);
     EXPECT_TRUE(std::isfinite(t.spread) && std::isfinite(t.width));
     EXPECT_GT(std::abs(t.width), 0);
+}
+
+// The producers run only for the methods a scene uses, and each event hands on the state a
+// child ray needs: its own differential and cone, the level one deeper, the path extended.
+TEST(FootprintProducers, RunOnlyTheMethodsUsedAndCarryTagAndPath) {
+    auto s = test::scene_from(
+        camera512("Shape \"sphere\" \"float radius\" 1000 Translate 0 0 10 Shape \"trianglemesh\" "
+                  "\"point3 P\" [-100 -100 0  100 -100 0  100 100 0  -100 100 0] "
+                  "\"integer indices\" [0 1 2 0 2 3]"));
+    Vec3 d;
+    const SurfaceHit h = hit_at(*s, 300, 200, &d);
+    texture::RayTag tag;
+    tag.id = 7;
+    tag.seq = 3;
+    for (FootprintMethod m : {FootprintMethod::None, FootprintMethod::Differentials,
+                              FootprintMethod::Cones, FootprintMethod::ConesAniso}) {
+        SCOPED_TRACE(std::string(to_string(m)));
+        FootprintMethods methods;
+        methods.add(m);
+        const FootprintProducers producers(methods, s->camera, 4);
+        const RayFootprint camera = producers.camera_ray(300, 200, d, tag, 0.25f, -0.5f);
+        EXPECT_EQ(camera.diff.valid, m == FootprintMethod::Differentials);
+        EXPECT_FLOAT_EQ(camera.cone.spread, camera_cone(s->camera, 0.5f).spread);
+        const HitFootprint at = producers.at_hit(camera, d, h);
+        using Kind = texture::Footprint::Kind;
+        EXPECT_EQ(at.axes.kind == Kind::Axes, m == FootprintMethod::Differentials);
+        EXPECT_EQ(at.cone_aniso.kind == Kind::Axes, m == FootprintMethod::ConesAniso);
+        EXPECT_EQ(at.of(m).kind == Kind::Axes, m != FootprintMethod::None);
+        EXPECT_EQ(at.of(FootprintMethod::Cmam).kind, Kind::None);
+        EXPECT_EQ(at.tag.id, 7u);
+        if (m == FootprintMethod::Differentials) {
+            // The stratum offset is the screen offset (0.25, -0.5) mapped by the Jacobian.
+            const HitDifferential& hd = at.diff;
+            EXPECT_NEAR(at.stratum_offset.u, hd.dudx * 0.25 - hd.dudy * 0.5, 1e-9);
+            EXPECT_NEAR(at.stratum_offset.v, hd.dvdx * 0.25 - hd.dvdy * 0.5, 1e-9);
+            EXPECT_NE(dot(at.dpdx, at.dpdx), 0);
+        } else
+            EXPECT_EQ(dot(at.dpdx, at.dpdx), 0);
+
+        const RayFootprint refl = producers.reflected(camera, at, d, h);
+        const RayFootprint refr = producers.refracted(camera, at, d, h, 1 / 1.5f);
+        const RayFootprint through = producers.passed_through(camera, at, h);
+        EXPECT_EQ(refl.path, 2u);
+        EXPECT_EQ(refr.path, 3u);
+        EXPECT_EQ(through.path, 1u);
+        EXPECT_EQ(producers.reflected(refr, at, d, h).path, 6u);
+        EXPECT_EQ(refl.tag.level, 1u);
+        EXPECT_EQ(refr.tag.level, 1u);
+        EXPECT_EQ(through.tag.level, 0u);
+        EXPECT_EQ(refl.tag.seq, 3u);
+        EXPECT_FLOAT_EQ(refl.to_stratum_y, -0.5f);
+        EXPECT_EQ(refl.diff.valid, m == FootprintMethod::Differentials);
+        const bool cones = m == FootprintMethod::Cones || m == FootprintMethod::ConesAniso;
+        EXPECT_EQ(refl.cone.width != 0, cones);  // the cone's width at the hit, carried on
+        EXPECT_FLOAT_EQ(through.cone.width, cone_width_at(camera.cone, h.t));
+    }
 }
 
 TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {

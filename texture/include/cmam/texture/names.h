@@ -19,6 +19,9 @@ struct Named {
     std::string_view name;
 };
 
+template <class E, class S>
+Named(E, S) -> Named<E>;
+
 template <class E, std::size_t N>
 struct NameTable {
     std::array<Named<E>, N> entries;
