@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/error.h"
 #include "render/scene.h"
 
 namespace cmam::eval {
