@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
-#include <stdexcept>
 
 #include "app/common.h"
 #include "eval/evaluation.h"
@@ -28,20 +27,19 @@ int run_eval(const EvalArgs& a) {
          a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
         auto m = eval::parse_method(name);
         if (!m)
-            throw std::invalid_argument("--methods: unknown method \"" + name + "\" (" +
-                                        method_syntax() + ")");
+            throw UsageError("--methods: unknown method \"" + name + "\" (" + method_syntax() +
+                             ")");
         o.methods.push_back(*m);
     }
     o.spp.clear();
     for (const std::string& v : split_list(a.spp)) {
         char* end = nullptr;
         long n = std::strtol(v.c_str(), &end, 10);
-        if (*end || n < 1)
-            throw std::invalid_argument("--spp: \"" + v + "\" is not a positive integer");
+        if (*end || n < 1) throw UsageError("--spp: \"" + v + "\" is not a positive integer");
         o.spp.push_back(static_cast<int>(n));
         note_spp_rounding(o.spp.back());
     }
-    if (o.spp.empty()) throw std::invalid_argument("--spp: give at least one sample count");
+    if (o.spp.empty()) throw UsageError("--spp: give at least one sample count");
     note_spp_rounding(a.reference_spp, "--reference-spp");
     o.timing_runs = a.timing_runs;
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));

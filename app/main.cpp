@@ -29,53 +29,27 @@ struct LookupArgs {
     bool json = false;
 };
 
-std::string json_escape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        if (static_cast<unsigned char>(c) < 0x20) {  // control characters as \u00XX
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-            out += buf;
-            continue;
-        }
-        if (c == '"' || c == '\\') out += '\\';
-        out += c;
-    }
-    return out;
-}
-
-// A number as JSON has it: JSON has no NaN or infinity, so those are null (a NaN --uv given to
-// see the fallback, an infinite PSNR of identical images).
-std::string json_number(double x) {
-    if (!std::isfinite(x)) return "null";
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", x);
-    return buf;
-}
-
 int run_lookup(const LookupArgs& a) {
     auto kind = texture::parse_filter(a.filter);
     if (!kind)
-        throw std::invalid_argument("--filter: unknown filter \"" + a.filter + "\" (expected " +
-                                    texture::filter_names() + ")");
+        throw UsageError("--filter: unknown filter \"" + a.filter + "\" (expected " +
+                         texture::filter_names() + ")");
     auto wrap = texture::parse_wrap_mode(a.wrap);
     if (!wrap)
-        throw std::invalid_argument("--wrap: unknown wrap mode \"" + a.wrap +
-                                    "\" (expected repeat, clamp, black or mirror)");
+        throw UsageError("--wrap: unknown wrap mode \"" + a.wrap +
+                         "\" (expected repeat, clamp, black or mirror)");
     std::vector<double> uv;  // --points gives the lookup point as its first pair
     if (!a.uv.empty() || a.points.empty()) uv = parse_numbers(a.uv, "--uv");
-    if (a.points.empty() && uv.size() != 2)
-        throw std::invalid_argument("--uv needs two numbers: U,V");
+    if (a.points.empty() && uv.size() != 2) throw UsageError("--uv needs two numbers: U,V");
     texture::Footprint fp;
     if (!a.axes.empty()) {
         auto ax = parse_numbers(a.axes, "--axes");
-        if (ax.size() != 4) throw std::invalid_argument("--axes needs four numbers: AU,AV,BU,BV");
+        if (ax.size() != 4) throw UsageError("--axes needs four numbers: AU,AV,BU,BV");
         fp = texture::Footprint::axes({ax[0], ax[1]}, {ax[2], ax[3]});
     } else if (!a.points.empty()) {
         auto pt = parse_numbers(a.points, "--points");
         if (pt.size() % 2 != 0 || pt.size() < 2 || pt.size() > 6)
-            throw std::invalid_argument(
-                "--points needs one to three U,V pairs (the current sample first)");
+            throw UsageError("--points needs one to three U,V pairs (the current sample first)");
         fp.kind = texture::Footprint::Kind::Points;
         fp.point_count = static_cast<int>(pt.size() / 2);
         for (int i = 0; i < fp.point_count; ++i) fp.points[i] = {pt[2 * i], pt[2 * i + 1]};
@@ -149,9 +123,9 @@ int run_lookup(const LookupArgs& a) {
 int run_compare(const std::string& ref_path, const std::string& img_path, bool json) {
     render::RawImage ref = render::read_image(ref_path), img = render::read_image(img_path);
     if (ref.width != img.width || ref.height != img.height)
-        throw std::invalid_argument("\"" + img_path + "\" is " + std::to_string(img.width) + "x" +
-                                    std::to_string(img.height) + ", the reference is " +
-                                    std::to_string(ref.width) + "x" + std::to_string(ref.height));
+        throw UsageError("\"" + img_path + "\" is " + std::to_string(img.width) + "x" +
+                         std::to_string(img.height) + ", the reference is " +
+                         std::to_string(ref.width) + "x" + std::to_string(ref.height));
     auto rgb = [](const render::RawImage& r) {
         std::vector<float> v(static_cast<std::size_t>(r.width) * r.height * 3);
         for (std::size_t p = 0; p < v.size() / 3; ++p)

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <stdexcept>
 
 #include "app/common.h"
 #include "pbrt/parser.h"
@@ -41,14 +40,13 @@ void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
     if (n == 1 && w > 0)
         h = std::max(1, static_cast<int>(std::lround(double(w) * yres / xres)));
     else if (!(n == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0))
-        throw std::invalid_argument("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text +
-                                    "\"");
+        throw UsageError("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text + "\"");
     if (w > render::kMaxFilmSide || h > render::kMaxFilmSide ||
         static_cast<long long>(w) * h > render::kMaxFilmPixels)
-        throw std::invalid_argument("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
-                                    " is above cmam's limits of " +
-                                    std::to_string(render::kMaxFilmSide) + " pixels a side and " +
-                                    std::to_string(render::kMaxFilmPixels) + " in all");
+        throw UsageError("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
+                         " is above cmam's limits of " + std::to_string(render::kMaxFilmSide) +
+                         " pixels a side and " + std::to_string(render::kMaxFilmPixels) +
+                         " in all");
     if (std::abs(double(w) / h - double(xres) / yres) > 1.0 / std::min(w, h))
         warn("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
              " has another aspect ratio than the scene's " + std::to_string(xres) + "x" +
@@ -62,12 +60,11 @@ void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
 // --crop x0,x1,y0,y1: the Film's cropwindow (fractions of the image, y down, as pbrt-v3); it
 // replaces the scene's.
 void override_crop(pbrt::SceneDesc& desc, const std::vector<double>& c) {
-    if (c.size() != 4) throw std::invalid_argument("--crop needs four numbers: X0,X1,Y0,Y1");
+    if (c.size() != 4) throw UsageError("--crop needs four numbers: X0,X1,Y0,Y1");
     for (double v : c)
         if (!(v >= 0 && v <= 1))
-            throw std::invalid_argument("--crop: values are fractions of the image, in [0, 1]");
-    if (!(c[0] < c[1] && c[2] < c[3]))
-        throw std::invalid_argument("--crop: needs X0 < X1 and Y0 < Y1");
+            throw UsageError("--crop: values are fractions of the image, in [0, 1]");
+    if (!(c[0] < c[1] && c[2] < c[3])) throw UsageError("--crop: needs X0 < X1 and Y0 < Y1");
     desc.film.params.add(film_param("float", "cropwindow", c));
 }
 
@@ -81,7 +78,7 @@ bool is_float_format(const std::string& path) {
 // none to report rather than write zeros.
 void check_footprint_aov(const render::Scene& scene, const std::string& out) {
     if (!is_float_format(out))
-        throw std::invalid_argument(
+        throw UsageError(
             "--aov footprint writes lengths in texels and MIP levels, "
             "which need a float image: use .exr or .pfm, not \"" +
             out + "\"");
@@ -92,12 +89,11 @@ void check_footprint_aov(const render::Scene& scene, const std::string& out) {
         footprint = footprint || n.lod != render::FootprintMethod::None;
     }
     if (!image)
-        throw std::invalid_argument(
+        throw UsageError(
             "--aov footprint measures image textures, and this scene has none (procedural "
             "textures such as checkerboard have no texel size)");
     if (!footprint)
-        throw std::invalid_argument(
-            "--aov footprint: --lod none point-samples, there is no footprint");
+        throw UsageError("--aov footprint: --lod none point-samples, there is no footprint");
 }
 
 void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
@@ -143,14 +139,13 @@ void check_output_folder(const std::string& out) {
     if (dir.empty()) dir = ".";
     std::error_code ec;
     if (!fs::exists(dir, ec))
-        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
-                                    "\" does not exist");
+        throw UsageError("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                         "\" does not exist");
     if (!fs::is_directory(dir, ec))
-        throw std::invalid_argument("cannot write \"" + out + "\": \"" + dir.string() +
-                                    "\" is not a folder");
+        throw UsageError("cannot write \"" + out + "\": \"" + dir.string() + "\" is not a folder");
     if (::access(dir.c_str(), W_OK) != 0)
-        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
-                                    "\" is not writable");
+        throw UsageError("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                         "\" is not writable");
 }
 
 }  // namespace
@@ -166,31 +161,27 @@ int run_render(const RenderArgs& a) {
     if (!a.lod.empty()) {
         bo.lod = render::parse_footprint_method(a.lod);
         if (!bo.lod)
-            throw std::invalid_argument(
-                "--lod: unknown \"" + a.lod +
-                "\" (expected none, differentials, cones, cones-aniso or cmam)");
+            throw UsageError("--lod: unknown \"" + a.lod +
+                             "\" (expected none, differentials, cones, cones-aniso or cmam)");
     }
     if (!a.filter.empty()) {
         bo.filter = texture::parse_filter(a.filter);
         if (!bo.filter)
-            throw std::invalid_argument("--filter: unknown \"" + a.filter + "\" (expected " +
-                                        texture::filter_names() + ")");
+            throw UsageError("--filter: unknown \"" + a.filter + "\" (expected " +
+                             texture::filter_names() + ")");
     }
     auto miss = texture::parse_cmam_miss(a.cmam_miss);
     auto tags = render::parse_tag_policy(a.cmam_tags);
     auto ell = texture::parse_cmam_ellipse(a.cmam_ellipse);
     auto sat_miss = texture::parse_cmam_sat_miss(a.cmam_sat_miss);
-    if (!miss) throw std::invalid_argument("--cmam-miss: expected average or point");
-    if (!tags) throw std::invalid_argument("--cmam-tags: expected scanline or pixel");
-    if (!ell)
-        throw std::invalid_argument(
-            "--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
-    if (!sat_miss)
-        throw std::invalid_argument("--cmam-sat-miss: expected average or paper-literal");
+    if (!miss) throw UsageError("--cmam-miss: expected average or point");
+    if (!tags) throw UsageError("--cmam-tags: expected scanline or pixel");
+    if (!ell) throw UsageError("--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
+    if (!sat_miss) throw UsageError("--cmam-sat-miss: expected average or paper-literal");
     if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
-        throw std::invalid_argument("--cmam-adjacency: expected on or off");
+        throw UsageError("--cmam-adjacency: expected on or off");
     if (a.cmam_hull && *tags != render::TagPolicy::Pixel)
-        throw std::invalid_argument("--cmam-hull works per pixel: it needs --cmam-tags pixel");
+        throw UsageError("--cmam-hull works per pixel: it needs --cmam-tags pixel");
     bo.tags = *tags;
     bo.cmam.miss = *miss;
     bo.cmam.ellipse = *ell;
@@ -198,7 +189,7 @@ int run_render(const RenderArgs& a) {
     bo.cmam.adjacent_only = a.cmam_adjacency == "on";
     bo.cmam.hull = a.cmam_hull;
     if (a.cmam_2d && *tags != render::TagPolicy::Scanline)
-        throw std::invalid_argument(
+        throw UsageError(
             "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
     bo.cmam.two_d = a.cmam_2d;
     auto scene = render::build_scene(desc, bo, print_warning);
@@ -206,8 +197,8 @@ int run_render(const RenderArgs& a) {
     check_output_folder(out);  // before rendering: a long render is not lost to a typo
     std::optional<std::size_t> max_memory;
     if (!a.max_memory.empty() && !(max_memory = render::parse_bytes(a.max_memory)))
-        throw std::invalid_argument("--max-memory: expected a size such as 8G or 512M, not \"" +
-                                    a.max_memory + "\"");
+        throw UsageError("--max-memory: expected a size such as 8G or 512M, not \"" + a.max_memory +
+                         "\"");
     render::check_render_memory(*scene, max_memory);  // before rendering, with the sizes
 
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
@@ -219,8 +210,7 @@ int run_render(const RenderArgs& a) {
     } else if (a.aov == "texture")
         ro.aov = render::AovKind::Texture;
     else if (!a.aov.empty())
-        throw std::invalid_argument("--aov: unknown \"" + a.aov +
-                                    "\" (expected footprint or texture)");
+        throw UsageError("--aov: unknown \"" + a.aov + "\" (expected footprint or texture)");
     ro.progress = [&](int done, int total) { bar.update(done, total); };
     render::RenderStats stats;
     auto t1 = std::chrono::steady_clock::now();
