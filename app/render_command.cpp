@@ -1,13 +1,14 @@
-#include "app/render_command.h"
-
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
+#include "app/command.h"
 #include "app/common.h"
 #include "pbrt/parser.h"
 #include "render/image_io.h"
@@ -18,6 +19,22 @@
 namespace cmam::app {
 
 namespace {
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    int spp = 0;
+    int threads = 0;
+    bool quiet = false;
+    bool stats = false;
+    std::string lod, filter, cmam_miss = "average", cmam_tags = "scanline",
+                             cmam_ellipse = "conjugate", cmam_sat_miss = "average",
+                             cmam_adjacency = "on";
+    bool cmam_hull = false, cmam_2d = false;
+    std::string aov;
+    std::string resolution, crop;
+    std::string max_memory;  // empty: the machine's memory (render::memory_limit())
+};
 
 pbrt::Param film_param(const char* type, const char* name, std::vector<double> values) {
     pbrt::Param p;
@@ -148,16 +165,10 @@ void check_output_folder(const std::string& out) {
                          "\" is not writable");
 }
 
-}  // namespace
-
-int run_render(const RenderArgs& a) {
-    auto t0 = std::chrono::steady_clock::now();
-    pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
-    if (!a.resolution.empty()) override_resolution(desc, a.resolution);
-    if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
+// The scene's build options as the command line overrides them.
+render::BuildOptions build_options(const RenderArgs& a) {
     render::BuildOptions bo;
     bo.spp_override = a.spp;
-    note_spp_rounding(a.spp);
     if (!a.lod.empty()) {
         bo.lod = render::parse_footprint_method(a.lod);
         if (!bo.lod)
@@ -192,6 +203,29 @@ int run_render(const RenderArgs& a) {
         throw UsageError(
             "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
     bo.cmam.two_d = a.cmam_2d;
+    return bo;
+}
+
+// The summary line: wall time, split into loading (parsing, images and acceleration structures;
+// pyramids and tables are built on first use, inside the render) and rendering, and the rays.
+void print_summary(const std::string& out, const render::Framebuffer& fb, int spp,
+                   const render::RenderStats& stats, double wall_s, double load_s,
+                   double render_s) {
+    uint64_t rays = stats.total_rays();
+    std::fprintf(stderr,
+                 "%s: %dx%d, %d spp, wall %.3fs (load %.3fs, render %.3fs), %llu rays, "
+                 "%.2f Mrays/s\n",
+                 out.c_str(), fb.width, fb.height, spp, wall_s, load_s, render_s,
+                 (unsigned long long)rays, render_s > 0 ? rays / render_s / 1e6 : 0.0);
+}
+
+int run_render(const RenderArgs& a) {
+    auto t0 = std::chrono::steady_clock::now();
+    pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
+    if (!a.resolution.empty()) override_resolution(desc, a.resolution);
+    if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
+    note_spp_rounding(a.spp);
+    const render::BuildOptions bo = build_options(a);
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
     check_output_folder(out);  // before rendering: a long render is not lost to a typo
@@ -217,22 +251,89 @@ int run_render(const RenderArgs& a) {
     render::Framebuffer fb = render::render(*scene, ro, &stats);
     auto t2 = std::chrono::steady_clock::now();
     render::write_image(out, fb.width, fb.height, fb.rgb, fb.channel_names);
-    // Load: parsing, images and acceleration structures (pyramids and tables are built on
-    // first use, inside the render).
-    double load_s = std::chrono::duration<double>(t1 - t0).count();
-    double render_s = std::chrono::duration<double>(t2 - t1).count();
-    double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!a.quiet) {
-        uint64_t rays = stats.total_rays();
-        std::fprintf(stderr,
-                     "%s: %dx%d, %d spp, wall %.3fs (load %.3fs, render %.3fs), %llu rays, "
-                     "%.2f Mrays/s\n",
-                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, load_s,
-                     render_s, (unsigned long long)rays,
-                     render_s > 0 ? rays / render_s / 1e6 : 0.0);
+        const auto seconds = [](auto from, auto to) {
+            return std::chrono::duration<double>(to - from).count();
+        };
+        print_summary(out, fb, scene->sampler.spp(), stats,
+                      seconds(t0, std::chrono::steady_clock::now()), seconds(t0, t1),
+                      seconds(t1, t2));
     }
     if (a.stats) print_stats(*scene, stats);
     return 0;
+}
+
+// Scene, output and sampling.
+void add_output_options(CLI::App& cmd, RenderArgs& a) {
+    cmd.add_option("scene", a.scene, "Scene file (.pbrt)")->required();
+    cmd.add_option("-o,--output", a.output,
+                   "Output image: .exr or .pfm (float, linear), .png, .jpg or .tga (8-bit "
+                   "sRGB); default: the Film's filename");
+    cmd.add_option("--spp", a.spp,
+                   "Samples per pixel, rounded to a square grid (5 renders 2x2 = 4, with a "
+                   "warning); 1 = the pixel centre")
+        ->check(CLI::Range(1, 1 << 20));
+    cmd.add_option("--threads", a.threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, 4096));
+    cmd.add_flag("--quiet", a.quiet, "No progress bar and no summary line");
+    cmd.add_option("--max-memory", a.max_memory,
+                   "Refuse, before rendering, a render that would take the process over "
+                   "this size (8G, 512M; default: the machine's memory)");
+    cmd.add_option("--resolution", a.resolution,
+                   "Film resolution WxH, or W alone to keep the scene's aspect ratio (a "
+                   "quick preview of a big scene)");
+    cmd.add_option("--crop", a.crop,
+                   "Render only X0,X1,Y0,Y1 of the image: the Film's cropwindow, fractions "
+                   "of the width and height from the top left (replaces the scene's)");
+    cmd.add_flag("--stats", a.stats, "Print texture memory and lookup counts per filter");
+}
+
+// Footprints, filters and AOVs of image textures.
+void add_texture_options(CLI::App& cmd, RenderArgs& a) {
+    cmd.add_option("--lod", a.lod,
+                   "Footprint source for image textures: differentials (default, as pbrt-v3), "
+                   "cones, cones-aniso, cmam, or none (point sampling)");
+    cmd.add_option("--aov", a.aov,
+                   "Write an AOV instead of radiance: footprint (major, minor axis in texels, MIP "
+                   "level; .exr or .pfm; with --lod cmam the region the CMAM built) or texture "
+                   "(unlit filtered texture of the first non-specular hit)");
+    cmd.add_option("--filter", a.filter,
+                   "Filter for image textures: " + texture::filter_names() +
+                       " (default: the scene's; area is the exact mean over each sample's "
+                       "footprint)");
+}
+
+void add_cmam_options(CLI::App& cmd, RenderArgs& a) {
+    cmd.add_option("--cmam-miss", a.cmam_miss, "CMAM, no matching sample: average or point")
+        ->capture_default_str();
+    cmd.add_option("--cmam-tags", a.cmam_tags, "CMAM ray IDs: scanline or pixel")
+        ->capture_default_str();
+    cmd.add_option("--cmam-ellipse", a.cmam_ellipse,
+                   "CMAM EWA reading of two vectors: conjugate, orthogonal or orthogonalised")
+        ->capture_default_str();
+    cmd.add_option("--cmam-sat-miss", a.cmam_sat_miss,
+                   "CMAM SAT on a miss: average or paper-literal")
+        ->capture_default_str();
+    cmd.add_option("--cmam-adjacency", a.cmam_adjacency,
+                   "CMAM accepts only adjacent samples: on, or off (the paper's literal matching)")
+        ->capture_default_str();
+    cmd.add_flag("--cmam-2d", a.cmam_2d,
+                 "2-D CMAM: also use the sample of the pixel above (scanline tags), an "
+                 "improvement beyond the paper");
+    cmd.add_flag("--cmam-hull", a.cmam_hull,
+                 "CMAM convex hull weighting (paper section 4; pixel tags)");
+}
+
+void add_render_options(CLI::App& cmd, RenderArgs& a) {
+    add_output_options(cmd, a);
+    add_texture_options(cmd, a);
+    add_cmam_options(cmd, a);
+}
+
+}  // namespace
+
+Command add_render_command(CLI::App& app) {
+    return make_command(app, "render", "Render a pbrt-v3 scene", add_render_options, run_render);
 }
 
 }  // namespace cmam::app
