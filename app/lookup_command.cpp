@@ -18,7 +18,9 @@ namespace cmam::app {
 namespace {
 
 struct LookupArgs {
-    std::string image, uv, axes, points, filter = "ewa", wrap = "repeat";
+    std::string image, uv, axes, points;
+    texture::FilterKind filter = texture::FilterKind::Ewa;
+    texture::WrapMode wrap = texture::WrapMode::Repeat;
     double max_aniso = 8;
     bool json = false;
 };
@@ -121,19 +123,11 @@ void print_text(const LookupResult& r) {
 }
 
 int run_lookup(const LookupArgs& a) {
-    auto kind = texture::parse_filter(a.filter);
-    if (!kind)
-        throw UsageError("--filter: unknown filter \"" + a.filter + "\" (expected " +
-                         texture::filter_names() + ")");
-    auto wrap = texture::parse_wrap_mode(a.wrap);
-    if (!wrap)
-        throw UsageError("--wrap: unknown wrap mode \"" + a.wrap +
-                         "\" (expected repeat, clamp, black or mirror)");
-    LookupResult r{*kind, lookup_point(a), {}, {}, false};
+    LookupResult r{a.filter, lookup_point(a), {}, {}, false};
     if (r.kind == texture::FilterKind::Ewa && a.max_aniso > texture::kEwaMaxAnisotropy)
         std::cerr << "cmam: warning: --maxaniso " << a.max_aniso << " is above cmam's limit of "
                   << texture::kEwaMaxAnisotropy << ", which is used instead\n";
-    texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, *wrap));
+    texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, a.wrap));
     r.value = tex.lookup(r.at.u, r.at.v, r.at.footprint, {r.kind, a.max_aniso}, &r.info);
     r.region = r.at.footprint.kind != texture::Footprint::Kind::None &&
                r.kind != texture::FilterKind::Nearest && r.kind != texture::FilterKind::Bilinear &&
@@ -152,8 +146,10 @@ void add_lookup_options(CLI::App& cmd, LookupArgs& a) {
     cmd.add_option("--points", a.points,
                    "Footprint sample points U1,V1[,U2,V2[,U3,V3]], current first")
         ->excludes(axes);
-    cmd.add_option("--filter", a.filter, texture::filter_names())->capture_default_str();
-    cmd.add_option("--wrap", a.wrap, "repeat, clamp, black or mirror")->capture_default_str();
+    add_choice(cmd, "--filter", a.filter, texture::kFilterNames,
+               "Filter: " + texture::kFilterNames.list());
+    add_choice(cmd, "--wrap", a.wrap, texture::kWrapModeNames,
+               "Wrap mode: " + texture::kWrapModeNames.list());
     cmd.add_option("--maxaniso", a.max_aniso, "EWA maximum anisotropy")
         ->capture_default_str()
         ->check(CLI::Range(1.0, 1e6));

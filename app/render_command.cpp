@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "app/command.h"
 #include "app/common.h"
@@ -20,6 +21,14 @@ namespace cmam::app {
 
 namespace {
 
+// The AOVs --aov names; radiance (render::AovKind::None) is the option left out.
+constexpr texture::NameTable kAovNames{
+    texture::Named<render::AovKind>{render::AovKind::Footprint, "footprint"},
+    texture::Named{render::AovKind::Texture, "texture"}};
+// --cmam-adjacency: whether the CMAM accepts only adjacent samples.
+constexpr texture::NameTable kAdjacencyNames{texture::Named<bool>{true, "on"},
+                                             texture::Named{false, "off"}};
+
 struct RenderArgs {
     std::string scene;
     std::string output;
@@ -27,11 +36,15 @@ struct RenderArgs {
     int threads = 0;
     bool quiet = false;
     bool stats = false;
-    std::string lod, filter, cmam_miss = "average", cmam_tags = "scanline",
-                             cmam_ellipse = "conjugate", cmam_sat_miss = "average",
-                             cmam_adjacency = "on";
+    std::optional<render::FootprintMethod> lod;  // empty: the scene's
+    std::optional<texture::FilterKind> filter;   // empty: the scene's
+    std::optional<render::AovKind> aov;          // empty: radiance
+    texture::CmamMiss cmam_miss = texture::CmamMiss::Average;
+    render::TagPolicy cmam_tags = render::TagPolicy::Scanline;
+    texture::CmamEllipse cmam_ellipse = texture::CmamEllipse::Conjugate;
+    texture::CmamSatMiss cmam_sat_miss = texture::CmamSatMiss::Average;
+    bool cmam_adjacency = true;
     bool cmam_hull = false, cmam_2d = false;
-    std::string aov;
     std::string resolution, crop;
     std::string max_memory;  // empty: the machine's memory (render::memory_limit())
 };
@@ -169,37 +182,17 @@ void check_output_folder(const std::string& out) {
 render::BuildOptions build_options(const RenderArgs& a) {
     render::BuildOptions bo;
     bo.spp_override = a.spp;
-    if (!a.lod.empty()) {
-        bo.lod = render::parse_footprint_method(a.lod);
-        if (!bo.lod)
-            throw UsageError("--lod: unknown \"" + a.lod +
-                             "\" (expected none, differentials, cones, cones-aniso or cmam)");
-    }
-    if (!a.filter.empty()) {
-        bo.filter = texture::parse_filter(a.filter);
-        if (!bo.filter)
-            throw UsageError("--filter: unknown \"" + a.filter + "\" (expected " +
-                             texture::filter_names() + ")");
-    }
-    auto miss = texture::parse_cmam_miss(a.cmam_miss);
-    auto tags = render::parse_tag_policy(a.cmam_tags);
-    auto ell = texture::parse_cmam_ellipse(a.cmam_ellipse);
-    auto sat_miss = texture::parse_cmam_sat_miss(a.cmam_sat_miss);
-    if (!miss) throw UsageError("--cmam-miss: expected average or point");
-    if (!tags) throw UsageError("--cmam-tags: expected scanline or pixel");
-    if (!ell) throw UsageError("--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
-    if (!sat_miss) throw UsageError("--cmam-sat-miss: expected average or paper-literal");
-    if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
-        throw UsageError("--cmam-adjacency: expected on or off");
-    if (a.cmam_hull && *tags != render::TagPolicy::Pixel)
+    bo.lod = a.lod;
+    bo.filter = a.filter;
+    if (a.cmam_hull && a.cmam_tags != render::TagPolicy::Pixel)
         throw UsageError("--cmam-hull works per pixel: it needs --cmam-tags pixel");
-    bo.tags = *tags;
-    bo.cmam.miss = *miss;
-    bo.cmam.ellipse = *ell;
-    bo.cmam.sat_miss = *sat_miss;
-    bo.cmam.adjacent_only = a.cmam_adjacency == "on";
+    bo.tags = a.cmam_tags;
+    bo.cmam.miss = a.cmam_miss;
+    bo.cmam.ellipse = a.cmam_ellipse;
+    bo.cmam.sat_miss = a.cmam_sat_miss;
+    bo.cmam.adjacent_only = a.cmam_adjacency;
     bo.cmam.hull = a.cmam_hull;
-    if (a.cmam_2d && *tags != render::TagPolicy::Scanline)
+    if (a.cmam_2d && a.cmam_tags != render::TagPolicy::Scanline)
         throw UsageError(
             "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
     bo.cmam.two_d = a.cmam_2d;
@@ -238,13 +231,8 @@ int run_render(const RenderArgs& a) {
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     render::RenderOptions ro;
     ro.threads = a.threads;
-    if (a.aov == "footprint") {
-        ro.aov = render::AovKind::Footprint;
-        check_footprint_aov(*scene, out);
-    } else if (a.aov == "texture")
-        ro.aov = render::AovKind::Texture;
-    else if (!a.aov.empty())
-        throw UsageError("--aov: unknown \"" + a.aov + "\" (expected footprint or texture)");
+    ro.aov = a.aov.value_or(render::AovKind::None);
+    if (ro.aov == render::AovKind::Footprint) check_footprint_aov(*scene, out);
     ro.progress = [&](int done, int total) { bar.update(done, total); };
     render::RenderStats stats;
     auto t1 = std::chrono::steady_clock::now();
@@ -290,33 +278,32 @@ void add_output_options(CLI::App& cmd, RenderArgs& a) {
 
 // Footprints, filters and AOVs of image textures.
 void add_texture_options(CLI::App& cmd, RenderArgs& a) {
-    cmd.add_option("--lod", a.lod,
-                   "Footprint source for image textures: differentials (default, as pbrt-v3), "
-                   "cones, cones-aniso, cmam, or none (point sampling)");
-    cmd.add_option("--aov", a.aov,
-                   "Write an AOV instead of radiance: footprint (major, minor axis in texels, MIP "
-                   "level; .exr or .pfm; with --lod cmam the region the CMAM built) or texture "
-                   "(unlit filtered texture of the first non-specular hit)");
-    cmd.add_option("--filter", a.filter,
-                   "Filter for image textures: " + texture::filter_names() +
-                       " (default: the scene's; area is the exact mean over each sample's "
-                       "footprint)");
+    add_choice(cmd, "--lod", a.lod, render::kFootprintMethodNames,
+               "Footprint source for image textures: " + render::kFootprintMethodNames.list() +
+                   " (default: differentials, as pbrt-v3; none point-samples)");
+    add_choice(cmd, "--aov", a.aov, kAovNames,
+               "Write an AOV instead of radiance, " + kAovNames.list() +
+                   ": footprint gives the major and minor axis in texels and the MIP level (.exr "
+                   "or .pfm; with --lod cmam the region the CMAM built), texture the unlit "
+                   "filtered texture of the first non-specular hit");
+    add_choice(cmd, "--filter", a.filter, texture::kFilterNames,
+               "Filter for image textures: " + texture::kFilterNames.list() +
+                   " (default: the scene's; area is the exact mean over each sample's "
+                   "footprint)");
 }
 
 void add_cmam_options(CLI::App& cmd, RenderArgs& a) {
-    cmd.add_option("--cmam-miss", a.cmam_miss, "CMAM, no matching sample: average or point")
-        ->capture_default_str();
-    cmd.add_option("--cmam-tags", a.cmam_tags, "CMAM ray IDs: scanline or pixel")
-        ->capture_default_str();
-    cmd.add_option("--cmam-ellipse", a.cmam_ellipse,
-                   "CMAM EWA reading of two vectors: conjugate, orthogonal or orthogonalised")
-        ->capture_default_str();
-    cmd.add_option("--cmam-sat-miss", a.cmam_sat_miss,
-                   "CMAM SAT on a miss: average or paper-literal")
-        ->capture_default_str();
-    cmd.add_option("--cmam-adjacency", a.cmam_adjacency,
-                   "CMAM accepts only adjacent samples: on, or off (the paper's literal matching)")
-        ->capture_default_str();
+    add_choice(cmd, "--cmam-miss", a.cmam_miss, texture::kCmamMissNames,
+               "CMAM, no matching sample: " + texture::kCmamMissNames.list());
+    add_choice(cmd, "--cmam-tags", a.cmam_tags, render::kTagPolicyNames,
+               "CMAM ray IDs: " + render::kTagPolicyNames.list());
+    add_choice(cmd, "--cmam-ellipse", a.cmam_ellipse, texture::kCmamEllipseNames,
+               "CMAM EWA reading of two vectors: " + texture::kCmamEllipseNames.list());
+    add_choice(cmd, "--cmam-sat-miss", a.cmam_sat_miss, texture::kCmamSatMissNames,
+               "CMAM SAT on a miss: " + texture::kCmamSatMissNames.list());
+    add_choice(cmd, "--cmam-adjacency", a.cmam_adjacency, kAdjacencyNames,
+               "CMAM accepts only adjacent samples: " + kAdjacencyNames.list() +
+                   " (off: the paper's literal matching)");
     cmd.add_flag("--cmam-2d", a.cmam_2d,
                  "2-D CMAM: also use the sample of the pixel above (scanline tags), an "
                  "improvement beyond the paper");
