@@ -1,3 +1,4 @@
+// cmam render: a scene to an image, with the command line's overrides of the scene.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
