@@ -23,12 +23,12 @@ namespace cmam::app {
 namespace {
 
 // The AOVs --aov names; radiance (render::AovKind::None) is the option left out.
-constexpr texture::NameTable kAovNames{
-    texture::Named<render::AovKind>{render::AovKind::Footprint, "footprint"},
-    texture::Named{render::AovKind::Texture, "texture"}};
+using AovName = texture::Named<render::AovKind>;
+constexpr texture::NameTable kAovNames{AovName{render::AovKind::Footprint, "footprint"},
+                                       AovName{render::AovKind::Texture, "texture"}};
 // --cmam-adjacency: whether the CMAM accepts only adjacent samples.
 constexpr texture::NameTable kAdjacencyNames{texture::Named<bool>{true, "on"},
-                                             texture::Named{false, "off"}};
+                                             texture::Named<bool>{false, "off"}};
 
 struct RenderArgs {
     std::string scene;
