@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
-#include <stdexcept>
 
 #include "eval/evaluation.h"
 
@@ -38,7 +37,7 @@ std::vector<double> parse_numbers(const std::string& text, const char* flag) {
         char* end = nullptr;
         double v = std::strtod(item.c_str(), &end);
         if (item.empty() || end != item.c_str() + item.size())
-            throw std::invalid_argument(std::string(flag) + ": \"" + item + "\" is not a number");
+            throw UsageError(std::string(flag) + ": \"" + item + "\" is not a number");
         out.push_back(v);
         if (comma == std::string::npos) break;
         pos = comma + 1;
@@ -67,6 +66,28 @@ std::string format_duration(double s) {
         std::snprintf(buf, sizeof buf, "%.1fs", s);
     else
         std::snprintf(buf, sizeof buf, "%dm%02ds", int(s) / 60, int(s) % 60);
+    return buf;
+}
+
+std::string json_escape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+            out += buf;
+            continue;
+        }
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out;
+}
+
+std::string json_number(double x) {
+    if (!std::isfinite(x)) return "null";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", x);
     return buf;
 }
 

@@ -1,4 +1,5 @@
-// cmam — what the commands share: messages, lists on the command line, the progress bar.
+// cmam — what the commands share: messages, the usage error, lists on the command line, JSON
+// values, the progress bar.
 // Warnings and errors have one form: "FILE:LINE:COL: warning: ..." when they point into a scene
 // file, "cmam: warning: ..." (or "cmam: error: ...") otherwise.
 #pragma once
@@ -6,10 +7,18 @@
 #include <chrono>
 #include <cstdio>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace cmam::app {
+
+/// The app's one exception type for a bad command-line value (an option, a path, an image given
+/// to compare); printed as "cmam: error: MESSAGE", the message naming the option or the file.
+class UsageError : public std::invalid_argument {
+  public:
+    using std::invalid_argument::invalid_argument;
+};
 
 /// Prints a warning, located ("file:line:col: warning: ...") or not ("warning: ...", printed
 /// with the "cmam: " prefix).
@@ -19,13 +28,20 @@ void warn(const std::string& message);
 /// --spp N renders a square grid of k x k strata: says so when k * k != N.
 void note_spp_rounding(int spp, const char* flag = "--spp");
 
-/// Comma-separated numbers; throws std::invalid_argument naming `flag` on anything else.
+/// Comma-separated numbers; throws UsageError naming `flag` on anything else.
 std::vector<double> parse_numbers(const std::string& text, const char* flag);
 /// Comma-separated items, empty ones dropped.
 std::vector<std::string> split_list(const std::string& s);
 std::string join(const std::vector<std::string>& v, const char* sep = ", ");
 
 std::string format_duration(double seconds);
+
+/// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters as
+/// \u00XX.
+std::string json_escape(const std::string& s);
+/// A number as JSON has it: JSON has no NaN or infinity, so those are null (a NaN --uv given to
+/// see the fallback, an infinite PSNR of identical images).
+std::string json_number(double x);
 
 class ProgressBar {
   public:

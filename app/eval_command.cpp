@@ -1,25 +1,38 @@
-#include "app/eval_command.h"
-
+// cmam eval: every footprint method against a ground truth, and the report.
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
-#include <stdexcept>
+#include <string>
+#include <vector>
 
+#include "app/command.h"
 #include "app/common.h"
 #include "eval/evaluation.h"
 #include "pbrt/error.h"
 
 namespace cmam::app {
 
+namespace {
+
+struct EvalArgs {
+    std::vector<std::string> scenes;
+    std::string methods, spp = "1,4,16", out = "eval-out";
+    int reference_spp = 1024, timing_runs = 1;
+    bool quiet = false;
+};
+
+// What a method name is, from the evaluation's own tables (for --help and errors).
 std::string method_syntax() {
     return "none, or SOURCE+FILTER with SOURCE one of " + join(eval::method_sources()) +
            " and FILTER one of " + join(eval::method_filters());
 }
 
-int run_eval(const EvalArgs& a) {
+// The evaluation's options from the command line's: methods and sample counts checked.
+eval::EvalOptions eval_options(const EvalArgs& a) {
     eval::EvalOptions o;
     o.scenes = a.scenes;
     o.reference_spp = a.reference_spp;
@@ -28,22 +41,26 @@ int run_eval(const EvalArgs& a) {
          a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
         auto m = eval::parse_method(name);
         if (!m)
-            throw std::invalid_argument("--methods: unknown method \"" + name + "\" (" +
-                                        method_syntax() + ")");
+            throw UsageError("--methods: unknown method \"" + name + "\" (" + method_syntax() +
+                             ")");
         o.methods.push_back(*m);
     }
     o.spp.clear();
     for (const std::string& v : split_list(a.spp)) {
         char* end = nullptr;
         long n = std::strtol(v.c_str(), &end, 10);
-        if (*end || n < 1)
-            throw std::invalid_argument("--spp: \"" + v + "\" is not a positive integer");
+        if (*end || n < 1) throw UsageError("--spp: \"" + v + "\" is not a positive integer");
         o.spp.push_back(static_cast<int>(n));
         note_spp_rounding(o.spp.back());
     }
-    if (o.spp.empty()) throw std::invalid_argument("--spp: give at least one sample count");
+    if (o.spp.empty()) throw UsageError("--spp: give at least one sample count");
     note_spp_rounding(a.reference_spp, "--reference-spp");
     o.timing_runs = a.timing_runs;
+    return o;
+}
+
+int run_eval(const EvalArgs& a) {
+    eval::EvalOptions o = eval_options(a);
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     o.progress = [&](int done, int total, const std::string&) { bar.update(done, total); };
     // Warnings and failures interrupt the progress bar on a line of their own.
@@ -75,6 +92,34 @@ int run_eval(const EvalArgs& a) {
         return 1;
     }
     return 0;
+}
+
+void add_eval_options(CLI::App& cmd, EvalArgs& a) {
+    cmd.add_option("scenes", a.scenes, "Scene files (.pbrt)")->required();
+    cmd.add_option("--methods", a.methods,
+                   "Comma-separated methods: " + method_syntax() +
+                       ". Default: " + join(eval::default_methods(), ","));
+    cmd.add_option("--spp", a.spp, "Comma-separated samples per pixel")->capture_default_str();
+    cmd.add_option("--reference-spp", a.reference_spp, "Ground-truth samples per pixel")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1 << 20));
+    cmd.add_option("--timing-runs", a.timing_runs,
+                   "Renders timed per method and sample count; the report gives their median "
+                   "and range (1: single runs, marked as such)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 100));
+    cmd.add_option("-o,--output", a.out,
+                   "Output directory; a report already there is replaced (its own files only)")
+        ->capture_default_str();
+    cmd.add_flag("--quiet", a.quiet, "No progress bar and no summary line");
+}
+
+}  // namespace
+
+Command add_eval_command(CLI::App& app) {
+    return make_command(app, "eval",
+                        "Compare footprint methods against a ground truth; write a report",
+                        add_eval_options, run_eval);
 }
 
 }  // namespace cmam::app

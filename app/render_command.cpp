@@ -1,14 +1,16 @@
-#include "app/render_command.h"
-
+// cmam render: a scene to an image, with the command line's overrides of the scene.
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <stdexcept>
+#include <memory>
+#include <optional>
 
+#include "app/command.h"
 #include "app/common.h"
 #include "pbrt/parser.h"
 #include "render/image_io.h"
@@ -19,6 +21,34 @@
 namespace cmam::app {
 
 namespace {
+
+// The AOVs --aov names; radiance (render::AovKind::None) is the option left out.
+using AovName = texture::Named<render::AovKind>;
+constexpr texture::NameTable kAovNames{AovName{render::AovKind::Footprint, "footprint"},
+                                       AovName{render::AovKind::Texture, "texture"}};
+// --cmam-adjacency: whether the CMAM accepts only adjacent samples.
+constexpr texture::NameTable kAdjacencyNames{texture::Named<bool>{true, "on"},
+                                             texture::Named<bool>{false, "off"}};
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    int spp = 0;
+    int threads = 0;
+    bool quiet = false;
+    bool stats = false;
+    std::optional<render::FootprintMethod> lod;  // empty: the scene's
+    std::optional<texture::FilterKind> filter;   // empty: the scene's
+    std::optional<render::AovKind> aov;          // empty: radiance
+    texture::CmamMiss cmam_miss = texture::CmamMiss::Average;
+    render::TagPolicy cmam_tags = render::TagPolicy::Scanline;
+    texture::CmamEllipse cmam_ellipse = texture::CmamEllipse::Conjugate;
+    texture::CmamSatMiss cmam_sat_miss = texture::CmamSatMiss::Average;
+    bool cmam_adjacency = true;
+    bool cmam_hull = false, cmam_2d = false;
+    std::string resolution, crop;
+    std::string max_memory;  // empty: the machine's memory (render::memory_limit())
+};
 
 pbrt::Param film_param(const char* type, const char* name, std::vector<double> values) {
     pbrt::Param p;
@@ -41,14 +71,13 @@ void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
     if (n == 1 && w > 0)
         h = std::max(1, static_cast<int>(std::lround(double(w) * yres / xres)));
     else if (!(n == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0))
-        throw std::invalid_argument("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text +
-                                    "\"");
+        throw UsageError("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text + "\"");
     if (w > render::kMaxFilmSide || h > render::kMaxFilmSide ||
         static_cast<long long>(w) * h > render::kMaxFilmPixels)
-        throw std::invalid_argument("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
-                                    " is above cmam's limits of " +
-                                    std::to_string(render::kMaxFilmSide) + " pixels a side and " +
-                                    std::to_string(render::kMaxFilmPixels) + " in all");
+        throw UsageError("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
+                         " is above cmam's limits of " + std::to_string(render::kMaxFilmSide) +
+                         " pixels a side and " + std::to_string(render::kMaxFilmPixels) +
+                         " in all");
     if (std::abs(double(w) / h - double(xres) / yres) > 1.0 / std::min(w, h))
         warn("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
              " has another aspect ratio than the scene's " + std::to_string(xres) + "x" +
@@ -62,12 +91,11 @@ void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
 // --crop x0,x1,y0,y1: the Film's cropwindow (fractions of the image, y down, as pbrt-v3); it
 // replaces the scene's.
 void override_crop(pbrt::SceneDesc& desc, const std::vector<double>& c) {
-    if (c.size() != 4) throw std::invalid_argument("--crop needs four numbers: X0,X1,Y0,Y1");
+    if (c.size() != 4) throw UsageError("--crop needs four numbers: X0,X1,Y0,Y1");
     for (double v : c)
         if (!(v >= 0 && v <= 1))
-            throw std::invalid_argument("--crop: values are fractions of the image, in [0, 1]");
-    if (!(c[0] < c[1] && c[2] < c[3]))
-        throw std::invalid_argument("--crop: needs X0 < X1 and Y0 < Y1");
+            throw UsageError("--crop: values are fractions of the image, in [0, 1]");
+    if (!(c[0] < c[1] && c[2] < c[3])) throw UsageError("--crop: needs X0 < X1 and Y0 < Y1");
     desc.film.params.add(film_param("float", "cropwindow", c));
 }
 
@@ -81,7 +109,7 @@ bool is_float_format(const std::string& path) {
 // none to report rather than write zeros.
 void check_footprint_aov(const render::Scene& scene, const std::string& out) {
     if (!is_float_format(out))
-        throw std::invalid_argument(
+        throw UsageError(
             "--aov footprint writes lengths in texels and MIP levels, "
             "which need a float image: use .exr or .pfm, not \"" +
             out + "\"");
@@ -92,12 +120,11 @@ void check_footprint_aov(const render::Scene& scene, const std::string& out) {
         footprint = footprint || n.lod != render::FootprintMethod::None;
     }
     if (!image)
-        throw std::invalid_argument(
+        throw UsageError(
             "--aov footprint measures image textures, and this scene has none (procedural "
             "textures such as checkerboard have no texel size)");
     if (!footprint)
-        throw std::invalid_argument(
-            "--aov footprint: --lod none point-samples, there is no footprint");
+        throw UsageError("--aov footprint: --lod none point-samples, there is no footprint");
 }
 
 void print_stats(const render::Scene& scene, const render::RenderStats& stats) {
@@ -143,106 +170,158 @@ void check_output_folder(const std::string& out) {
     if (dir.empty()) dir = ".";
     std::error_code ec;
     if (!fs::exists(dir, ec))
-        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
-                                    "\" does not exist");
+        throw UsageError("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                         "\" does not exist");
     if (!fs::is_directory(dir, ec))
-        throw std::invalid_argument("cannot write \"" + out + "\": \"" + dir.string() +
-                                    "\" is not a folder");
+        throw UsageError("cannot write \"" + out + "\": \"" + dir.string() + "\" is not a folder");
     if (::access(dir.c_str(), W_OK) != 0)
-        throw std::invalid_argument("cannot write \"" + out + "\": the folder \"" + dir.string() +
-                                    "\" is not writable");
+        throw UsageError("cannot write \"" + out + "\": the folder \"" + dir.string() +
+                         "\" is not writable");
 }
 
-}  // namespace
+// The scene's build options as the command line overrides them.
+render::BuildOptions build_options(const RenderArgs& a) {
+    render::BuildOptions bo;
+    bo.spp_override = a.spp;
+    bo.lod = a.lod;
+    bo.filter = a.filter;
+    if (a.cmam_hull && a.cmam_tags != render::TagPolicy::Pixel)
+        throw UsageError("--cmam-hull works per pixel: it needs --cmam-tags pixel");
+    bo.tags = a.cmam_tags;
+    bo.cmam.miss = a.cmam_miss;
+    bo.cmam.ellipse = a.cmam_ellipse;
+    bo.cmam.sat_miss = a.cmam_sat_miss;
+    bo.cmam.adjacent_only = a.cmam_adjacency;
+    bo.cmam.hull = a.cmam_hull;
+    if (a.cmam_2d && a.cmam_tags != render::TagPolicy::Scanline)
+        throw UsageError(
+            "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
+    bo.cmam.two_d = a.cmam_2d;
+    return bo;
+}
+
+// The summary line: wall time, split into loading (parsing, images and acceleration structures;
+// pyramids and tables are built on first use, inside the render) and rendering, and the rays.
+void print_summary(const std::string& out, const render::Framebuffer& fb, int spp,
+                   const render::RenderStats& stats, double wall_s, double load_s,
+                   double render_s) {
+    uint64_t rays = stats.total_rays();
+    std::fprintf(stderr,
+                 "%s: %dx%d, %d spp, wall %.3fs (load %.3fs, render %.3fs), %llu rays, "
+                 "%.2f Mrays/s\n",
+                 out.c_str(), fb.width, fb.height, spp, wall_s, load_s, render_s,
+                 (unsigned long long)rays, render_s > 0 ? rays / render_s / 1e6 : 0.0);
+}
 
 int run_render(const RenderArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
     if (!a.resolution.empty()) override_resolution(desc, a.resolution);
     if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
-    render::BuildOptions bo;
-    bo.spp_override = a.spp;
     note_spp_rounding(a.spp);
-    if (!a.lod.empty()) {
-        bo.lod = render::parse_footprint_method(a.lod);
-        if (!bo.lod)
-            throw std::invalid_argument(
-                "--lod: unknown \"" + a.lod +
-                "\" (expected none, differentials, cones, cones-aniso or cmam)");
-    }
-    if (!a.filter.empty()) {
-        bo.filter = texture::parse_filter(a.filter);
-        if (!bo.filter)
-            throw std::invalid_argument("--filter: unknown \"" + a.filter + "\" (expected " +
-                                        texture::filter_names() + ")");
-    }
-    auto miss = texture::parse_cmam_miss(a.cmam_miss);
-    auto tags = render::parse_tag_policy(a.cmam_tags);
-    auto ell = texture::parse_cmam_ellipse(a.cmam_ellipse);
-    auto sat_miss = texture::parse_cmam_sat_miss(a.cmam_sat_miss);
-    if (!miss) throw std::invalid_argument("--cmam-miss: expected average or point");
-    if (!tags) throw std::invalid_argument("--cmam-tags: expected scanline or pixel");
-    if (!ell)
-        throw std::invalid_argument(
-            "--cmam-ellipse: expected conjugate, orthogonal or orthogonalised");
-    if (!sat_miss)
-        throw std::invalid_argument("--cmam-sat-miss: expected average or paper-literal");
-    if (a.cmam_adjacency != "on" && a.cmam_adjacency != "off")
-        throw std::invalid_argument("--cmam-adjacency: expected on or off");
-    if (a.cmam_hull && *tags != render::TagPolicy::Pixel)
-        throw std::invalid_argument("--cmam-hull works per pixel: it needs --cmam-tags pixel");
-    bo.tags = *tags;
-    bo.cmam.miss = *miss;
-    bo.cmam.ellipse = *ell;
-    bo.cmam.sat_miss = *sat_miss;
-    bo.cmam.adjacent_only = a.cmam_adjacency == "on";
-    bo.cmam.hull = a.cmam_hull;
-    if (a.cmam_2d && *tags != render::TagPolicy::Scanline)
-        throw std::invalid_argument(
-            "--cmam-2d finds the pixel above through scanline tags: use --cmam-tags scanline");
-    bo.cmam.two_d = a.cmam_2d;
+    const render::BuildOptions bo = build_options(a);
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
     check_output_folder(out);  // before rendering: a long render is not lost to a typo
     std::optional<std::size_t> max_memory;
     if (!a.max_memory.empty() && !(max_memory = render::parse_bytes(a.max_memory)))
-        throw std::invalid_argument("--max-memory: expected a size such as 8G or 512M, not \"" +
-                                    a.max_memory + "\"");
+        throw UsageError("--max-memory: expected a size such as 8G or 512M, not \"" + a.max_memory +
+                         "\"");
     render::check_render_memory(*scene, max_memory);  // before rendering, with the sizes
 
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     render::RenderOptions ro;
     ro.threads = a.threads;
-    if (a.aov == "footprint") {
-        ro.aov = render::AovKind::Footprint;
-        check_footprint_aov(*scene, out);
-    } else if (a.aov == "texture")
-        ro.aov = render::AovKind::Texture;
-    else if (!a.aov.empty())
-        throw std::invalid_argument("--aov: unknown \"" + a.aov +
-                                    "\" (expected footprint or texture)");
+    ro.aov = a.aov.value_or(render::AovKind::None);
+    if (ro.aov == render::AovKind::Footprint) check_footprint_aov(*scene, out);
     ro.progress = [&](int done, int total) { bar.update(done, total); };
     render::RenderStats stats;
     auto t1 = std::chrono::steady_clock::now();
     render::Framebuffer fb = render::render(*scene, ro, &stats);
     auto t2 = std::chrono::steady_clock::now();
     render::write_image(out, fb.width, fb.height, fb.rgb, fb.channel_names);
-    // Load: parsing, images and acceleration structures (pyramids and tables are built on
-    // first use, inside the render).
-    double load_s = std::chrono::duration<double>(t1 - t0).count();
-    double render_s = std::chrono::duration<double>(t2 - t1).count();
-    double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!a.quiet) {
-        uint64_t rays = stats.total_rays();
-        std::fprintf(stderr,
-                     "%s: %dx%d, %d spp, wall %.3fs (load %.3fs, render %.3fs), %llu rays, "
-                     "%.2f Mrays/s\n",
-                     out.c_str(), fb.width, fb.height, scene->sampler.spp(), wall_s, load_s,
-                     render_s, (unsigned long long)rays,
-                     render_s > 0 ? rays / render_s / 1e6 : 0.0);
+        const auto seconds = [](auto from, auto to) {
+            return std::chrono::duration<double>(to - from).count();
+        };
+        print_summary(out, fb, scene->sampler.spp(), stats,
+                      seconds(t0, std::chrono::steady_clock::now()), seconds(t0, t1),
+                      seconds(t1, t2));
     }
     if (a.stats) print_stats(*scene, stats);
     return 0;
+}
+
+// Scene, output and sampling.
+void add_output_options(CLI::App& cmd, RenderArgs& a) {
+    cmd.add_option("scene", a.scene, "Scene file (.pbrt)")->required();
+    cmd.add_option("-o,--output", a.output,
+                   "Output image: .exr or .pfm (float, linear), .png, .jpg or .tga (8-bit "
+                   "sRGB); default: the Film's filename");
+    cmd.add_option("--spp", a.spp,
+                   "Samples per pixel, rounded to a square grid (5 renders 2x2 = 4, with a "
+                   "warning); 1 = the pixel centre")
+        ->check(CLI::Range(1, 1 << 20));
+    cmd.add_option("--threads", a.threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, 4096));
+    cmd.add_flag("--quiet", a.quiet, "No progress bar and no summary line");
+    cmd.add_option("--max-memory", a.max_memory,
+                   "Refuse, before rendering, a render that would take the process over "
+                   "this size (8G, 512M; default: the machine's memory)");
+    cmd.add_option("--resolution", a.resolution,
+                   "Film resolution WxH, or W alone to keep the scene's aspect ratio (a "
+                   "quick preview of a big scene)");
+    cmd.add_option("--crop", a.crop,
+                   "Render only X0,X1,Y0,Y1 of the image: the Film's cropwindow, fractions "
+                   "of the width and height from the top left (replaces the scene's)");
+    cmd.add_flag("--stats", a.stats, "Print texture memory and lookup counts per filter");
+}
+
+// Footprints, filters and AOVs of image textures.
+void add_texture_options(CLI::App& cmd, RenderArgs& a) {
+    add_choice(cmd, "--lod", a.lod, render::kFootprintMethodNames,
+               "Footprint source for image textures: " + render::kFootprintMethodNames.list() +
+                   " (default: differentials, as pbrt-v3; none point-samples)");
+    add_choice(cmd, "--aov", a.aov, kAovNames,
+               "Write an AOV instead of radiance, " + kAovNames.list() +
+                   ": footprint gives the major and minor axis in texels and the MIP level (.exr "
+                   "or .pfm; with --lod cmam the region the CMAM built), texture the unlit "
+                   "filtered texture of the first non-specular hit");
+    add_choice(cmd, "--filter", a.filter, texture::kFilterNames,
+               "Filter for image textures: " + texture::kFilterNames.list() +
+                   " (default: the scene's; area is the exact mean over each sample's "
+                   "footprint)");
+}
+
+void add_cmam_options(CLI::App& cmd, RenderArgs& a) {
+    add_choice(cmd, "--cmam-miss", a.cmam_miss, texture::kCmamMissNames,
+               "CMAM, no matching sample: " + texture::kCmamMissNames.list());
+    add_choice(cmd, "--cmam-tags", a.cmam_tags, render::kTagPolicyNames,
+               "CMAM ray IDs: " + render::kTagPolicyNames.list());
+    add_choice(cmd, "--cmam-ellipse", a.cmam_ellipse, texture::kCmamEllipseNames,
+               "CMAM EWA reading of two vectors: " + texture::kCmamEllipseNames.list());
+    add_choice(cmd, "--cmam-sat-miss", a.cmam_sat_miss, texture::kCmamSatMissNames,
+               "CMAM SAT on a miss: " + texture::kCmamSatMissNames.list());
+    add_choice(cmd, "--cmam-adjacency", a.cmam_adjacency, kAdjacencyNames,
+               "CMAM accepts only adjacent samples: " + kAdjacencyNames.list() +
+                   " (off: the paper's literal matching)");
+    cmd.add_flag("--cmam-2d", a.cmam_2d,
+                 "2-D CMAM: also use the sample of the pixel above (scanline tags), an "
+                 "improvement beyond the paper");
+    cmd.add_flag("--cmam-hull", a.cmam_hull,
+                 "CMAM convex hull weighting (paper section 4; pixel tags)");
+}
+
+void add_render_options(CLI::App& cmd, RenderArgs& a) {
+    add_output_options(cmd, a);
+    add_texture_options(cmd, a);
+    add_cmam_options(cmd, a);
+}
+
+}  // namespace
+
+Command add_render_command(CLI::App& app) {
+    return make_command(app, "render", "Render a pbrt-v3 scene", add_render_options, run_render);
 }
 
 }  // namespace cmam::app

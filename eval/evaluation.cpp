@@ -1,15 +1,19 @@
 #include "eval/evaluation.h"
 
+#include <cmam/texture/filter.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "eval/metrics.h"
 #include "eval/report.h"
 #include "pbrt/parser.h"
+#include "render/footprint/method.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
 
@@ -23,61 +27,71 @@ const char* renderer_version() {
 
 namespace {
 
-// The footprint sources of method names: "SOURCE+FILTER".
+// The footprint sources of method names, "SOURCE+FILTER": a footprint method's name
+// (render::kFootprintMethodNames) and a variant of its settings, "cmam-literal" say.
 struct Source {
-    const char* name;
     render::FootprintMethod lod;
+    const char* variant;
     void (*adjust)(render::BuildOptions&);  // may be null
+
+    std::string name() const {
+        return std::string(render::kFootprintMethodNames.name(lod)) + variant;
+    }
 };
 const Source kSources[] = {
-    {"differentials", render::FootprintMethod::Differentials, nullptr},
-    {"cones", render::FootprintMethod::Cones, nullptr},
-    {"cones-aniso", render::FootprintMethod::ConesAniso, nullptr},
+    {render::FootprintMethod::Differentials, "", nullptr},
+    {render::FootprintMethod::Cones, "", nullptr},
+    {render::FootprintMethod::ConesAniso, "", nullptr},
     // Paper mode: scanline tags, average on a miss, conjugate ellipse.
-    {"cmam", render::FootprintMethod::Cmam, nullptr},
-    {"cmam-literal", render::FootprintMethod::Cmam,
+    {render::FootprintMethod::Cmam, "", nullptr},
+    {render::FootprintMethod::Cmam, "-literal",
      [](render::BuildOptions& b) { b.cmam.adjacent_only = false; }},
-    {"cmam-point", render::FootprintMethod::Cmam,
+    {render::FootprintMethod::Cmam, "-point",
      [](render::BuildOptions& b) { b.cmam.miss = texture::CmamMiss::Point; }},
-    {"cmam-pixel-hull", render::FootprintMethod::Cmam,
+    {render::FootprintMethod::Cmam, "-pixel-hull",
      [](render::BuildOptions& b) {
          b.tags = render::TagPolicy::Pixel;
          b.cmam.hull = true;
      }},
-    {"cmam2d", render::FootprintMethod::Cmam, [](render::BuildOptions& b) { b.cmam.two_d = true; }},
+    {render::FootprintMethod::Cmam, "2d", [](render::BuildOptions& b) { b.cmam.two_d = true; }},
 };
+
+// The filters a method may end with: every filter but nearest (no footprint to filter).
+std::optional<texture::FilterKind> parse_method_filter(std::string_view name) {
+    auto f = texture::kFilterNames.parse(name);
+    if (f == texture::FilterKind::Nearest) return std::nullopt;
+    return f;
+}
 
 }  // namespace
 
 std::vector<std::string> method_sources() {
     std::vector<std::string> out;
-    for (const Source& s : kSources) out.push_back(s.name);
+    for (const Source& s : kSources) out.push_back(s.name());
     return out;
 }
 
 std::vector<std::string> method_filters() {
     std::vector<std::string> out;
-    for (int k = 0; k < texture::kFilterKinds; ++k)
-        if (texture::FilterKind(k) != texture::FilterKind::Nearest)
-            out.emplace_back(texture::to_string(texture::FilterKind(k)));
+    for (const std::string& name : texture::kFilterNames.names())
+        if (parse_method_filter(name)) out.push_back(name);
     return out;
 }
 
 std::optional<Method> parse_method(const std::string& name) {
     Method m;
     m.name = name;
-    if (name == "none") {
+    if (render::kFootprintMethodNames.parse(name) == render::FootprintMethod::None) {
         m.build.lod = render::FootprintMethod::None;
         return m;
     }
     auto plus = name.find('+');
     if (plus == std::string::npos) return std::nullopt;
-    std::string source = name.substr(0, plus), filter = name.substr(plus + 1);
-    auto f = texture::parse_filter(filter);
-    if (!f || *f == texture::FilterKind::Nearest) return std::nullopt;
-    m.build.filter = *f;
+    const std::string source = name.substr(0, plus);
+    m.build.filter = parse_method_filter(std::string_view(name).substr(plus + 1));
+    if (!m.build.filter) return std::nullopt;
     for (const Source& s : kSources)
-        if (source == s.name) {
+        if (source == s.name()) {
             m.build.lod = s.lod;
             if (s.adjust) s.adjust(m.build);
             return m;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/error.h"
 #include "render/scene.h"
 
 namespace cmam::eval {
@@ -22,7 +23,8 @@ struct Method {
 /// cones+F; cones-aniso+F; cmam+F (paper mode: scanline tags, average miss, conjugate
 /// ellipse); cmam-literal+F (no adjacency check); cmam-point+F (point sample on a miss);
 /// cmam-pixel-hull+F (pixel tags with convex hull weighting); cmam2d+F (the 2-D CMAM);
-/// F in bilinear, trilinear, sat, ewa, area.
+/// F a filter of texture::kFilterNames other than nearest. The footprint method and the
+/// filter are read with their name tables.
 std::optional<Method> parse_method(const std::string& name);
 /// The default list of the evaluation.
 std::vector<std::string> default_methods();

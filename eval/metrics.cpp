@@ -3,17 +3,26 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
+
+#include "eval/error.h"
 
 namespace cmam::eval {
 
+namespace {
+
+void require_same_size(const std::vector<float>& ref, const std::vector<float>& img) {
+    if (ref.size() != img.size() || ref.size() % 3 != 0)
+        throw EvalError("images differ in size (" + std::to_string(ref.size() / 3) + " vs " +
+                        std::to_string(img.size() / 3) + " pixels)");
+}
+
+}  // namespace
+
 ErrorStats compare(const std::vector<float>& ref, const std::vector<float>& img,
                    const std::vector<bool>* mask) {
-    if (ref.size() != img.size() || ref.size() % 3 != 0)
-        throw std::invalid_argument("images differ in size (" + std::to_string(ref.size() / 3) +
-                                    " vs " + std::to_string(img.size() / 3) + " pixels)");
+    require_same_size(ref, img);
     if (mask && mask->size() * 3 != ref.size())
-        throw std::invalid_argument("mask size does not match the image");
+        throw EvalError("mask size does not match the image");
     double se = 0, sum = 0;
     std::size_t n = 0;
     for (std::size_t p = 0; p < ref.size() / 3; ++p) {
@@ -44,8 +53,9 @@ double luminance(const std::vector<float>& rgb, std::size_t p) {
 
 double ssim(const std::vector<float>& ref, const std::vector<float>& img, int w, int h,
             const std::vector<bool>* mask) {
-    if (ref.size() != img.size() || ref.size() != static_cast<std::size_t>(w) * h * 3)
-        throw std::invalid_argument("images differ in size");
+    require_same_size(ref, img);
+    if (ref.size() != static_cast<std::size_t>(w) * h * 3)
+        throw EvalError("images are not " + std::to_string(w) + "x" + std::to_string(h));
     const std::size_t n = static_cast<std::size_t>(w) * h;
     std::vector<double> x(n), y(n);
     for (std::size_t p = 0; p < n; ++p) {
@@ -92,7 +102,7 @@ double ssim(const std::vector<float>& ref, const std::vector<float>& img, int w,
 
 std::vector<bool> edge_mask(const std::vector<float>& ref, const std::vector<float>& img,
                             double rel, double abs_tol) {
-    if (ref.size() != img.size()) throw std::invalid_argument("images differ in size");
+    require_same_size(ref, img);
     std::vector<bool> m(ref.size() / 3, true);
     for (std::size_t p = 0; p < m.size(); ++p)
         for (int c = 0; c < 3; ++c) {
@@ -114,7 +124,7 @@ std::vector<unsigned char> to_srgb8(const std::vector<float>& rgb) {
 
 std::vector<unsigned char> error_heatmap(const std::vector<float>& ref,
                                          const std::vector<float>& img, double scale) {
-    if (ref.size() != img.size()) throw std::invalid_argument("images differ in size");
+    require_same_size(ref, img);
     // A black-purple-orange-yellow-white ramp (inferno-like), 5 stops.
     static const double stops[5][3] = {
         {0, 0, 0.02}, {0.34, 0.06, 0.43}, {0.8, 0.25, 0.2}, {0.99, 0.7, 0.1}, {1, 1, 1}};

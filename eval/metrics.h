@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "eval/error.h"
+
 namespace cmam::eval {
 
 struct ErrorStats {
@@ -15,7 +17,7 @@ struct ErrorStats {
     std::size_t pixels = 0;
 };
 
-/// Throws std::invalid_argument when the sizes differ or the mask has the wrong size.
+/// Throws EvalError when the sizes differ or the mask has the wrong size.
 ErrorStats compare(const std::vector<float>& reference, const std::vector<float>& image,
                    const std::vector<bool>* mask = nullptr);
 

@@ -11,6 +11,8 @@
 #include <set>
 #include <sstream>
 
+#include "eval/error.h"
+
 namespace cmam::eval {
 
 namespace fs = std::filesystem;
@@ -29,7 +31,7 @@ void write_atomic(const fs::path& path, const std::string& text) {
         std::ofstream out(tmp, std::ios::binary);
         out << text;
         out.flush();
-        if (!out) throw std::runtime_error("cannot write \"" + path.string() + "\"");
+        if (!out) throw EvalError("cannot write \"" + path.string() + "\"");
     }
     fs::rename(tmp, path);
 }

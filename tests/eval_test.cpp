@@ -9,6 +9,7 @@
 
 #include "eval/evaluation.h"
 #include "eval/metrics.h"
+#include "eval_expect.h"
 #include "pbrt/parser.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
@@ -26,7 +27,16 @@ TEST(Metrics, RmsePsnrByHand) {
     std::vector<bool> mask = {false, true};
     EXPECT_NEAR(eval::compare(ref, img, &mask).rmse, 0.1, 1e-7);
     EXPECT_TRUE(std::isinf(eval::compare(ref, ref).psnr));
-    EXPECT_THROW(eval::compare(ref, {0, 0, 0}), std::invalid_argument);
+    EVAL_EXPECT_THROW_MSG(eval::compare(ref, {0, 0, 0}), eval::EvalError,
+                          "images differ in size (2 vs 1 pixels)");
+    std::vector<bool> short_mask = {true};
+    EVAL_EXPECT_THROW_MSG(eval::compare(ref, img, &short_mask), eval::EvalError,
+                          "mask size does not match the image");
+    EVAL_EXPECT_THROW_MSG(eval::ssim(ref, img, 2, 2), eval::EvalError, "images are not 2x2");
+    EVAL_EXPECT_THROW_MSG(eval::edge_mask(ref, {0, 0, 0}), eval::EvalError,
+                          "images differ in size (2 vs 1 pixels)");
+    EVAL_EXPECT_THROW_MSG(eval::error_heatmap(ref, {0, 0, 0}, 1), eval::EvalError,
+                          "images differ in size (2 vs 1 pixels)");
 }
 
 TEST(Metrics, SsimByHand) {
@@ -160,6 +170,30 @@ TEST(Eval, MethodNames) {
     for (const std::string& m : eval::default_methods()) EXPECT_TRUE(eval::parse_method(m)) << m;
     EXPECT_FALSE(eval::parse_method("cmam+nearest"));
     EXPECT_FALSE(eval::parse_method("magic+ewa"));
+    EXPECT_FALSE(eval::parse_method("none+ewa"));
+    EXPECT_FALSE(eval::parse_method("cmam"));
+    EXPECT_FALSE(eval::parse_method("cmam+"));
+    EXPECT_FALSE(eval::parse_method("+ewa"));
+    EXPECT_FALSE(eval::parse_method("Cmam+ewa"));
+    EXPECT_EQ(
+        eval::method_sources(),
+        (std::vector<std::string>{"differentials", "cones", "cones-aniso", "cmam", "cmam-literal",
+                                  "cmam-point", "cmam-pixel-hull", "cmam2d"}));
+    EXPECT_EQ(eval::method_filters(),
+              (std::vector<std::string>{"bilinear", "trilinear", "sat", "ewa", "area"}));
+    auto none = eval::parse_method("none");
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->build.lod, render::FootprintMethod::None);
+    EXPECT_FALSE(none->build.filter);
+    auto literal = eval::parse_method("cmam-literal+sat");
+    ASSERT_TRUE(literal);
+    EXPECT_EQ(literal->build.lod, render::FootprintMethod::Cmam);
+    EXPECT_EQ(literal->build.filter, texture::FilterKind::Sat);
+    EXPECT_FALSE(literal->build.cmam.adjacent_only);
+    auto cones = eval::parse_method("cones-aniso+area");
+    ASSERT_TRUE(cones);
+    EXPECT_EQ(cones->build.lod, render::FootprintMethod::ConesAniso);
+    EXPECT_EQ(cones->build.filter, texture::FilterKind::Area);
     for (const std::string& source : eval::method_sources())
         for (const std::string& filter : eval::method_filters())
             EXPECT_TRUE(eval::parse_method(source + "+" + filter)) << source << "+" << filter;

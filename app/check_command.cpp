@@ -1,0 +1,64 @@
+// cmam check: parse and build a scene, report its problems, render nothing.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/command.h"
+#include "app/common.h"
+#include "pbrt/parser.h"
+#include "render/scene.h"
+
+namespace cmam::app {
+
+namespace {
+
+struct CheckArgs {
+    std::string scene;
+};
+
+// Triangles and quadrics as rendered: an object's count once per instance.
+void count_primitives(const std::vector<std::unique_ptr<render::Primitive>>& prims,
+                      std::size_t* tris, std::size_t* quadrics) {
+    for (const auto& p : prims) {
+        if (p->kind == render::Primitive::Kind::Triangles)
+            *tris += p->indices.size() / 3;
+        else
+            ++*quadrics;
+    }
+}
+
+int run_check(const CheckArgs& a) {
+    pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
+    auto scene = render::build_scene(desc, {}, print_warning);
+    std::size_t tris = 0, quadrics = 0;
+    count_primitives(scene->primitives, &tris, &quadrics);
+    for (const auto& in : scene->instances)
+        count_primitives(scene->objects[in.object].primitives, &tris, &quadrics);
+    std::string instances;
+    if (!scene->instances.empty())
+        instances = " (" + std::to_string(scene->instances.size()) + " instances of " +
+                    std::to_string(scene->objects.size()) +
+                    (scene->objects.size() == 1 ? " object)" : " objects)");
+    std::printf(
+        "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics%s, %zu lights, %zu materials, "
+        "%zu textures\n",
+        a.scene.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris,
+        quadrics, instances.c_str(), scene->lights.size(), scene->materials.size(),
+        scene->textures.size());
+    return 0;
+}
+
+void add_check_options(CLI::App& cmd, CheckArgs& a) {
+    cmd.add_option("scene", a.scene, "Scene file (.pbrt)")->required();
+}
+
+}  // namespace
+
+Command add_check_command(CLI::App& app) {
+    return make_command(app, "check", "Parse and build a scene, report problems, render nothing",
+                        add_check_options, run_check);
+}
+
+}  // namespace cmam::app
