@@ -2,6 +2,7 @@
 // share (finite numbers and transforms, parameter locations, warnings).
 #include "render/build/builder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -110,6 +111,12 @@ double Builder::finite(const pbrt::FileLoc& loc, const std::string& name, double
 
 double Builder::finite_float(const Entity& e, const std::string& name, double def, bool positive) {
     return finite(loc_of(e, name), name, e.params.get_float(name, def), positive);
+}
+
+// The point3 parameter `name` (`def` when not given), every coordinate finite.
+std::array<double, 3> Builder::finite_point(const Entity& e, const std::string& name,
+                                            const std::array<double, 3>& def) {
+    return finite_values(e, name, e.params.get_point3(name, def));
 }
 
 // The inverse of `m`, or `message` at `loc` when m is singular.

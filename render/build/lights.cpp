@@ -43,95 +43,118 @@ std::shared_ptr<const EnvironmentMap> Builder::environment_map(const Entity& e,
     return env;
 }
 
-void Builder::light(const pbrt::LightDesc& d) {
-    const Entity& e = d.entity;
-    Light l;
+// pbrt-v3's "scale" of a light: the factor of its intensity or radiance.
+Rgb Builder::light_scale(const Entity& e) {
     Rgb scale(1);
     if (auto sc = e.params.get_rgb("scale")) scale = to_rgb(finite_values(e, "scale", *sc));
+    return scale;
+}
+
+// The light's intensity or radiance `name` (1 when not given) times its scale.
+Rgb Builder::light_intensity(const Entity& e, const char* name, const Rgb& scale) {
+    auto v = e.params.get_rgb(name);
+    return (v ? to_rgb(finite_values(e, name, *v)) : Rgb(1)) * scale;
+}
+
+void Builder::point_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
+    const Entity& e = d.entity;
+    l.type = Light::Type::Point;
+    l.intensity = light_intensity(e, "I", scale);
+    l.position = to_vec(d.world_from_light.apply_point(finite_point(e, "from", {0, 0, 0})));
+}
+
+void Builder::spot_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
+    const Entity& e = d.entity;
     const Mat4& m = d.world_from_light;
-    finite_transform(m, e.loc, "light");
-    auto intensity = [&](const char* name) {
-        auto v = e.params.get_rgb(name);
-        return (v ? to_rgb(finite_values(e, name, *v)) : Rgb(1)) * scale;
-    };
-    auto point = [&](const char* name, std::array<double, 3> def) {
-        return finite_values(e, name, e.params.get_point3(name, def));
-    };
-    if (e.type == "point") {
-        l.type = Light::Type::Point;
-        l.intensity = intensity("I");
-        l.position = to_vec(m.apply_point(point("from", {0, 0, 0})));
-    } else if (e.type == "spot") {
-        l.type = Light::Type::Spot;
-        l.intensity = intensity("I");
-        auto from = point("from", {0, 0, 0});
-        auto to = point("to", {0, 0, 1});
-        // pbrt-v3 names the falloff "conedeltaangle"; "conedelta" is read too (cmam read only
-        // that name before).
-        const char* delta_name = e.params.find("conedelta") && !e.params.find("conedeltaangle")
-                                     ? "conedelta"
-                                     : "conedeltaangle";
-        double cone = finite_float(e, "coneangle", 30), delta = finite_float(e, delta_name, 5);
-        l.position = to_vec(m.apply_point(from));
-        Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
-        if (length(axis) == 0) throw SceneError(e.loc, "spot light \"from\" and \"to\" coincide");
-        l.direction = normalize(axis);
-        l.cos_total = float(std::cos(cone * std::numbers::pi / 180));
-        l.cos_falloff_start = float(std::cos((cone - delta) * std::numbers::pi / 180));
-    } else if (e.type == "distant") {
-        l.type = Light::Type::Distant;
-        l.intensity = intensity("L");
-        auto from = point("from", {0, 0, 0});
-        auto to = point("to", {0, 0, 1});
-        Vec3 w = to_vec(m.apply_vector({from[0] - to[0], from[1] - to[1], from[2] - to[2]}));
-        if (length(w) == 0) throw SceneError(e.loc, "distant light \"from\" and \"to\" coincide");
-        l.direction = normalize(w);
-    } else if (e.type == "infinite") {
-        l.type = Light::Type::Infinite;
-        l.intensity = intensity("L");
-        if (const auto* mp = e.params.find("mapname")) {
-            l.env = environment_map(e, *mp, m);
-            // Escaping rays filter the map over their ray differentials' footprint, with
-            // the image textures' filter (EWA unless overridden); other footprint sources
-            // point-sample it as pbrt-v3 does.
-            l.env_footprint = !m_opts.lod || *m_opts.lod == FootprintMethod::Differentials;
-            if (l.env_footprint) m_scene->footprint_methods.add(FootprintMethod::Differentials);
-        }
-        e.params.get_int("samples",
-                         1);  // pbrt-v3's sample count hint; one sample per lookup here
-    } else if (e.type == "goniometric" || e.type == "projection") {
-        // A point light at the light's origin whose intensity follows an image.
-        l.type = e.type == "goniometric" ? Light::Type::Goniometric : Light::Type::Projection;
-        l.intensity = intensity("I");
-        l.position = to_vec(m.apply_point({0, 0, 0}));
-        auto img = std::make_shared<LightImage>();
-        img->kind =
-            e.type == "goniometric" ? LightImage::Kind::Goniometric : LightImage::Kind::Projection;
-        img->light_from_world = light_from_world(e, m);
-        if (e.type == "projection") {
-            const double fov = finite_float(e, "fov", 45);
-            if (!(fov > 0 && fov < 180))
-                throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
-            img->tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
-        }
-        if (const auto* mp = e.params.find("mapname")) {
-            img->image = light_image(e, *mp);
-            const auto& im = img->image->image();
-            const float aspect = float(im.width()) / float(im.height());
-            if (aspect > 1) {
-                img->screen[0] = -aspect, img->screen[1] = aspect;
-            } else {
-                img->screen[2] = -1 / aspect, img->screen[3] = 1 / aspect;
-            }
-            l.image = img;
-        } else if (e.type == "projection") {
-            l.image = img;  // without an image: 1 inside the square screen's frustum
-        }
-    } else {
-        throw SceneError(e.loc, "unsupported light " + q(e.type) +
-                                    " (supported: \"point\", \"spot\", \"distant\", "
-                                    "\"infinite\", \"goniometric\", \"projection\")");
+    l.type = Light::Type::Spot;
+    l.intensity = light_intensity(e, "I", scale);
+    auto from = finite_point(e, "from", {0, 0, 0});
+    auto to = finite_point(e, "to", {0, 0, 1});
+    // pbrt-v3 names the falloff "conedeltaangle"; "conedelta" is read too (cmam read only
+    // that name before).
+    const char* delta_name = e.params.find("conedelta") && !e.params.find("conedeltaangle")
+                                 ? "conedelta"
+                                 : "conedeltaangle";
+    double cone = finite_float(e, "coneangle", 30), delta = finite_float(e, delta_name, 5);
+    l.position = to_vec(m.apply_point(from));
+    Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
+    if (length(axis) == 0) throw SceneError(e.loc, "spot light \"from\" and \"to\" coincide");
+    l.direction = normalize(axis);
+    l.cos_total = float(std::cos(cone * std::numbers::pi / 180));
+    l.cos_falloff_start = float(std::cos((cone - delta) * std::numbers::pi / 180));
+}
+
+void Builder::distant_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
+    const Entity& e = d.entity;
+    l.type = Light::Type::Distant;
+    l.intensity = light_intensity(e, "L", scale);
+    auto from = finite_point(e, "from", {0, 0, 0});
+    auto to = finite_point(e, "to", {0, 0, 1});
+    Vec3 w = to_vec(
+        d.world_from_light.apply_vector({from[0] - to[0], from[1] - to[1], from[2] - to[2]}));
+    if (length(w) == 0) throw SceneError(e.loc, "distant light \"from\" and \"to\" coincide");
+    l.direction = normalize(w);
+}
+
+void Builder::infinite_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
+    const Entity& e = d.entity;
+    l.type = Light::Type::Infinite;
+    l.intensity = light_intensity(e, "L", scale);
+    if (const auto* mp = e.params.find("mapname")) {
+        l.env = environment_map(e, *mp, d.world_from_light);
+        // Escaping rays filter the map over their ray differentials' footprint, with
+        // the image textures' filter (EWA unless overridden); other footprint sources
+        // point-sample it as pbrt-v3 does.
+        l.env_footprint = !m_opts.lod || *m_opts.lod == FootprintMethod::Differentials;
+        if (l.env_footprint) m_scene->footprint_methods.add(FootprintMethod::Differentials);
     }
+    e.params.get_int("samples",
+                     1);  // pbrt-v3's sample count hint; one sample per lookup here
+}
+
+// "goniometric" and "projection": a point light at the light's origin whose intensity follows
+// an image.
+void Builder::image_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
+    const Entity& e = d.entity;
+    const Mat4& m = d.world_from_light;
+    l.type = e.type == "goniometric" ? Light::Type::Goniometric : Light::Type::Projection;
+    l.intensity = light_intensity(e, "I", scale);
+    l.position = to_vec(m.apply_point({0, 0, 0}));
+    auto img = std::make_shared<LightImage>();
+    img->kind =
+        e.type == "goniometric" ? LightImage::Kind::Goniometric : LightImage::Kind::Projection;
+    img->light_from_world = light_from_world(e, m);
+    if (e.type == "projection") {
+        const double fov = finite_float(e, "fov", 45);
+        if (!(fov > 0 && fov < 180))
+            throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
+        img->tan_half_fov = float(std::tan(fov * std::numbers::pi / 360));
+    }
+    if (const auto* mp = e.params.find("mapname")) {
+        img->image = light_image(e, *mp);
+        const auto& im = img->image->image();
+        const float aspect = float(im.width()) / float(im.height());
+        if (aspect > 1) {
+            img->screen[0] = -aspect, img->screen[1] = aspect;
+        } else {
+            img->screen[2] = -1 / aspect, img->screen[3] = 1 / aspect;
+        }
+        l.image = img;
+    } else if (e.type == "projection") {
+        l.image = img;  // without an image: 1 inside the square screen's frustum
+    }
+}
+
+void Builder::light(const pbrt::LightDesc& d) {
+    static constexpr TypeBuilder<LightBuild> kLights[] = {
+        {"point", &Builder::point_light},       {"spot", &Builder::spot_light},
+        {"distant", &Builder::distant_light},   {"infinite", &Builder::infinite_light},
+        {"goniometric", &Builder::image_light}, {"projection", &Builder::image_light}};
+    const Entity& e = d.entity;
+    Light l;
+    const Rgb scale = light_scale(e);
+    finite_transform(d.world_from_light, e.loc, "light");
+    (this->*builder_for(kLights, e, "light"))(d, scale, l);
     // A delta light needs one shadow ray; the others take nsamples under directlighting.
     // (pbrt-v3's goniometric light has no fov, but scenes give it; pbrt-v3 warns too.)
     if (l.type == Light::Type::Infinite) l.samples = light_samples(e);

@@ -2,6 +2,7 @@
 // one TextureNode per Texture directive.
 #include <cmam/texture/ewa.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <sstream>
 
@@ -48,8 +49,8 @@ void Builder::uv_mapping(const Entity& e, const pbrt::TextureDesc& t, TextureNod
         texture_space(e, t, n);
     } else if (mapping == "planar") {
         n->mapping = TextureNode::Mapping::Planar;
-        n->v1 = to_vec(finite_values(e, "v1", e.params.get_point3("v1", {1, 0, 0})));
-        n->v2 = to_vec(finite_values(e, "v2", e.params.get_point3("v2", {0, 1, 0})));
+        n->v1 = to_vec(finite_point(e, "v1", {1, 0, 0}));
+        n->v2 = to_vec(finite_point(e, "v2", {0, 1, 0}));
         n->du = float(finite_float(e, "udelta", 0));
         n->dv = float(finite_float(e, "vdelta", 0));
     } else {
@@ -101,152 +102,186 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     return ptr;
 }
 
+// A texture's input `name`: a float texture or constant in a float texture, a spectrum one in a
+// spectrum texture.
+TexInput Builder::texture_input(const pbrt::TextureDesc& t, const std::string& name, float def) {
+    return t.is_float ? float_input(t.entity, t.scope, name, def)
+                      : spectrum_input(t.entity, t.scope, name, Rgb(def));
+}
+
+void Builder::image_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    const Entity& e = t.entity;
+    n.kind = TextureNode::Kind::Image;
+    uv_mapping(e, t, &n);
+    n.image = load_image(e, t.is_float);
+    if (m_opts.untextured) {
+        const texture::Texel& mean = n.image->image().mean();
+        n.kind = TextureNode::Kind::Constant;
+        n.constant =
+            n.image->image().channels() == 1 ? Rgb(mean[0]) : Rgb(mean[0], mean[1], mean[2]);
+    }
+    // pbrt-v3: EWA unless "trilinear" is true; "maxanisotropy" bounds EWA's eccentricity.
+    n.filter.kind = e.params.get_bool("trilinear", false) ? texture::FilterKind::Trilinear
+                                                          : texture::FilterKind::Ewa;
+    n.filter.max_aniso = e.params.get_float("maxanisotropy", 8);
+    // cmam's extensions (pbrt-v3 warns that it does not use them):
+    // "string filter" and "string lod".
+    if (const auto* fp = e.params.find("filter")) {
+        std::string f = e.params.get_string("filter", "");
+        auto k = texture::parse_filter(f);
+        if (!k)
+            throw SceneError(fp->loc, "unknown filter " + q(f) + " (expected " +
+                                          texture::filter_names("\"") + ")");
+        n.filter.kind = *k;
+    }
+    if (const auto* lp = e.params.find("lod")) {
+        std::string l = e.params.get_string("lod", "");
+        auto k = parse_footprint_method(l);
+        if (!k)
+            throw SceneError(lp->loc, "unknown lod " + q(l) + " (expected " +
+                                          kFootprintMethodNames.list("\"") + ")");
+        n.lod = *k;
+    }
+    if (m_opts.filter) n.filter.kind = *m_opts.filter;
+    if (m_opts.lod) n.lod = *m_opts.lod;
+    // With ray differentials, trilinear measures the footprint as pbrt-v3 does.
+    n.filter.pbrt_trilinear_width = n.lod == FootprintMethod::Differentials;
+    if (!(n.filter.max_aniso >= 1))
+        throw SceneError(e.params.find("maxanisotropy")->loc, "maxanisotropy must be at least 1");
+    if (n.filter.max_aniso > texture::kEwaMaxAnisotropy) {
+        std::ostringstream m;
+        m << "maxanisotropy " << n.filter.max_aniso << " is above cmam's limit of "
+          << texture::kEwaMaxAnisotropy << ", which is used instead";
+        warn(e.params.find("maxanisotropy")->loc, m.str());
+    }
+}
+
+void Builder::constant_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    n.kind = TextureNode::Kind::Constant;
+    n.constant = texture_input(t, "value", 1).value;
+}
+
+void Builder::checkerboard_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    const Entity& e = t.entity;
+    if (e.params.get_int("dimension", 2) == 3) {
+        n.kind = TextureNode::Kind::Checkerboard3D;
+        texture_space(e, t, &n);
+        n.tex1 = texture_input(t, "tex1", 1);
+        n.tex2 = texture_input(t, "tex2", 0);
+        return;
+    }
+    n.kind = TextureNode::Kind::Checkerboard;
+    int dim = e.params.get_int("dimension", 2);
+    if (dim != 2)
+        throw SceneError(e.params.find("dimension")->loc,
+                         "checkerboard dimension must be 2 or 3, got " + std::to_string(dim));
+    uv_mapping(e, t, &n);
+    n.tex1 = texture_input(t, "tex1", 1);
+    n.tex2 = texture_input(t, "tex2", 0);
+    std::string aa = e.params.get_string("aamode", "closedform");
+    n.closed_form = aa == "closedform";
+    if (m_opts.untextured) {  // the mean of the two inputs (constants only)
+        if (n.tex1.node < 0 && n.tex2.node < 0) {
+            n.kind = TextureNode::Kind::Constant;
+            n.constant = (n.tex1.value + n.tex2.value) * 0.5f;
+        } else {
+            n.kind = TextureNode::Kind::Mix;
+            n.amount = {-1, Rgb(0.5f)};
+        }
+    }
+    if (m_opts.lod) n.lod = *m_opts.lod;
+    if (aa != "closedform" && aa != "none")
+        throw SceneError(e.params.find("aamode")->loc,
+                         "unknown aamode " + q(aa) + " (expected \"closedform\" or \"none\")");
+}
+
+void Builder::scale_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    n.kind = TextureNode::Kind::Scale;
+    n.tex1 = texture_input(t, "tex1", 1);
+    n.tex2 = texture_input(t, "tex2", 1);
+}
+
+void Builder::mix_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    n.kind = TextureNode::Kind::Mix;
+    n.tex1 = texture_input(t, "tex1", 0);
+    n.tex2 = texture_input(t, "tex2", 1);
+    n.amount = float_input(t.entity, t.scope, "amount", 0.5f);
+}
+
+void Builder::bilerp_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    const Entity& e = t.entity;
+    n.kind = TextureNode::Kind::Bilerp;
+    uv_mapping(e, t, &n);
+    const char* names[4] = {"v00", "v01", "v10", "v11"};
+    const float defs[4] = {0, 1, 0, 1};
+    for (int k = 0; k < 4; ++k) {
+        if (t.is_float)
+            n.corners[k] = Rgb(float(finite_float(e, names[k], defs[k])));
+        else if (auto c = e.params.get_rgb(names[k]))
+            n.corners[k] = to_rgb(finite_values(e, names[k], *c));
+        else
+            n.corners[k] = Rgb(defs[k]);
+    }
+}
+
+void Builder::uv_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    n.kind = TextureNode::Kind::Uv;
+    uv_mapping(t.entity, t, &n);
+    if (t.is_float)
+        warn(t.entity.loc, "pbrt-v3 has no float \"uv\" texture; cmam gives its s coordinate");
+}
+
+void Builder::dots_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    n.kind = TextureNode::Kind::Dots;
+    uv_mapping(t.entity, t, &n);
+    n.tex1 = texture_input(t, "inside", 1);
+    n.tex2 = texture_input(t, "outside", 0);
+}
+
+// pbrt-v3's noise textures: "fbm", "wrinkled", "windy" and "marble".
+void Builder::noise_texture(const pbrt::TextureDesc& t, TextureNode& n) {
+    const Entity& e = t.entity;
+    n.kind = e.type == "fbm"        ? TextureNode::Kind::Fbm
+             : e.type == "wrinkled" ? TextureNode::Kind::Wrinkled
+             : e.type == "windy"    ? TextureNode::Kind::Windy
+                                    : TextureNode::Kind::Marble;
+    texture_space(e, t, &n);
+    if (e.type != "windy") {
+        n.octaves = std::clamp(e.params.get_int("octaves", 8), 0, 64);
+        n.omega = float(finite_float(e, "roughness", 0.5));
+    }
+    if (e.type == "marble") {
+        n.scale = float(finite_float(e, "scale", 1));
+        n.variation = float(finite_float(e, "variation", 0.2));
+        if (t.is_float)
+            warn(e.loc,
+                 "pbrt-v3 has no float \"marble\" texture; cmam gives the "
+                 "luminance of its colour");
+    }
+    // Their octaves follow the footprint, as in pbrt-v3: ray differentials are traced.
+    m_scene->footprint_methods.add(FootprintMethod::Differentials);
+}
+
 void Builder::texture(const pbrt::TextureDesc& t) {
+    static constexpr TypeBuilder<TextureBuild> kClasses[] = {
+        {"imagemap", &Builder::image_texture},
+        {"checkerboard", &Builder::checkerboard_texture},
+        {"constant", &Builder::constant_texture},
+        {"scale", &Builder::scale_texture},
+        {"mix", &Builder::mix_texture},
+        {"bilerp", &Builder::bilerp_texture},
+        {"uv", &Builder::uv_texture},
+        {"dots", &Builder::dots_texture},
+        {"fbm", &Builder::noise_texture},
+        {"wrinkled", &Builder::noise_texture},
+        {"windy", &Builder::noise_texture},
+        {"marble", &Builder::noise_texture}};
     const Entity& e = t.entity;
     TextureNode n;
     n.is_float = t.is_float;
     const std::string what =
         std::string(t.is_float ? "float" : "spectrum") + " texture " + q(e.type);
-    auto input = [&](const std::string& name, float def) {
-        return t.is_float ? float_input(e, t.scope, name, def)
-                          : spectrum_input(e, t.scope, name, Rgb(def));
-    };
-    if (e.type == "imagemap") {
-        n.kind = TextureNode::Kind::Image;
-        uv_mapping(e, t, &n);
-        n.image = load_image(e, t.is_float);
-        if (m_opts.untextured) {
-            const texture::Texel& mean = n.image->image().mean();
-            n.kind = TextureNode::Kind::Constant;
-            n.constant =
-                n.image->image().channels() == 1 ? Rgb(mean[0]) : Rgb(mean[0], mean[1], mean[2]);
-        }
-        // pbrt-v3: EWA unless "trilinear" is true; "maxanisotropy" bounds EWA's eccentricity.
-        n.filter.kind = e.params.get_bool("trilinear", false) ? texture::FilterKind::Trilinear
-                                                              : texture::FilterKind::Ewa;
-        n.filter.max_aniso = e.params.get_float("maxanisotropy", 8);
-        // cmam's extensions (pbrt-v3 warns that it does not use them):
-        // "string filter" and "string lod".
-        if (const auto* fp = e.params.find("filter")) {
-            std::string f = e.params.get_string("filter", "");
-            auto k = texture::parse_filter(f);
-            if (!k)
-                throw SceneError(fp->loc, "unknown filter " + q(f) + " (expected " +
-                                              texture::filter_names("\"") + ")");
-            n.filter.kind = *k;
-        }
-        if (const auto* lp = e.params.find("lod")) {
-            std::string l = e.params.get_string("lod", "");
-            auto k = parse_footprint_method(l);
-            if (!k)
-                throw SceneError(lp->loc, "unknown lod " + q(l) + " (expected " +
-                                              kFootprintMethodNames.list("\"") + ")");
-            n.lod = *k;
-        }
-        if (m_opts.filter) n.filter.kind = *m_opts.filter;
-        if (m_opts.lod) n.lod = *m_opts.lod;
-        // With ray differentials, trilinear measures the footprint as pbrt-v3 does.
-        n.filter.pbrt_trilinear_width = n.lod == FootprintMethod::Differentials;
-        if (!(n.filter.max_aniso >= 1))
-            throw SceneError(e.params.find("maxanisotropy")->loc,
-                             "maxanisotropy must be at least 1");
-        if (n.filter.max_aniso > texture::kEwaMaxAnisotropy) {
-            std::ostringstream m;
-            m << "maxanisotropy " << n.filter.max_aniso << " is above cmam's limit of "
-              << texture::kEwaMaxAnisotropy << ", which is used instead";
-            warn(e.params.find("maxanisotropy")->loc, m.str());
-        }
-    } else if (e.type == "constant") {
-        n.kind = TextureNode::Kind::Constant;
-        n.constant = input("value", 1).value;
-    } else if (e.type == "checkerboard" && e.params.get_int("dimension", 2) == 3) {
-        n.kind = TextureNode::Kind::Checkerboard3D;
-        texture_space(e, t, &n);
-        n.tex1 = input("tex1", 1);
-        n.tex2 = input("tex2", 0);
-    } else if (e.type == "checkerboard") {
-        n.kind = TextureNode::Kind::Checkerboard;
-        int dim = e.params.get_int("dimension", 2);
-        if (dim != 2)
-            throw SceneError(e.params.find("dimension")->loc,
-                             "checkerboard dimension must be 2 or 3, got " + std::to_string(dim));
-        uv_mapping(e, t, &n);
-        n.tex1 = input("tex1", 1);
-        n.tex2 = input("tex2", 0);
-        std::string aa = e.params.get_string("aamode", "closedform");
-        n.closed_form = aa == "closedform";
-        if (m_opts.untextured) {  // the mean of the two inputs (constants only)
-            if (n.tex1.node < 0 && n.tex2.node < 0) {
-                n.kind = TextureNode::Kind::Constant;
-                n.constant = (n.tex1.value + n.tex2.value) * 0.5f;
-            } else {
-                n.kind = TextureNode::Kind::Mix;
-                n.amount = {-1, Rgb(0.5f)};
-            }
-        }
-        if (m_opts.lod) n.lod = *m_opts.lod;
-        if (aa != "closedform" && aa != "none")
-            throw SceneError(e.params.find("aamode")->loc,
-                             "unknown aamode " + q(aa) + " (expected \"closedform\" or \"none\")");
-    } else if (e.type == "scale") {
-        n.kind = TextureNode::Kind::Scale;
-        n.tex1 = input("tex1", 1);
-        n.tex2 = input("tex2", 1);
-    } else if (e.type == "mix") {
-        n.kind = TextureNode::Kind::Mix;
-        n.tex1 = input("tex1", 0);
-        n.tex2 = input("tex2", 1);
-        n.amount = float_input(e, t.scope, "amount", 0.5f);
-    } else if (e.type == "bilerp") {
-        n.kind = TextureNode::Kind::Bilerp;
-        uv_mapping(e, t, &n);
-        const char* names[4] = {"v00", "v01", "v10", "v11"};
-        const float defs[4] = {0, 1, 0, 1};
-        for (int k = 0; k < 4; ++k) {
-            if (t.is_float)
-                n.corners[k] = Rgb(float(finite_float(e, names[k], defs[k])));
-            else if (auto c = e.params.get_rgb(names[k]))
-                n.corners[k] = to_rgb(finite_values(e, names[k], *c));
-            else
-                n.corners[k] = Rgb(defs[k]);
-        }
-    } else if (e.type == "uv") {
-        n.kind = TextureNode::Kind::Uv;
-        uv_mapping(e, t, &n);
-        if (t.is_float)
-            warn(e.loc, "pbrt-v3 has no float \"uv\" texture; cmam gives its s coordinate");
-    } else if (e.type == "dots") {
-        n.kind = TextureNode::Kind::Dots;
-        uv_mapping(e, t, &n);
-        n.tex1 = input("inside", 1);
-        n.tex2 = input("outside", 0);
-    } else if (e.type == "fbm" || e.type == "wrinkled" || e.type == "windy" || e.type == "marble") {
-        n.kind = e.type == "fbm"        ? TextureNode::Kind::Fbm
-                 : e.type == "wrinkled" ? TextureNode::Kind::Wrinkled
-                 : e.type == "windy"    ? TextureNode::Kind::Windy
-                                        : TextureNode::Kind::Marble;
-        texture_space(e, t, &n);
-        if (e.type != "windy") {
-            n.octaves = std::clamp(e.params.get_int("octaves", 8), 0, 64);
-            n.omega = float(finite_float(e, "roughness", 0.5));
-        }
-        if (e.type == "marble") {
-            n.scale = float(finite_float(e, "scale", 1));
-            n.variation = float(finite_float(e, "variation", 0.2));
-            if (t.is_float)
-                warn(e.loc,
-                     "pbrt-v3 has no float \"marble\" texture; cmam gives the "
-                     "luminance of its colour");
-        }
-        // Their octaves follow the footprint, as in pbrt-v3: ray differentials are traced.
-        m_scene->footprint_methods.add(FootprintMethod::Differentials);
-    } else {
-        throw SceneError(e.loc, "unsupported texture class " + q(e.type) +
-                                    " (supported: \"imagemap\", \"checkerboard\", "
-                                    "\"constant\", \"scale\", \"mix\", \"bilerp\", "
-                                    "\"uv\", \"dots\", \"fbm\", \"wrinkled\", "
-                                    "\"windy\", \"marble\")");
-    }
+    (this->*builder_for(kClasses, e, "texture class"))(t, n);
     // Non-uv mappings take their footprints from dP/dx and dP/dy.
     if (n.mapping != TextureNode::Mapping::Uv &&
         (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
