@@ -280,6 +280,12 @@ Scene::~Scene() {
     if (m_device) rtcReleaseDevice(m_device);
 }
 
+std::size_t Scene::texture_memory_bytes() const {
+    std::size_t n = 0;
+    for (const auto& [k, img] : images) n += img->memory_bytes();
+    return n;
+}
+
 namespace {
 
 void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id, const Scene* owner) {

@@ -1,0 +1,159 @@
+// render — scene building: the Builder's run over the directives and the checks its parts
+// share (finite numbers and transforms, parameter locations, warnings).
+#include "render/build/builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace cmam::render::build_detail {
+
+std::string q(const std::string& s) {
+    return "\"" + s + "\"";
+}
+
+std::array<double, 12> to34(const Mat4& m) {
+    std::array<double, 12> r{};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 4; ++j) r[4 * i + j] = m.m[i][j];
+    return r;
+}
+
+std::unique_ptr<Scene> Builder::run() {
+    m_scene = std::make_unique<Scene>();
+    m_scene->tags = m_opts.tags;
+    m_scene->cmam = m_opts.cmam;
+    // Each directive's problem is collected and building goes on, so that one run reports
+    // every error it can find (up to pbrt::kMaxReportedErrors): a missing file does not hide
+    // the next.
+    std::vector<SceneError> errors;
+    auto attempt = [&](auto&& build) {
+        if (errors.size() >= pbrt::kMaxReportedErrors) return;
+        try {
+            build();
+        } catch (const SceneError& e) {
+            errors.push_back(e);
+        }
+    };
+    attempt([&] { film(); });
+    attempt([&] { camera(); });
+    attempt([&] { sampler(); });
+    attempt([&] { filter(); });
+    attempt([&] { integrator(); });
+    attempt([&] {
+        if (m_desc.accelerator.given)
+            m_desc.accelerator.params.check_unused("Accelerator", m_warn,
+                                                   names_of(m_desc.accelerator));
+    });
+    // A texture, material or area light that fails keeps its index (a placeholder), so
+    // that what names it is still checked.
+    for (std::size_t i = 0; i < m_desc.textures.size(); ++i) {
+        attempt([&] { texture(m_desc.textures[i]); });
+        m_scene->textures.resize(i + 1);
+    }
+    for (const auto& m : m_desc.materials) {
+        Material mat;
+        attempt([&] { mat = material(m); });
+        m_scene->materials.push_back(mat);
+    }
+    for (const auto& a : m_desc.area_lights) {
+        Light l;
+        attempt([&] { l = area_light(a); });
+        m_area_lights.push_back(l);
+    }
+    for (const auto& s : m_desc.shapes) attempt([&] { shape(s, m_scene->primitives); });
+    attempt([&] { instances(); });
+    for (const auto& l : m_desc.lights) attempt([&] { light(l); });
+    if (!errors.empty()) throw SceneError(errors);
+    if (m_scene->lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) && m_warn)
+        m_warn(pbrt::format_warning(m_desc.camera.loc,
+                                    "the scene has no lights; it will render black"));
+    m_scene->commit();
+    return std::move(m_scene);
+}
+
+// Shadow rays per shading point for a light: its nsamples under pbrt-v3's directlighting
+// integrator, which reads them; 1 otherwise, as pbrt-v3's whitted and path take.
+int Builder::light_samples(const Entity& e) const {
+    if (!m_light_samples || !e.params.find("nsamples")) return 1;
+    return std::clamp(e.params.get_int("nsamples", 1), 1, 1 << 16);
+}
+
+void Builder::warn(const pbrt::FileLoc& loc, const std::string& msg) {
+    if (m_warn) m_warn(pbrt::format_warning(loc, msg));
+}
+
+// Where a parameter was written, or the directive's location when it was not.
+const pbrt::FileLoc& Builder::loc_of(const Entity& e, const std::string& name) {
+    const pbrt::Param* p = e.params.find(name);
+    return p ? p->loc : e.loc;
+}
+
+std::vector<std::string> Builder::names_of(const Entity& e) {
+    std::vector<std::string> n;
+    for (const auto& p : e.params.params()) n.push_back(p.name);
+    return n;
+}
+
+// Numbers the renderer uses must be finite in single precision (a NaN or infinite light,
+// material or shape parameter once rendered black without a word).
+bool Builder::is_finite_float(double v) {
+    return std::abs(v) <= std::numeric_limits<float>::max();
+}
+
+double Builder::finite(const pbrt::FileLoc& loc, const std::string& name, double v, bool positive) {
+    if (!is_finite_float(v) || (positive && !(v > 0)))
+        throw SceneError(loc, name + " must be a " + (positive ? "positive " : "") +
+                                  "finite number, got " + pbrt::number_text(v));
+    return v;
+}
+
+double Builder::finite_float(const Entity& e, const std::string& name, double def, bool positive) {
+    return finite(loc_of(e, name), name, e.params.get_float(name, def), positive);
+}
+
+// The point3 parameter `name` (`def` when not given), every coordinate finite.
+std::array<double, 3> Builder::finite_point(const Entity& e, const std::string& name,
+                                            const std::array<double, 3>& def) {
+    return finite_values(e, name, e.params.get_point3(name, def));
+}
+
+// The inverse of `m`, or `message` at `loc` when m is singular.
+Mat4 Builder::inverse_or_error(const Mat4& m, const pbrt::FileLoc& loc, const char* message) {
+    try {
+        return m.inverse();
+    } catch (const std::domain_error&) {
+        throw SceneError(loc, message);
+    }
+}
+
+// A shape's or light's transform: every entry finite (NaN or infinite transforms once gave
+// black images).
+void Builder::finite_transform(const Mat4& m, const pbrt::FileLoc& loc, const char* what) {
+    for (const auto& row : m.m)
+        for (double v : row)
+            if (!is_finite_float(v))
+                throw SceneError(loc, std::string("the ") + what +
+                                          "'s transform must be finite, got an entry of " +
+                                          pbrt::number_text(v));
+}
+
+Vec3 Builder::to_vec(const std::array<double, 3>& a) {
+    return Vec3(float(a[0]), float(a[1]), float(a[2]));
+}
+
+Rgb Builder::to_rgb(const pbrt::Rgb& c) {
+    return Rgb(c[0], c[1], c[2]);
+}
+
+}  // namespace cmam::render::build_detail
+
+namespace cmam::render {
+
+std::unique_ptr<Scene> build_scene(const pbrt::SceneDesc& desc, const BuildOptions& options,
+                                   const pbrt::WarningSink& warn) {
+    return build_detail::Builder(desc, options, warn).run();
+}
+
+}  // namespace cmam::render

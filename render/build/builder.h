@@ -1,0 +1,193 @@
+// render — scene building's private header: the Builder that turns a parsed pbrt-v3
+// description into a renderable Scene. Its members are defined by responsibility:
+// builder.cpp (run, shared checks), film_camera.cpp, textures.cpp, materials.cpp, shapes.cpp
+// (shapes, instances, area lights) and lights.cpp.
+#pragma once
+
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pbrt/error.h"
+#include "pbrt/ply.h"
+#include "pbrt/scene_desc.h"
+#include "render/scene.h"
+#include "render/tessellate.h"
+
+namespace cmam::render::build_detail {
+
+using pbrt::Entity;
+using pbrt::Mat4;
+using pbrt::SceneError;
+using pbrt::TextureScope;
+
+// `s` in double quotes, as messages name types and parameters.
+std::string q(const std::string& s);
+// The top three rows of `m`, row by row.
+std::array<double, 12> to34(const Mat4& m);
+
+// A type a directive renders and the member that builds it. One table per directive gives both
+// the dispatch and the list of supported types in the error for any other.
+template <class Build>
+struct TypeBuilder {
+    std::string_view name;
+    Build build;
+};
+
+// The member that builds `type`; nullptr when the table does not name it.
+template <class Build, std::size_t N>
+Build find_builder(const TypeBuilder<Build> (&table)[N], const std::string& type) {
+    for (const TypeBuilder<Build>& t : table)
+        if (t.name == type) return t.build;
+    return nullptr;
+}
+
+// The table's names in double quotes, separated by ", ".
+template <class Build, std::size_t N>
+std::string quoted_names(const TypeBuilder<Build> (&table)[N]) {
+    std::string out;
+    for (const TypeBuilder<Build>& t : table) {
+        if (!out.empty()) out += ", ";
+        out += q(std::string(t.name));
+    }
+    return out;
+}
+
+// The member that builds `e`'s type, or an error at `e` naming the types the table supports.
+template <class Build, std::size_t N>
+Build builder_for(const TypeBuilder<Build> (&table)[N], const Entity& e, const char* what) {
+    if (const Build build = find_builder(table, e.type)) return build;
+    throw SceneError(e.loc, std::string("unsupported ") + what + " " + q(e.type) +
+                                " (supported: " + quoted_names(table) + ")");
+}
+
+class Builder {
+  public:
+    Builder(const pbrt::SceneDesc& d, const BuildOptions& o, const pbrt::WarningSink& w)
+        : m_desc(d), m_opts(o), m_warn(w) {}
+
+    std::unique_ptr<Scene> run();
+
+  private:
+    const pbrt::SceneDesc& m_desc;
+    BuildOptions m_opts;
+    pbrt::WarningSink m_warn;
+    std::unique_ptr<Scene> m_scene;
+    std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
+    std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
+    bool m_light_samples = false;      // lights' nsamples are used (directlighting, "all")
+
+    // --- shared checks (builder.cpp) ------------------------------------------------------
+    int light_samples(const Entity& e) const;
+    void warn(const pbrt::FileLoc& loc, const std::string& msg);
+    static const pbrt::FileLoc& loc_of(const Entity& e, const std::string& name);
+    static std::vector<std::string> names_of(const Entity& e);
+    static bool is_finite_float(double v);
+    static double finite(const pbrt::FileLoc& loc, const std::string& name, double v,
+                         bool positive = false);
+    static double finite_float(const Entity& e, const std::string& name, double def,
+                               bool positive = false);
+    // `values`, or an error at the parameter naming the first that is not finite in single
+    // precision.
+    template <class Values>
+    static const Values& finite_values(const Entity& e, const std::string& name,
+                                       const Values& values) {
+        for (double v : values)
+            if (!is_finite_float(v))
+                throw SceneError(loc_of(e, name), name + " values must be finite numbers, got " +
+                                                      pbrt::number_text(v));
+        return values;
+    }
+    static std::array<double, 3> finite_point(const Entity& e, const std::string& name,
+                                              const std::array<double, 3>& def);
+    static Mat4 inverse_or_error(const Mat4& m, const pbrt::FileLoc& loc, const char* message);
+    static void finite_transform(const Mat4& m, const pbrt::FileLoc& loc, const char* what);
+    static Vec3 to_vec(const std::array<double, 3>& a);
+    static Rgb to_rgb(const pbrt::Rgb& c);
+
+    // --- film, camera, sampler, pixel filter, integrator (film_camera.cpp) -----------------
+    void film();
+    void camera();
+    static void check_camera_rays(const Camera& c, const pbrt::FileLoc& loc);
+    void sampler();
+    void filter();
+    void integrator();
+
+    // --- textures (textures.cpp) ----------------------------------------------------------
+    TexInput spectrum_input(const Entity& e, const TextureScope& scope, const std::string& name,
+                            Rgb def);
+    TexInput float_input(const Entity& e, const TextureScope& scope, const std::string& name,
+                         float def, bool positive = false);
+    void uv_mapping(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n);
+    void texture_space(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n);
+    const texture::FilteredTexture* load_image(const Entity& e, bool is_float);
+    void texture(const pbrt::TextureDesc& t);
+    // Each fills in the node of its texture class (or classes).
+    using TextureBuild = void (Builder::*)(const pbrt::TextureDesc& t, TextureNode& n);
+    TexInput texture_input(const pbrt::TextureDesc& t, const std::string& name, float def);
+    void image_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void constant_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void checkerboard_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void scale_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void mix_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void bilerp_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void uv_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void dots_texture(const pbrt::TextureDesc& t, TextureNode& n);
+    void noise_texture(const pbrt::TextureDesc& t, TextureNode& n);
+
+    // --- materials (materials.cpp) --------------------------------------------------------
+    TexInput rough_input(const Entity& e, const TextureScope& s, float def);
+    Material material(const pbrt::MaterialDesc& d);
+    // Each fills in the material of its type (or types).
+    using MaterialBuild = void (Builder::*)(const pbrt::MaterialDesc& d, Material& m);
+    void matte_material(const pbrt::MaterialDesc& d, Material& m);
+    void mirror_material(const pbrt::MaterialDesc& d, Material& m);
+    void glass_material(const pbrt::MaterialDesc& d, Material& m);
+    void plastic_material(const pbrt::MaterialDesc& d, Material& m);
+    void uber_material(const pbrt::MaterialDesc& d, Material& m);
+    void plastic_approximation(const pbrt::MaterialDesc& d, Material& m);
+    void metal_material(const pbrt::MaterialDesc& d, Material& m);
+    void no_material(const pbrt::MaterialDesc& d, Material& m);
+    void mix_material(const pbrt::MaterialDesc& d, Material& m);
+    Material unrendered_material(const pbrt::MaterialDesc& d);
+
+    // --- shapes, instances and area lights (shapes.cpp) -----------------------------------
+    void shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primitive>>& out);
+    // Each fills in the primitive of its shape (or shapes); false when it has no surface.
+    using ShapeBuild = bool (Builder::*)(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
+    void mesh_primitive(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
+                    const std::vector<float>& N, const std::vector<float>& UV,
+                    const std::vector<int>& idx, Primitive& prim);
+    void emit_area_light(const pbrt::ShapeDesc& s, Primitive& prim);
+    void instances();
+    QuadricParams quadric_params(const Entity& e);
+    static void round_sphere(Primitive& prim);
+    Light area_light(const Entity& e);
+
+    // --- lights (lights.cpp) --------------------------------------------------------------
+    std::shared_ptr<const texture::FilteredTexture> light_image(const Entity& e,
+                                                                const pbrt::Param& p);
+    static std::array<float, 9> light_from_world(const Entity& e, const Mat4& world_from_light);
+    std::shared_ptr<const EnvironmentMap> environment_map(const Entity& e, const pbrt::Param& p,
+                                                          const Mat4& world_from_light);
+    void light(const pbrt::LightDesc& d);
+    // Each fills in the light of its type (or types).
+    using LightBuild = void (Builder::*)(const pbrt::LightDesc& d, const Rgb& scale, Light& l);
+    static Rgb light_scale(const Entity& e);
+    static Rgb light_intensity(const Entity& e, const char* name, const Rgb& scale);
+    void point_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l);
+    void spot_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l);
+    void distant_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l);
+    void infinite_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l);
+    void image_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l);
+};
+
+}  // namespace cmam::render::build_detail

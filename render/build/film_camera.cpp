@@ -1,0 +1,250 @@
+// render — scene building: film, camera (and the check of its rays), sampler, pixel filter
+// and integrator settings.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "render/build/builder.h"
+
+namespace cmam::render::build_detail {
+
+void Builder::film() {
+    const Entity& e = m_desc.film;
+    FilmSettings& f = m_scene->film;
+    if (e.given && e.type != "image")
+        throw SceneError(e.loc, "unsupported Film " + q(e.type) + " (supported: \"image\")");
+    auto side = [&](const char* name, int def) {
+        const int n = e.params.get_int(name, def);
+        if (n < 1 || n > kMaxFilmSide)
+            throw SceneError(loc_of(e, name), std::string(name) + " must be between 1 and " +
+                                                  std::to_string(kMaxFilmSide) + ", got " +
+                                                  std::to_string(n));
+        return n;
+    };
+    f.xres = side("xresolution", 640);
+    f.yres = side("yresolution", 480);
+    const long long pixels = static_cast<long long>(f.xres) * f.yres;
+    if (pixels > kMaxFilmPixels)
+        throw SceneError(loc_of(e, "xresolution"),
+                         "a film of " + std::to_string(f.xres) + "x" + std::to_string(f.yres) +
+                             " = " + std::to_string(pixels) + " pixels is above cmam's limit of " +
+                             std::to_string(kMaxFilmPixels));
+    f.filename = e.params.get_string("filename", "pbrt.exr");
+    double cw[4] = {0, 1, 0, 1};
+    if (auto c = e.params.get_floats("cropwindow")) {
+        if (c->size() != 4)
+            throw SceneError(e.params.find("cropwindow")->loc, "cropwindow needs 4 values");
+        for (int i = 0; i < 4; ++i) {
+            if (!std::isfinite((*c)[i]))
+                throw SceneError(
+                    e.params.find("cropwindow")->loc,
+                    "cropwindow values must be finite numbers, got " + pbrt::number_text((*c)[i]));
+            cw[i] = std::clamp((*c)[i], 0.0, 1.0);
+        }
+    }
+    f.x0 = static_cast<int>(std::ceil(f.xres * std::min(cw[0], cw[1])));
+    f.x1 = static_cast<int>(std::ceil(f.xres * std::max(cw[0], cw[1])));
+    f.y0 = static_cast<int>(std::ceil(f.yres * std::min(cw[2], cw[3])));
+    f.y1 = static_cast<int>(std::ceil(f.yres * std::max(cw[2], cw[3])));
+    if (f.width() <= 0 || f.height() <= 0)
+        throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
+    // pbrt-v3 multiplies every pixel by "scale" (radiance only, not AOVs).
+    f.scale = static_cast<float>(finite_float(e, "scale", 1));
+    e.params.check_unused("Film \"image\"", m_warn,
+                          {"diagonal", "maxsampleluminance", "pixelbounds"});
+}
+
+void Builder::camera() {
+    const Entity& e = m_desc.camera;
+    if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
+    if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment")
+        throw SceneError(e.loc, "unsupported Camera " + q(e.type) +
+                                    " (supported: \"perspective\", \"orthographic\", "
+                                    "\"environment\")");
+    Camera& c = m_scene->camera;
+    c.orthographic = e.type == "orthographic";
+    c.environment = e.type == "environment";
+    c.xres = m_scene->film.xres;
+    c.yres = m_scene->film.yres;
+    double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
+    if (!(frame > 0 && std::isfinite(frame)))
+        throw SceneError(
+            loc_of(e, "frameaspectratio"),
+            "frameaspectratio must be a positive finite number, got " + pbrt::number_text(frame));
+    if (frame > 1) {
+        c.screen[0] = float(-frame);
+        c.screen[1] = float(frame);
+        c.screen[2] = -1;
+        c.screen[3] = 1;
+    } else {
+        c.screen[0] = -1;
+        c.screen[1] = 1;
+        c.screen[2] = float(-1 / frame);
+        c.screen[3] = float(1 / frame);
+    }
+    if (auto sw = e.params.get_floats("screenwindow")) {
+        if (sw->size() != 4)
+            throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
+        for (int i = 0; i < 4; ++i) {
+            if (!(std::abs((*sw)[i]) <= std::numeric_limits<float>::max()))
+                throw SceneError(e.params.find("screenwindow")->loc,
+                                 "screenwindow values must be finite numbers, got " +
+                                     pbrt::number_text((*sw)[i]));
+            c.screen[i] = float((*sw)[i]);
+        }
+    }
+    double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
+    double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
+    if (halffov > 0) fov = 2 * halffov;
+    if (!(fov > 0 && fov < 180))
+        throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
+    c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
+    if (e.params.get_float("lensradius", 0) != 0)
+        warn(e.params.find("lensradius")->loc, "lensradius ignored: cmam renders a pinhole camera");
+    const Mat4 wc =
+        inverse_or_error(m_desc.camera_from_world, e.loc, "the camera transform is singular");
+    auto m = to34(wc);
+    for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
+    check_camera_rays(c, e.loc);
+    e.params.check_unused("Camera " + q(e.type), m_warn,
+                          {"focaldistance", "shutteropen", "shutterclose"});
+}
+
+// Embree takes rays whose origin and direction are finite and within kMaxRayCoordinate.
+// Camera rays are checked through the film's corners: the origin (orthographic) and the
+// direction before normalisation are affine in the raster position, so the corners bound
+// every other pixel's.
+void Builder::check_camera_rays(const Camera& c, const pbrt::FileLoc& loc) {
+    auto text = [](const Vec3& v) {
+        return "(" + pbrt::number_text(v.x, 7) + ", " + pbrt::number_text(v.y, 7) + ", " +
+               pbrt::number_text(v.z, 7) + ")";
+    };
+    for (int corner = 0; corner < 4; ++corner) {
+        const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
+        const auto [org, dir] = c.generate_ray(px, py);
+        const std::string at =
+            " at raster position (" + pbrt::number_text(px) + ", " + pbrt::number_text(py) + ")";
+        for (float x : {org.x, org.y, org.z})
+            if (!(std::abs(x) <= kMaxRayCoordinate))
+                throw SceneError(
+                    loc, "camera rays start at " + text(org) + at + ", beyond cmam's limit of " +
+                             pbrt::number_text(kMaxRayCoordinate, 7) +
+                             " on coordinates (check the camera transform and screenwindow)");
+        if (!(std::abs(length(dir) - 1) < 1e-3f))
+            throw SceneError(loc, "camera rays have direction " + text(dir) + at +
+                                      ", not a finite unit vector (check the camera "
+                                      "transform, screenwindow and frameaspectratio)");
+    }
+}
+
+void Builder::sampler() {
+    const Entity& e = m_desc.sampler;
+    SamplerSettings& s = m_scene->sampler;
+    if (!e.given) {  // pbrt-v3's default: halton, 16 samples per pixel
+        s.xsamples = s.ysamples = 4;
+    } else if (e.type == "stratified") {
+        s.xsamples = e.params.get_int("xsamples", 4);
+        s.ysamples = e.params.get_int("ysamples", 4);
+        s.jitter = e.params.get_bool("jitter", true);
+        if (s.xsamples <= 0 || s.ysamples <= 0)
+            throw SceneError(e.loc, "xsamples and ysamples must be positive");
+        const long long spp = static_cast<long long>(s.xsamples) * s.ysamples;
+        if (spp > kMaxSamplesPerPixel)
+            throw SceneError(loc_of(e, "xsamples"),
+                             "xsamples x ysamples = " + std::to_string(s.xsamples) + "x" +
+                                 std::to_string(s.ysamples) + " = " + std::to_string(spp) +
+                                 " samples per pixel is above cmam's limit of " +
+                                 std::to_string(kMaxSamplesPerPixel));
+        e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions", "pixelsamples"});
+    } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" ||
+               e.type == "02sequence" || e.type == "lowdiscrepancy" || e.type == "maxmindist") {
+        int n = e.params.get_int("pixelsamples", 16);
+        if (n <= 0) throw SceneError(e.loc, "pixelsamples must be positive");
+        if (n > kMaxSamplesPerPixel)
+            throw SceneError(loc_of(e, "pixelsamples"),
+                             "pixelsamples " + std::to_string(n) + " is above cmam's limit of " +
+                                 std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
+        int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
+        s.xsamples = s.ysamples = k;
+        // With --spp the count comes from there (set below), not from pixelsamples.
+        const std::string count =
+            m_opts.spp_override > 0
+                ? std::string(", as many as --spp asks for")
+                : " with " + std::to_string(k) + "x" + std::to_string(k) + " per pixel";
+        warn(e.loc,
+             "Sampler " + q(e.type) + " is rendered as \"stratified\" jittered samples" + count);
+        e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
+    } else {
+        throw SceneError(e.loc, "unknown Sampler " + q(e.type));
+    }
+    if (m_opts.spp_override > kMaxSamplesPerPixel)
+        throw SceneError("--spp " + std::to_string(m_opts.spp_override) +
+                         " is above cmam's limit of " + std::to_string(kMaxSamplesPerPixel));
+    if (m_opts.spp_override > 0) {
+        int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
+        s.xsamples = s.ysamples = k;
+        s.jitter = k > 1;
+    }
+    // A row of the film holds every sample of its pixels at once (and sample numbers along a
+    // row or column are ints), so the samples along the film's larger side are bounded too.
+    const FilmSettings& f = m_scene->film;
+    const long long side = std::max(f.xres, f.yres);
+    const long long per_row = side * s.spp();
+    if (per_row > kMaxSamplesPerRow)
+        throw SceneError(
+            m_opts.spp_override > 0 ? pbrt::FileLoc{} : e.loc,
+            std::to_string(s.spp()) + " samples per pixel along " + std::to_string(side) +
+                " pixels (the film's larger side) = " + std::to_string(per_row) +
+                " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
+}
+
+void Builder::filter() {
+    const Entity& e = m_desc.filter;
+    if (!e.given) return;
+    if (e.type == "box") {
+        double xw = e.params.get_float("xwidth", 0.5), yw = e.params.get_float("ywidth", 0.5);
+        if (xw != 0.5 || yw != 0.5)
+            warn(e.loc,
+                 "box filter width other than 0.5 is rendered with width 0.5 (each sample "
+                 "counts for its own pixel)");
+        e.params.check_unused("PixelFilter \"box\"", m_warn);
+    } else if (e.type == "gaussian" || e.type == "mitchell" || e.type == "sinc" ||
+               e.type == "triangle") {
+        warn(e.loc, "PixelFilter " + q(e.type) + " is rendered as \"box\"");
+        e.params.check_unused("PixelFilter", m_warn, names_of(e));
+    } else {
+        throw SceneError(e.loc, "unknown PixelFilter " + q(e.type));
+    }
+}
+
+void Builder::integrator() {
+    const Entity& e = m_desc.integrator;
+    if (!e.given) {
+        if (!m_desc.shapes.empty())
+            warn(m_desc.camera.loc,
+                 "no Integrator given: pbrt-v3 would path trace (\"path\"); cmam renders "
+                 "\"whitted\"");
+        return;
+    }
+    // pbrt-v3's directlighting is whitted's recursion with every light sampled nsamples
+    // times ("all", its default) or one light chosen per point ("one": here each light
+    // once, the same expectation).
+    const bool direct = e.type == "directlighting";
+    if (direct)
+        m_light_samples = e.params.get_string("strategy", "all") == "all";
+    else if (e.type != "whitted")
+        warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
+    if (const auto* p = e.params.find("maxdepth")) {
+        const int depth = e.params.get_int("maxdepth", 5);
+        m_scene->max_depth = std::min(depth, kMaxDepthLimit);
+        if (depth > kMaxDepthLimit)
+            warn(p->loc, "maxdepth " + std::to_string(depth) + " is above cmam's limit of " +
+                             std::to_string(kMaxDepthLimit) + ", which is used instead");
+    }
+    e.params.check_unused(
+        "Integrator " + q(e.type), m_warn,
+        e.type == "whitted" || direct ? std::vector<std::string>{"pixelbounds"} : names_of(e));
+}
+
+}  // namespace cmam::render::build_detail

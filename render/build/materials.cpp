@@ -1,0 +1,169 @@
+// render — scene building: one Material per Material or MakeNamedMaterial directive, with
+// pbrt-v3's parameters and defaults.
+#include "render/build/builder.h"
+
+namespace cmam::render::build_detail {
+
+// pbrt-v3's "roughness", or the mean of "uroughness" and "vroughness" (cmam's microfacet
+// distribution is isotropic).
+TexInput Builder::rough_input(const Entity& e, const TextureScope& s, float def) {
+    if (e.params.find("uroughness") || e.params.find("vroughness")) {
+        TexInput u = float_input(e, s, "uroughness", def), v = float_input(e, s, "vroughness", def);
+        if (u.node < 0 && v.node < 0) return TexInput{-1, Rgb(0.5f * (u.value.r + v.value.r))};
+        warn(e.loc, "textured uroughness/vroughness: uroughness is used for both");
+        (void)e.params.get_float("roughness", def);
+        return u;
+    }
+    return float_input(e, s, "roughness", def);
+}
+
+void Builder::matte_material(const pbrt::MaterialDesc& d, Material& m) {
+    m.type = Material::Type::Matte;
+    m.kd = spectrum_input(d.entity, d.scope, "Kd", Rgb(0.5f));
+    m.sigma = float_input(d.entity, d.scope, "sigma", 0);
+}
+
+void Builder::mirror_material(const pbrt::MaterialDesc& d, Material& m) {
+    m.type = Material::Type::Mirror;
+    m.kr = spectrum_input(d.entity, d.scope, "Kr", Rgb(0.9f));
+}
+
+void Builder::glass_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Glass;
+    m.kr = spectrum_input(e, s, "Kr", Rgb(1));
+    m.kt = spectrum_input(e, s, "Kt", Rgb(1));
+    const char* eta = e.params.find("eta") ? "eta" : "index";
+    m.eta = float_input(e, s, eta, 1.5f, true);
+    for (const char* r : {"uroughness", "vroughness"}) {
+        TexInput rough = float_input(e, s, r, 0);
+        if (rough.node >= 0 || rough.value.r != 0)
+            warn(e.params.find(r)->loc,
+                 std::string(r) + " ignored: glass is rendered perfectly smooth");
+    }
+    e.params.get_bool("remaproughness", true);
+}
+
+void Builder::plastic_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Plastic;
+    m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
+    m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
+    m.roughness = float_input(e, s, "roughness", 0.1f);
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
+}
+
+// pbrt-v3's uber: a diffuse lobe, a microfacet lobe (plastic's), and specular
+// reflection and transmission with dielectric Fresnel (glass's).
+void Builder::uber_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Uber;
+    m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
+    m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
+    m.kr = spectrum_input(e, s, "Kr", Rgb(0));
+    m.kt = spectrum_input(e, s, "Kt", Rgb(0));
+    m.roughness = rough_input(e, s, 0);
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
+    const char* eta = e.params.find("eta") ? "eta" : "index";
+    m.eta = float_input(e, s, eta, 1.5f, true);
+    if (const auto* op = e.params.find("opacity")) {
+        warn(op->loc, "uber \"opacity\" ignored: cmam renders the material opaque");
+        (void)spectrum_input(e, s, "opacity", Rgb(1));
+    }
+}
+
+// "substrate" and "translucent", approximated by plastic: substrate's Fresnel-blended glossy
+// coat over a diffuse base, and translucent's reflection (its transmission is not rendered).
+void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    const std::string& t = e.type;
+    m.type = Material::Type::Plastic;
+    m.kd = spectrum_input(e, s, "Kd", Rgb(t == "substrate" ? 0.5f : 0.25f));
+    m.ks = spectrum_input(e, s, "Ks", Rgb(t == "substrate" ? 0.5f : 0.25f));
+    m.roughness = t == "substrate" ? rough_input(e, s, 0.1f) : float_input(e, s, "roughness", 0.1f);
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
+    if (t == "translucent") {
+        (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
+        (void)spectrum_input(e, s, "transmit", Rgb(0.5f));
+    }
+    warn(e.loc,
+         "material " + q(t) + " is rendered as \"plastic\" (" +
+             (t == "substrate" ? "its Fresnel blend approximated" : "no diffuse transmission") +
+             ")");
+}
+
+// A conductor: a microfacet lobe whose Fresnel term is Schlick's from the
+// normal-incidence reflectance of eta and k (pbrt-v3: copper by default).
+void Builder::metal_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Metal;
+    m.eta = spectrum_input(e, s, "eta", Rgb(0.2004f, 0.9240f, 1.1022f));
+    m.k = spectrum_input(e, s, "k", Rgb(3.9129f, 2.4528f, 2.1421f));
+    m.roughness = rough_input(e, s, 0.01f);
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
+}
+
+void Builder::no_material(const pbrt::MaterialDesc& d, Material& m) {
+    m.type = Material::Type::None;
+}
+
+void Builder::mix_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    m.type = Material::Type::Mix;
+    m.amount = spectrum_input(e, d.scope, "amount", Rgb(0.5f));
+    for (int k = 0; k < 2; ++k) {
+        const std::string param = "namedmaterial" + std::to_string(k + 1);
+        const auto* p = e.params.find(param);
+        if (!p) throw SceneError(e.loc, "mix needs a \"string " + param + "\" parameter");
+        const std::string name = e.params.get_string(param, "");
+        m.mix[k] = d.mix[k];
+        if (d.mix[k] < 0)
+            warn(p->loc, "named material " + q(name) +
+                             " is not defined here; the default matte is used in the mix");
+    }
+}
+
+// pbrt-v3 renders a material it does not know as matte, with a warning; so does
+// cmam with the ones it does not render (subsurface scattering, Fourier BSDFs, hair).
+Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
+    const Entity& e = d.entity;
+    Material m;
+    m.type = Material::Type::Matte;
+    m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
+    warn(e.loc, "material " + q(e.type) + " is rendered as \"matte\"" +
+                    (e.params.find("Kd") ? " with its Kd" : "") +
+                    " (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
+                    "substrate and translucent as plastic)");
+    return m;  // its other parameters are not read: no warning for each
+}
+
+Material Builder::material(const pbrt::MaterialDesc& d) {
+    static constexpr TypeBuilder<MaterialBuild> kMaterials[] = {
+        {"matte", &Builder::matte_material},
+        {"mirror", &Builder::mirror_material},
+        {"glass", &Builder::glass_material},
+        {"plastic", &Builder::plastic_material},
+        {"uber", &Builder::uber_material},
+        {"substrate", &Builder::plastic_approximation},
+        {"translucent", &Builder::plastic_approximation},
+        {"metal", &Builder::metal_material},
+        {"none", &Builder::no_material},
+        {"", &Builder::no_material},
+        {"mix", &Builder::mix_material}};
+    const Entity& e = d.entity;
+    const MaterialBuild build = find_builder(kMaterials, e.type);
+    if (!build) return unrendered_material(d);
+    Material m;
+    (this->*build)(d, m);
+    if (e.params.find("type")) e.params.get_string("type", "");
+    if (e.params.find("bumpmap")) m.bump = float_input(e, d.scope, "bumpmap", 0);
+    e.params.check_unused("material " + q(e.type), m_warn, {});
+    return m;
+}
+
+}  // namespace cmam::render::build_detail

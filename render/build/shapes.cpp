@@ -1,0 +1,314 @@
+// render — scene building: shapes (analytic spheres and disks, tessellated quadrics, triangle
+// and PLY meshes), object instances, and the area lights their shapes emit.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "pbrt/parser.h"
+#include "render/build/builder.h"
+
+namespace cmam::render::build_detail {
+
+// pbrt-v3's sphere and disk, intersected analytically in object space.
+bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    const Mat4 ow =
+        inverse_or_error(s.world_from_object, e.loc, "the shape's transform is singular");
+    prim.world_from_object = to34(s.world_from_object);
+    prim.object_from_world = to34(ow);
+    double r = finite_float(e, "radius", 1, true);
+    prim.radius = r;
+    double phimax = std::clamp(finite_float(e, "phimax", 360), 0.0, 360.0);
+    prim.phi_max = phimax * std::numbers::pi / 180;
+    if (e.type == "sphere") {
+        prim.kind = Primitive::Kind::Sphere;
+        double z0 = std::clamp(finite_float(e, "zmin", -r), -r, r);
+        double z1 = std::clamp(finite_float(e, "zmax", r), -r, r);
+        prim.zmin = std::min(z0, z1);
+        prim.zmax = std::max(z0, z1);
+        prim.theta_zmin = std::acos(std::clamp(prim.zmin / r, -1.0, 1.0));
+        prim.theta_zmax = std::acos(std::clamp(prim.zmax / r, -1.0, 1.0));
+        if (prim.theta_zmin == prim.theta_zmax) throw SceneError(e.loc, "sphere has zmin == zmax");
+    } else {
+        prim.kind = Primitive::Kind::Disk;
+        prim.height = finite_float(e, "height", 0);
+        prim.inner_radius = finite_float(e, "innerradius", 0);
+        if (prim.inner_radius < 0 || prim.inner_radius >= r)
+            throw SceneError(e.params.find("innerradius")->loc,
+                             "innerradius must be in [0, radius)");
+    }
+    e.params.check_unused("shape " + q(e.type), m_warn, {"alpha", "shadowalpha"});
+    return true;
+}
+
+// A triangle mesh's primitive, with pbrt-v3's cut-out masks (float textures or constants), read
+// before the parameters are checked.
+void Builder::mesh_primitive(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    prim.kind = Primitive::Kind::Triangles;
+    if (e.params.find("alpha")) prim.alpha = float_input(e, s.scope, "alpha", 1);
+    if (e.params.find("shadowalpha")) prim.shadow_alpha = float_input(e, s.scope, "shadowalpha", 1);
+}
+
+// pbrt-v3's cylinder, cone, paraboloid and hyperboloid, as triangle meshes (tessellate.h).
+bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    mesh_primitive(s, prim);
+    const QuadricMesh mesh = tessellate(e.type, quadric_params(e));
+    e.params.check_unused("shape " + q(e.type), m_warn, {"alpha", "shadowalpha"});
+    return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim);
+}
+
+bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    mesh_primitive(s, prim);
+    const auto* fp = e.params.find("filename");
+    if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
+    std::string path =
+        pbrt::resolve_path(m_desc.base_dir, fp->loc, e.params.get_string("filename", ""));
+    // Each file is read once, however many shapes name it.
+    auto& mesh = m_ply[path];
+    if (!mesh) {
+        try {
+            mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path));
+        } catch (const pbrt::PlyError& err) {
+            throw SceneError(fp->loc, err.what());
+        }
+    }
+    e.params.check_unused("shape \"plymesh\"", m_warn,
+                          {"alpha", "shadowalpha", "displacement", "edgelength"});
+    return place_mesh(s, mesh->positions, mesh->normals, mesh->uvs, mesh->indices, prim);
+}
+
+// pbrt-v3's "trianglemesh", and "loopsubdiv" as its control mesh.
+bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    mesh_primitive(s, prim);
+    std::vector<float> P, N, UV;
+    std::vector<int> idx;
+    const std::string what = q(e.type);
+    if (e.type == "loopsubdiv") {
+        // The control mesh stands for the limit surface (close for fine meshes).
+        warn(e.loc,
+             "shape \"loopsubdiv\" is rendered as its control mesh, not "
+             "subdivided");
+        (void)e.params.get_int("levels", 3);
+        (void)e.params.get_int("nlevels", 3);  // pbrt-v3 reads either name
+    }
+    auto p = e.params.get_point3s("P");
+    if (!p) throw SceneError(e.loc, what + " needs a \"point3 P\" parameter");
+    for (double x : finite_values(e, "P", *p)) P.push_back(float(x));
+    std::size_t nv = P.size() / 3;
+    if (auto i = e.params.get_ints("indices")) {
+        idx = *i;
+    } else if (nv == 3) {
+        idx = {0, 1, 2};
+    } else {
+        throw SceneError(e.loc, what + " needs an \"integer indices\" parameter");
+    }
+    if (idx.size() % 3 != 0)
+        throw SceneError(e.params.find("indices")->loc,
+                         "indices count " + std::to_string(idx.size()) + " is not a multiple of 3");
+    for (int i : idx)
+        if (i < 0 || static_cast<std::size_t>(i) >= nv)
+            throw SceneError(e.params.find("indices")->loc, "index " + std::to_string(i) +
+                                                                " out of range (" +
+                                                                std::to_string(nv) + " vertices)");
+    if (auto n = e.params.get_point3s("N")) {
+        if (n->size() != P.size())
+            throw SceneError(e.params.find("N")->loc, "N must have one normal per vertex of P");
+        for (double x : finite_values(e, "N", *n)) N.push_back(float(x));
+    }
+    const char* uvname = e.params.find("uv") ? "uv" : "st";
+    if (auto uv = e.params.get_point2s(uvname)) {
+        if (uv->size() != 2 * nv)
+            throw SceneError(e.params.find(uvname)->loc,
+                             std::string(uvname) + " must have one (u,v) pair per vertex of P");
+        for (double x : finite_values(e, uvname, *uv)) UV.push_back(float(x));
+    }
+    e.params.check_unused("shape " + what, m_warn, {"alpha", "shadowalpha", "S", "faceIndices"});
+    return place_mesh(s, P, N, UV, idx, prim);
+}
+
+// Places an object-space mesh (3 floats per position and normal, 2 per (u,v), 3 indices per
+// triangle) in the world as `prim`'s triangles; false when no triangle has an area.
+bool Builder::place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
+                         const std::vector<float>& N, const std::vector<float>& UV,
+                         const std::vector<int>& idx, Primitive& prim) {
+    std::size_t nv = P.size() / 3;
+    prim.positions.resize(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+        auto w = s.world_from_object.apply_point({P[3 * i], P[3 * i + 1], P[3 * i + 2]});
+        prim.positions[i] = Vec3(float(w[0]), float(w[1]), float(w[2]));
+    }
+    if (!N.empty()) {
+        const Mat4 inv_t =
+            inverse_or_error(s.world_from_object, s.entity.loc, "the shape's transform is singular")
+                .transposed();
+        prim.normals.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) {
+            auto w = inv_t.apply_vector({N[3 * i], N[3 * i + 1], N[3 * i + 2]});
+            prim.normals[i] = Vec3(float(w[0]), float(w[1]), float(w[2]));
+        }
+    }
+    if (!UV.empty()) {
+        prim.uvs.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) prim.uvs[i] = {UV[2 * i], UV[2 * i + 1]};
+    }
+    // Drop degenerate triangles (pbrt-v3 cannot hit them either).
+    for (std::size_t t = 0; t + 2 < idx.size(); t += 3) {
+        Vec3 a = prim.positions[idx[t]], b = prim.positions[idx[t + 1]],
+             c = prim.positions[idx[t + 2]];
+        if (length(cross(b - a, c - a)) == 0) continue;
+        prim.indices.insert(prim.indices.end(),
+                            {uint32_t(idx[t]), uint32_t(idx[t + 1]), uint32_t(idx[t + 2])});
+    }
+    return !prim.indices.empty();
+}
+
+// pbrt-v3 makes every shape in an AreaLightSource's scope emit; one light per shape
+// here, sampled uniformly by area over all its triangles.
+void Builder::emit_area_light(const pbrt::ShapeDesc& s, Primitive& prim) {
+    Light l = m_area_lights[static_cast<std::size_t>(s.area_light)];
+    l.prim = static_cast<int>(prim.id);
+    if (prim.kind == Primitive::Kind::Triangles) {
+        prim.area_cdf.assign(1, 0.0);
+        for (std::size_t t = 0; t < prim.indices.size(); t += 3) {
+            const Vec3 a = prim.positions[prim.indices[t]], b = prim.positions[prim.indices[t + 1]],
+                       c = prim.positions[prim.indices[t + 2]];
+            prim.area_cdf.push_back(prim.area_cdf.back() +
+                                    0.5 * double(length(cross(b - a, c - a))));
+        }
+    }
+    if (prim.kind == Primitive::Kind::Sphere) round_sphere(prim);
+    if (!l.intensity.is_black()) {
+        prim.area_light = static_cast<int>(m_scene->lights.size());
+        m_scene->lights.push_back(l);
+    }
+}
+
+// Appends the shape's primitive (if it has any surface) to `out`.
+void Builder::shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primitive>>& out) {
+    static constexpr TypeBuilder<ShapeBuild> kShapes[] = {
+        {"sphere", &Builder::analytic_quadric},
+        {"disk", &Builder::analytic_quadric},
+        {"cylinder", &Builder::tessellated_quadric},
+        {"cone", &Builder::tessellated_quadric},
+        {"paraboloid", &Builder::tessellated_quadric},
+        {"hyperboloid", &Builder::tessellated_quadric},
+        {"trianglemesh", &Builder::triangle_mesh},
+        {"plymesh", &Builder::ply_mesh},
+        {"loopsubdiv", &Builder::triangle_mesh}};
+    const Entity& e = s.entity;
+    auto prim = std::make_unique<Primitive>();
+    prim->material = s.material;
+    finite_transform(s.world_from_object, e.loc, "shape");
+    prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
+    if (e.type == "curve") {
+        warn(e.loc, "shape \"curve\" is not rendered (cmam has no curves); it is skipped");
+        return;
+    }
+    if (!(this->*builder_for(kShapes, e, "shape"))(s, *prim)) return;
+    prim->id = static_cast<uint32_t>(out.size());
+    if (s.area_light >= 0 && &out == &m_scene->primitives) emit_area_light(s, *prim);
+    out.push_back(std::move(prim));
+}
+
+QuadricParams Builder::quadric_params(const Entity& e) {
+    QuadricParams p;
+    if (e.type == "hyperboloid") {
+        auto a = finite_point(e, "p1", {0, 0, 0});
+        auto b = finite_point(e, "p2", {1, 1, 1});
+        std::copy(a.begin(), a.end(), p.p1);
+        std::copy(b.begin(), b.end(), p.p2);
+        if (a[2] == b[2]) throw SceneError(e.loc, "hyperboloid p1 and p2 must differ in z");
+    } else {
+        p.radius = finite_float(e, "radius", 1, true);
+    }
+    if (e.type == "cone") p.height = finite_float(e, "height", 1, true);
+    if (e.type == "cylinder" || e.type == "paraboloid") {
+        p.zmin = finite_float(e, "zmin", e.type == "cylinder" ? -1 : 0);
+        p.zmax = finite_float(e, "zmax", 1);
+        if (p.zmin == p.zmax) throw SceneError(e.loc, e.type + " has zmin == zmax");
+        if (e.type == "paraboloid" &&
+            (std::min(p.zmin, p.zmax) < 0 || std::max(p.zmin, p.zmax) <= 0))
+            throw SceneError(e.loc, "paraboloid zmin and zmax must be at least 0");
+    }
+    p.phimax = finite_float(e, "phimax", 360);
+    return p;
+}
+
+// A whole sphere whose transform is a rotation, reflection or uniform scale plus a
+// translation stays a sphere: its centre and radius let area lights sample its cone.
+void Builder::round_sphere(Primitive& prim) {
+    if (prim.zmin > -prim.radius || prim.zmax < prim.radius || prim.phi_max < 2 * std::numbers::pi)
+        return;
+    const auto& m = prim.world_from_object;
+    double len2[3], dots[3];
+    for (int c = 0; c < 3; ++c) {
+        const int d = (c + 1) % 3;
+        len2[c] = m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c];
+        dots[c] = m[c] * m[d] + m[4 + c] * m[4 + d] + m[8 + c] * m[8 + d];
+    }
+    for (int c = 0; c < 3; ++c)
+        if (std::abs(len2[c] - len2[0]) > 1e-6 * len2[0] || std::abs(dots[c]) > 1e-6 * len2[0])
+            return;
+    prim.sphere_center = Vec3(float(m[3]), float(m[7]), float(m[11]));
+    prim.sphere_radius = float(prim.radius * std::sqrt(len2[0]));
+}
+
+// pbrt-v3's "diffuse" area light: radiance L (times scale) leaving the surface.
+Light Builder::area_light(const Entity& e) {
+    Light l;
+    l.type = Light::Type::Area;
+    if (e.type != "diffuse" && e.type != "area") {  // pbrt-v3 warns and goes on
+        warn(e.loc, "unknown AreaLightSource " + q(e.type) +
+                        " (pbrt-v3 has \"diffuse\", also named \"area\"): the shapes in "
+                        "its scope do not emit");
+        return l;  // black: no light is made
+    }
+    l.intensity = light_intensity(e, "L", light_scale(e));
+    l.two_sided = e.params.get_bool("twosided", false);
+    l.samples = light_samples(e);
+    e.params.check_unused("AreaLightSource \"diffuse\"", m_warn, {"nsamples", "samples"});
+    return l;
+}
+
+// Each object an instance uses is built once, in its own space; each instance places it
+// (algorithms.md §7.1). Textured-object ids (the CMAM's caches) are per instance.
+void Builder::instances() {
+    std::vector<int> built(m_desc.objects.size(), -1);
+    std::size_t next_id = m_scene->primitives.size();
+    for (const pbrt::InstanceDesc& d : m_desc.instances) {
+        int& o = built[d.object];
+        if (o < 0) {
+            o = static_cast<int>(m_scene->objects.size());
+            m_scene->objects.emplace_back();
+            for (const auto& s : m_desc.objects[d.object].shapes)
+                shape(s, m_scene->objects.back().primitives);
+        }
+        const std::size_t n = m_scene->objects[o].primitives.size();
+        if (n == 0) continue;  // an empty object places nothing
+        finite_transform(d.world_from_instance, d.loc, "object instance");
+        const Mat4 inv =
+            inverse_or_error(d.world_from_instance, d.loc, "the instance's transform is singular");
+        Instance in;
+        in.object = static_cast<uint32_t>(o);
+        const auto w = to34(d.world_from_instance), iw = to34(inv);
+        for (int k = 0; k < 12; ++k) {
+            in.world_from_object[k] = static_cast<float>(w[k]);
+            in.object_from_world[k] = static_cast<float>(iw[k]);
+        }
+        const double det = w[0] * (w[5] * w[10] - w[6] * w[9]) -
+                           w[1] * (w[4] * w[10] - w[6] * w[8]) + w[2] * (w[4] * w[9] - w[5] * w[8]);
+        in.curvature_scale = static_cast<float>(std::cbrt(std::abs(det)));
+        if (next_id + n > std::numeric_limits<uint32_t>::max())
+            throw SceneError(d.loc, "more than 2^32 instanced primitives");
+        in.first_id = static_cast<uint32_t>(next_id);
+        next_id += n;
+        m_scene->instances.push_back(in);
+    }
+}
+
+}  // namespace cmam::render::build_detail
