@@ -318,3 +318,80 @@ TEST(Errors, MessagesEscapeWhatATerminalWouldActOn) {
         for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
     }
 }
+
+// The directives the unknown-directive error lists are the ones the parser reads: each listed
+// one parses, and so do the pbrt-v3 directives cmam reads without listing them.
+TEST(Parser, TheUnknownDirectiveErrorListsTheDirectivesItReads) {
+    const cmam::test::TempDir tmp("cmam_directives");
+    const std::string part = (tmp.path / "part.pbrt").string();
+    std::ofstream(part) << "Shape \"sphere\"\n";
+    // Every pbrt-v3 directive, in the error's order, with text before and inside the world
+    // block that uses it.
+    struct Use {
+        const char* name;
+        bool listed;
+        std::string options, world;
+    };
+    const Use uses[] = {
+        {"LookAt", true, "LookAt 0 0 -1  0 0 0  0 1 0", ""},
+        {"Translate", true, "", "Translate 1 0 0"},
+        {"Rotate", true, "", "Rotate 30 0 0 1"},
+        {"Scale", true, "", "Scale 1 2 3"},
+        {"Transform", true, "", "Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]"},
+        {"ConcatTransform", true, "", "ConcatTransform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]"},
+        {"Identity", true, "", "Identity"},
+        {"CoordinateSystem", true, "", "CoordinateSystem \"c\""},
+        {"CoordSysTransform", true, "", "CoordinateSystem \"c\" CoordSysTransform \"c\""},
+        {"ReverseOrientation", true, "", "ReverseOrientation"},
+        {"WorldBegin", true, "", ""},
+        {"WorldEnd", true, "", ""},
+        {"AttributeBegin", true, "", "AttributeBegin AttributeEnd"},
+        {"AttributeEnd", true, "", "AttributeBegin AttributeEnd"},
+        {"TransformBegin", true, "", "TransformBegin TransformEnd"},
+        {"TransformEnd", true, "", "TransformBegin TransformEnd"},
+        {"Include", true, "", "Include \"" + part + "\""},
+        {"MakeNamedMaterial", true, "", "MakeNamedMaterial \"m\" \"string type\" \"matte\""},
+        {"NamedMaterial", true, "",
+         "MakeNamedMaterial \"m\" \"string type\" \"matte\" NamedMaterial \"m\""},
+        {"Material", true, "", "Material \"matte\""},
+        {"Texture", true, "", "Texture \"t\" \"float\" \"constant\""},
+        {"Shape", true, "", "Shape \"sphere\""},
+        {"LightSource", true, "", "LightSource \"point\""},
+        {"AreaLightSource", true, "", "AreaLightSource \"diffuse\""},
+        {"Camera", true, "Camera \"perspective\"", ""},
+        {"Film", true, "Film \"image\"", ""},
+        {"Sampler", true, "Sampler \"random\"", ""},
+        {"PixelFilter", true, "PixelFilter \"box\"", ""},
+        {"Integrator", true, "Integrator \"whitted\"", ""},
+        {"Accelerator", true, "Accelerator \"bvh\"", ""},
+        {"ObjectBegin", true, "", "ObjectBegin \"o\" ObjectEnd"},
+        {"ObjectEnd", true, "", "ObjectBegin \"o\" ObjectEnd"},
+        {"ObjectInstance", true, "", "ObjectBegin \"o\" ObjectEnd ObjectInstance \"o\""},
+        {"SurfaceIntegrator", false, "SurfaceIntegrator \"whitted\"", ""},
+        {"ActiveTransform", false, "", "ActiveTransform All"},
+        {"TransformTimes", false, "", "TransformTimes 0 1"},
+        {"MakeNamedMedium", false, "", "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\""},
+        {"MediumInterface", false, "", "MediumInterface \"fog\" \"\""},
+    };
+    std::string listed;
+    for (const Use& u : uses) {
+        if (u.listed) listed += (listed.empty() ? "" : ", ") + std::string(u.name);
+        const std::string scene = u.options + "\nWorldBegin\n" + u.world + "\nWorldEnd\n";
+        ASSERT_NE(scene.find(u.name), std::string::npos) << u.name;
+        EXPECT_NO_THROW(parse_string(scene)) << u.name << ":\n" << scene;
+    }
+    try {
+        parse_string("WorldBegin\nBogus\n");
+        FAIL() << "an unknown directive parses";
+    } catch (const SceneError& e) {
+        EXPECT_EQ(e.message(), "unknown directive Bogus (supported: " + listed + ")");
+        EXPECT_STREQ(
+            e.what(),
+            "<string>:2:1: error: unknown directive Bogus (supported: LookAt, Translate, Rotate, "
+            "Scale, Transform, ConcatTransform, Identity, CoordinateSystem, CoordSysTransform, "
+            "ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
+            "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, "
+            "Texture, Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, "
+            "Integrator, Accelerator, ObjectBegin, ObjectEnd, ObjectInstance)");
+    }
+}
