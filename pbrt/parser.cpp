@@ -254,10 +254,8 @@ Param Parser::param_declaration(const Token& decl) {
     const std::string type_name = s.substr(a, b - a);
     auto type = parse_param_type(type_name);
     if (!type)
-        throw SceneError(decl.loc, "unknown parameter type " + q(type_name) +
-                                       " (expected integer, float, point2, vector2, point3, "
-                                       "vector3, normal, rgb, spectrum, blackbody, bool, string, "
-                                       "texture)");
+        throw SceneError(decl.loc, "unknown parameter type " + q(type_name) + " (expected " +
+                                       param_type_names() + ")");
     Param p;
     p.type = *type;
     p.type_name = type_name;

@@ -38,6 +38,32 @@ TEST(Parser, ParameterTypesAndAliases) {
     EXPECT_NEAR(0.212671 * sp[0] + 0.715160 * sp[1] + 0.072169 * sp[2], 1.0, 0.02);
 }
 
+// Every type prints its pbrt-v3 name, which parses back to it; the aliases parse too, and the
+// error for an unknown type lists the names without them.
+TEST(Parser, ParameterTypeNamesRoundTrip) {
+    for (int k = 0; k <= static_cast<int>(ParamType::Texture); ++k)
+        EXPECT_EQ(parse_param_type(to_string(ParamType(k))), ParamType(k)) << k;
+    EXPECT_EQ(parse_param_type("point"), ParamType::Point3);
+    EXPECT_EQ(parse_param_type("vector"), ParamType::Vector3);
+    EXPECT_EQ(parse_param_type("normal3"), ParamType::Normal);
+    EXPECT_EQ(parse_param_type("color"), ParamType::Rgb);
+    EXPECT_EQ(parse_param_type("blackbody"), ParamType::Spectrum);
+    EXPECT_EQ(parse_param_type("Float"), std::nullopt);
+    EXPECT_STREQ(to_string(ParamType::Spectrum), "spectrum");
+    EXPECT_EQ(param_type_names(),
+              "integer, float, point2, vector2, point3, vector3, normal, rgb, spectrum, "
+              "blackbody, bool, string, texture");
+    try {
+        parse_world("Shape \"sphere\" \"flaot radius\" 1");
+        FAIL() << "an unknown parameter type parses";
+    } catch (const SceneError& e) {
+        EXPECT_STREQ(e.what(),
+                     "t.pbrt:3:16: error: unknown parameter type \"flaot\" (expected integer, "
+                     "float, point2, vector2, point3, vector3, normal, rgb, spectrum, blackbody, "
+                     "bool, string, texture)");
+    }
+}
+
 TEST(Parser, SingleValuesWithoutBrackets) {
     SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 2.5 \"float zmin\" [-1]");
     EXPECT_DOUBLE_EQ(d.shapes[0].entity.params.get_float("radius", 1), 2.5);
