@@ -1,7 +1,5 @@
 // pbrt — what each directive does to the graphics state and the scene description, and the
 // table that names them.
-#include <stdexcept>
-
 #include "pbrt/parser_impl.h"
 
 namespace cmam::pbrt::detail {
@@ -74,8 +72,8 @@ void Parser::look_at(const Token& dir) {
     try {
         m_gs.ctm =
             m_gs.ctm * pbrt::look_at({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
-    } catch (const std::domain_error& e) {
-        throw SceneError(dir.loc, e.what());
+    } catch (const SceneError& e) {
+        throw SceneError(dir.loc, e.message());
     }
 }
 
@@ -299,7 +297,7 @@ void Parser::camera(const Token& dir) {
     m_desc.camera_from_world = m_gs.ctm;
     try {
         m_coord_systems["camera"] = m_gs.ctm.inverse();
-    } catch (const std::domain_error&) {
+    } catch (const SceneError&) {
         throw SceneError(dir.loc, "the camera transform is singular");
     }
 }

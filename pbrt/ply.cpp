@@ -16,6 +16,11 @@ namespace cmam::pbrt {
 
 namespace {
 
+// An error of the file at `path`: its message names the file first.
+PlyError ply_error(const std::string& path, const std::string& why) {
+    return PlyError(path + ": " + why);
+}
+
 enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 bool parse_scalar(const std::string& s, Scalar* out) {
@@ -158,7 +163,7 @@ class Reader {
         return static_cast<float>(v);
     }
     static std::string number(double v) { return number_text(v); }
-    [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
+    [[noreturn]] void fail(const std::string& why) { throw ply_error(m_path, why); }
 
   private:
     std::istream& m_in;
@@ -170,17 +175,17 @@ class Reader {
 
 PlyMesh read_ply(const std::string& path) {
     if (std::string why = not_a_regular_file(path); !why.empty())
-        throw PlyError(path + ": cannot read PLY file: " + why);
+        throw ply_error(path, "cannot read PLY file: " + why);
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw PlyError(path + ": cannot open PLY file: " + std::strerror(errno));
+    if (!in) throw ply_error(path, std::string("cannot open PLY file: ") + std::strerror(errno));
     std::string line;
     if (!std::getline(in, line) || line.substr(0, 3) != "ply")
-        throw PlyError(path + ": not a PLY file (missing \"ply\" magic)");
+        throw ply_error(path, "not a PLY file (missing \"ply\" magic)");
     Format format = Format::Ascii;
     bool have_format = false;
     std::vector<Element> elements;
     for (;;) {
-        if (!std::getline(in, line)) throw PlyError(path + ": PLY header has no end_header");
+        if (!std::getline(in, line)) throw ply_error(path, "PLY header has no end_header");
         if (!line.empty() && line.back() == '\r') line.pop_back();
         std::istringstream ls(line);
         std::string word;
@@ -197,17 +202,17 @@ PlyMesh read_ply(const std::string& path) {
             else if (f == "binary_big_endian")
                 format = Format::BinaryBE;
             else
-                throw PlyError(path + ": unknown PLY format \"" + f + "\"");
+                throw ply_error(path, "unknown PLY format \"" + f + "\"");
             have_format = true;
         } else if (word == "element") {
             Element e;
             long long count = -1;
             if (!(ls >> e.name >> count) || count < 0)  // a count beyond long long fails too
-                throw PlyError(path + ": malformed element line \"" + line + "\"");
+                throw ply_error(path, "malformed element line \"" + line + "\"");
             e.count = static_cast<std::size_t>(count);
             elements.push_back(std::move(e));
         } else if (word == "property") {
-            if (elements.empty()) throw PlyError(path + ": property before any element");
+            if (elements.empty()) throw ply_error(path, "property before any element");
             Property p;
             std::string t;
             ls >> t;
@@ -216,18 +221,18 @@ PlyMesh read_ply(const std::string& path) {
                 ls >> ct >> it >> p.name;
                 p.is_list = true;
                 if (!parse_scalar(ct, &p.count_type) || !parse_scalar(it, &p.type))
-                    throw PlyError(path + ": unknown property type in \"" + line + "\"");
+                    throw ply_error(path, "unknown property type in \"" + line + "\"");
             } else {
                 ls >> p.name;
                 if (!parse_scalar(t, &p.type))
-                    throw PlyError(path + ": unknown property type \"" + t + "\"");
+                    throw ply_error(path, "unknown property type \"" + t + "\"");
             }
             elements.back().props.push_back(p);
         } else {
-            throw PlyError(path + ": unexpected PLY header line \"" + line + "\"");
+            throw ply_error(path, "unexpected PLY header line \"" + line + "\"");
         }
     }
-    if (!have_format) throw PlyError(path + ": PLY header has no format line");
+    if (!have_format) throw ply_error(path, "PLY header has no format line");
 
     PlyMesh mesh;
     Reader r(in, format, path);
@@ -318,22 +323,22 @@ PlyMesh read_ply(const std::string& path) {
                 }
         }
     }
-    if (!have_vertices) throw PlyError(path + ": PLY file has no vertex element");
+    if (!have_vertices) throw ply_error(path, "PLY file has no vertex element");
     std::size_t nv = mesh.positions.size() / 3;
     // Several vertex elements may each have normals or texture coordinates or not: the mesh
     // needs them for every vertex or for none.
     auto per_vertex = [&](const std::vector<float>& a, std::size_t k, const char* what) {
         if (!a.empty() && a.size() != k * nv)
-            throw PlyError(path + ": " + what + " given for " + std::to_string(a.size() / k) +
-                           " of " + std::to_string(nv) +
-                           " vertices (give them for every vertex or none)");
+            throw ply_error(path, std::string(what) + " given for " + std::to_string(a.size() / k) +
+                                      " of " + std::to_string(nv) +
+                                      " vertices (give them for every vertex or none)");
     };
     per_vertex(mesh.normals, 3, "normals (nx ny nz)");
     per_vertex(mesh.uvs, 2, "texture coordinates (u v)");
     for (int idx : mesh.indices)
         if (idx < 0 || static_cast<std::size_t>(idx) >= nv)
-            throw PlyError(path + ": face index " + std::to_string(idx) + " out of range (" +
-                           std::to_string(nv) + " vertices)");
+            throw ply_error(path, "face index " + std::to_string(idx) + " out of range (" +
+                                      std::to_string(nv) + " vertices)");
     return mesh;
 }
 

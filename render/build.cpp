@@ -153,7 +153,7 @@ class Builder {
     static Mat4 inverse_or_error(const Mat4& m, const pbrt::FileLoc& loc, const char* message) {
         try {
             return m.inverse();
-        } catch (const std::domain_error&) {
+        } catch (const SceneError&) {
             throw SceneError(loc, message);
         }
     }
@@ -851,7 +851,7 @@ class Builder {
                     try {
                         mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path));
                     } catch (const pbrt::PlyError& err) {
-                        throw SceneError(fp->loc, err.what());
+                        throw SceneError(fp->loc, err.message());
                     }
                 }
                 P = mesh->positions;
@@ -917,7 +917,7 @@ class Builder {
                 Mat4 inv_t;
                 try {
                     inv_t = s.world_from_object.inverse().transposed();
-                } catch (const std::domain_error&) {
+                } catch (const SceneError&) {
                     throw SceneError(e.loc, "the shape's transform is singular");
                 }
                 prim->normals.resize(nv);

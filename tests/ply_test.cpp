@@ -84,16 +84,16 @@ TEST(Ply, ErrorsNameTheFile) {
     try {
         read_ply(path);
         FAIL();
-    } catch (const PlyError& e) {
-        EXPECT_EQ(std::string(e.what()), path + ": face index 1 out of range (1 vertices)");
+    } catch (const SceneError& e) {
+        EXPECT_EQ(e.message(), path + ": face index 1 out of range (1 vertices)");
     }
     std::string trunc =
         write_temp("d.ply",
                    "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
                    "property float z\nend_header\n0 0 0\n1 1\n");
-    EXPECT_THROW(read_ply(trunc), PlyError);
+    EXPECT_THROW(read_ply(trunc), SceneError);
     EXPECT_THROW(read_ply(write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n")),
-                 PlyError);
+                 SceneError);
 }
 
 // Numbers that do not fit what they are read into are errors naming the file and the value,
@@ -105,8 +105,8 @@ TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
     auto error_of = [](const std::string& path) -> std::string {
         try {
             read_ply(path);
-        } catch (const PlyError& e) {
-            return e.what();
+        } catch (const SceneError& e) {
+            return e.message();
         }
         return "no error";
     };
@@ -187,8 +187,8 @@ TEST(Ply, AttributesGivenForSomeVertexElementsOnlyAreErrors) {
         std::string error = "no error";
         try {
             read_ply(path);
-        } catch (const PlyError& e) {
-            error = e.what();
+        } catch (const SceneError& e) {
+            error = e.message();
         }
         EXPECT_EQ(error, path + ": " + c.expected) << c.name;
     }

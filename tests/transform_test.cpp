@@ -35,8 +35,8 @@ TEST(Transform, LookAtMapsEyeToOriginAndViewToPlusZ) {
 }
 
 TEST(Transform, LookAtRejectsDegenerateInput) {
-    EXPECT_THROW(look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}), std::domain_error);
-    EXPECT_THROW(look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}), std::domain_error);
+    EXPECT_THROW(look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}), SceneError);
+    EXPECT_THROW(look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}), SceneError);
 }
 
 TEST(Transform, InverseAndHandedness) {
