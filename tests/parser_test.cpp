@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "expect_throw.h"
 #include "temp_dir.h"
 
 using namespace cmam::pbrt;
@@ -53,15 +54,10 @@ TEST(Parser, ParameterTypeNamesRoundTrip) {
     EXPECT_EQ(param_type_names(),
               "integer, float, point2, vector2, point3, vector3, normal, rgb, spectrum, "
               "blackbody, bool, string, texture");
-    try {
-        parse_world("Shape \"sphere\" \"flaot radius\" 1");
-        FAIL() << "an unknown parameter type parses";
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(),
+    EXPECT_THROW_MSG(parse_world("Shape \"sphere\" \"flaot radius\" 1"), SceneError,
                      "t.pbrt:3:16: error: unknown parameter type \"flaot\" (expected integer, "
                      "float, point2, vector2, point3, vector3, normal, rgb, spectrum, blackbody, "
                      "bool, string, texture)");
-    }
 }
 
 TEST(Parser, SingleValuesWithoutBrackets) {
@@ -258,14 +254,9 @@ TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
     for (std::size_t i = 1; i < s.size(); i += 2) top = std::max(top, s[i]);
     EXPECT_LE(top, 1.0);
     EXPECT_GT(top, 0.999);
-    try {
-        parse_world("LightSource \"point\" \"blackbody I\" [-5 1]");
-        FAIL();
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(),
+    EXPECT_THROW_MSG(parse_world("LightSource \"point\" \"blackbody I\" [-5 1]"), SceneError,
                      "t.pbrt:3:21: error: blackbody \"I\" temperature must be a positive finite "
                      "number of kelvin, got -5");
-    }
 }
 
 TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
@@ -280,18 +271,12 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
         << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
         << "Material \"matte\" \"spectrum Kd\" [400 0.2 500 0.5 600 0.9 700 0.4]\n"
         << "Material \"matte\" \"spectrum Kd\" \"spds/missing.spd\"\nWorldEnd\n";
-    try {
-        parse_file((dir / "main.pbrt").string());
-        FAIL();
-    } catch (const SceneError& e) {  // the third names a file that is not there
-        EXPECT_NE(std::string(e.what()).find(":5:18: error: cannot read spectrum file"),
-                  std::string::npos)
-            << e.what();
-        EXPECT_NE(std::string(e.what()).find("missing.spd\": file not found (named by spectrum "
-                                             "\"Kd\")"),
-                  std::string::npos)
-            << e.what();
-    }
+    // The third names a file that is not there.
+    const std::string main = (dir / "main.pbrt").string();
+    EXPECT_THROW_MSG(parse_file(main), SceneError,
+                     main + ":5:18: error: cannot read spectrum file \"" +
+                         (dir / "spds/missing.spd").string() +
+                         "\": file not found (named by spectrum \"Kd\")");
     std::ofstream(dir / "main.pbrt")
         << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
         << "Material \"matte\" \"spectrum Kd\" [400 0.2 500 0.5 600 0.9 700 0.4]\nWorldEnd\n";
@@ -306,13 +291,8 @@ TEST(Parser, UnusedParameterErrorNamesEntity) {
     SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 1 \"float bogus\" 3");
     const ParamSet& p = d.shapes[0].entity.params;
     p.get_float("radius", 1);
-    try {
-        p.check_unused("shape \"sphere\"", {});
-        FAIL();
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(),
+    EXPECT_THROW_MSG(p.check_unused("shape \"sphere\"", {}), SceneError,
                      "t.pbrt:3:33: error: unknown parameter \"bogus\" for shape \"sphere\"");
-    }
 }
 
 TEST(Parser, KnownButUnsupportedParameterWarns) {
@@ -331,18 +311,16 @@ TEST(Errors, MessagesEscapeWhatATerminalWouldActOn) {
     EXPECT_EQ(printable("a\x1b[31m\x07z"), "a\\x1b[31m\\x07z");
     EXPECT_EQ(printable("caf\xc3\xa9 \xff\xc3"), "caf\xc3\xa9 \\xff\\xc3");
     EXPECT_EQ(printable("two\nlines\t"), "two\nlines\\x09");
-    try {
+    const std::string what = cmam::test::thrown_text<SceneError>([] {
         parse_string(
             "\x7f"
             "ELF\x02\x01",
             "bin.pbrt");
-        FAIL() << "a binary file must not parse";
-    } catch (const SceneError& e) {
-        const std::string what = e.what();
-        EXPECT_EQ(what.rfind("bin.pbrt:1:1: error: unknown directive \\x7fELF\\x02\\x01", 0), 0u)
-            << what;
-        for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
-    }
+    });
+    EXPECT_EQ(
+        what.rfind("bin.pbrt:1:1: error: unknown directive \\x7fELF\\x02\\x01 (supported: ", 0), 0u)
+        << what;
+    for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
 }
 
 // The directives the unknown-directive error lists are the ones the parser reads: each listed
@@ -406,18 +384,14 @@ TEST(Parser, TheUnknownDirectiveErrorListsTheDirectivesItReads) {
         ASSERT_NE(scene.find(u.name), std::string::npos) << u.name;
         EXPECT_NO_THROW(parse_string(scene)) << u.name << ":\n" << scene;
     }
-    try {
-        parse_string("WorldBegin\nBogus\n");
-        FAIL() << "an unknown directive parses";
-    } catch (const SceneError& e) {
-        EXPECT_EQ(e.message(), "unknown directive Bogus (supported: " + listed + ")");
-        EXPECT_STREQ(
-            e.what(),
-            "<string>:2:1: error: unknown directive Bogus (supported: LookAt, Translate, Rotate, "
-            "Scale, Transform, ConcatTransform, Identity, CoordinateSystem, CoordSysTransform, "
-            "ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
-            "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, "
-            "Texture, Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, "
-            "Integrator, Accelerator, ObjectBegin, ObjectEnd, ObjectInstance)");
-    }
+    EXPECT_THROW_MSG(parse_string("WorldBegin\nBogus\n"), SceneError,
+                     "<string>:2:1: error: unknown directive Bogus (supported: " + listed + ")");
+    EXPECT_THROW_MSG(
+        parse_string("WorldBegin\nBogus\n"), SceneError,
+        "<string>:2:1: error: unknown directive Bogus (supported: LookAt, Translate, Rotate, "
+        "Scale, Transform, ConcatTransform, Identity, CoordinateSystem, CoordSysTransform, "
+        "ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
+        "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, "
+        "Texture, Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, "
+        "Integrator, Accelerator, ObjectBegin, ObjectEnd, ObjectInstance)");
 }
