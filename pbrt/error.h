@@ -20,8 +20,9 @@ struct FileLoc {
     std::string to_string() const;  // "file:line:col", "file" when line is 0, "" when unknown
 };
 
-/// The one exception type of the scene parser and the scene builder. `what()` is the complete,
-/// printable message: "file:line:col: error: message".
+/// The one exception type of the pbrt library (tokenizer, parser, PLY reader, transforms) and of
+/// the scene builder. `what()` is the complete, printable message: "file:line:col: error:
+/// message"; `message()` is the message alone.
 class SceneError : public std::runtime_error {
   public:
     SceneError(const FileLoc& loc, const std::string& message);

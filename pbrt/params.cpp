@@ -6,50 +6,62 @@
 
 namespace cmam::pbrt {
 
-std::optional<ParamType> parse_param_type(const std::string& n) {
-    if (n == "integer") return ParamType::Integer;
-    if (n == "float") return ParamType::Float;
-    if (n == "point2") return ParamType::Point2;
-    if (n == "vector2") return ParamType::Vector2;
-    if (n == "point3" || n == "point") return ParamType::Point3;
-    if (n == "vector3" || n == "vector") return ParamType::Vector3;
-    if (n == "normal" || n == "normal3") return ParamType::Normal;
-    if (n == "rgb" || n == "color") return ParamType::Rgb;
-    if (n == "spectrum" || n == "blackbody") return ParamType::Spectrum;  // blackbody: sampled
-    if (n == "bool") return ParamType::Bool;
-    if (n == "string") return ParamType::String;
-    if (n == "texture") return ParamType::Texture;
+namespace {
+
+// Every type name a parameter declaration may use. The first name of each type is the one
+// printed; the aliases pbrt-v3 also reads are not listed in messages. "blackbody" is pbrt-v3's
+// own type, read into a sampled spectrum.
+struct ParamTypeName {
+    ParamType type;
+    const char* name;
+    bool listed;
+};
+constexpr ParamTypeName kParamTypeNames[] = {
+    {ParamType::Integer, "integer", true},   {ParamType::Float, "float", true},
+    {ParamType::Point2, "point2", true},     {ParamType::Vector2, "vector2", true},
+    {ParamType::Point3, "point3", true},     {ParamType::Point3, "point", false},
+    {ParamType::Vector3, "vector3", true},   {ParamType::Vector3, "vector", false},
+    {ParamType::Normal, "normal", true},     {ParamType::Normal, "normal3", false},
+    {ParamType::Rgb, "rgb", true},           {ParamType::Rgb, "color", false},
+    {ParamType::Spectrum, "spectrum", true}, {ParamType::Spectrum, "blackbody", true},
+    {ParamType::Bool, "bool", true},         {ParamType::String, "string", true},
+    {ParamType::Texture, "texture", true},
+};
+
+// Each type's first entry, the name printed, is one messages list.
+constexpr bool every_type_named() {
+    for (int k = 0; k <= static_cast<int>(ParamType::Texture); ++k) {
+        const ParamTypeName* first = nullptr;
+        for (const ParamTypeName& t : kParamTypeNames)
+            if (!first && t.type == ParamType(k)) first = &t;
+        if (!first || !first->listed) return false;
+    }
+    return true;
+}
+static_assert(every_type_named());
+
+}  // namespace
+
+std::optional<ParamType> parse_param_type(const std::string& name) {
+    for (const ParamTypeName& t : kParamTypeNames)
+        if (t.name == name) return t.type;
     return std::nullopt;
 }
 
-const char* to_string(ParamType t) {
-    switch (t) {
-        case ParamType::Integer:
-            return "integer";
-        case ParamType::Float:
-            return "float";
-        case ParamType::Point2:
-            return "point2";
-        case ParamType::Vector2:
-            return "vector2";
-        case ParamType::Point3:
-            return "point3";
-        case ParamType::Vector3:
-            return "vector3";
-        case ParamType::Normal:
-            return "normal";
-        case ParamType::Rgb:
-            return "rgb";
-        case ParamType::Spectrum:
-            return "spectrum";
-        case ParamType::Bool:
-            return "bool";
-        case ParamType::String:
-            return "string";
-        case ParamType::Texture:
-            return "texture";
-    }
+const char* to_string(ParamType type) {
+    for (const ParamTypeName& t : kParamTypeNames)
+        if (t.type == type) return t.name;
     return "?";
+}
+
+const std::string& param_type_names() {
+    static const std::string list = [] {
+        std::string s;
+        for (const ParamTypeName& t : kParamTypeNames)
+            if (t.listed) s += (s.empty() ? "" : ", ") + std::string(t.name);
+        return s;
+    }();
+    return list;
 }
 
 namespace {

@@ -29,7 +29,11 @@ enum class ParamType {
 
 /// Parses a pbrt-v3 type name (including the aliases point, vector, color, normal3).
 std::optional<ParamType> parse_param_type(const std::string& name);
+/// The type's pbrt-v3 name ("point3" for Point3, "spectrum" for Spectrum).
 const char* to_string(ParamType t);
+/// The type names messages list as valid, comma-separated ("integer, float, ..."): pbrt-v3's
+/// own names, without the aliases.
+const std::string& param_type_names();
 
 struct Param {
     ParamType type{};

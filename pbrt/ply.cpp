@@ -16,6 +16,11 @@ namespace cmam::pbrt {
 
 namespace {
 
+// An error of the file at `path`: its message names the file first.
+PlyError ply_error(const std::string& path, const std::string& why) {
+    return PlyError(path + ": " + why);
+}
+
 enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 bool parse_scalar(const std::string& s, Scalar* out) {
@@ -150,6 +155,11 @@ class Reader {
             fail("vertex index " + number(v) + " is not a whole number in int's range");
         return static_cast<int>(v);
     }
+    // A list read and dropped.
+    void skip_list(const Property& p) {
+        const std::size_t n = read_count(p.count_type, kMaxSkippedList);
+        for (std::size_t c = 0; c < n; ++c) read(p.type);
+    }
     // A vertex attribute as stored: a finite single-precision number.
     float to_float(double v, std::size_t vertex, const std::string& property) {
         if (!(std::abs(v) <= std::numeric_limits<float>::max()))
@@ -158,7 +168,7 @@ class Reader {
         return static_cast<float>(v);
     }
     static std::string number(double v) { return number_text(v); }
-    [[noreturn]] void fail(const std::string& why) { throw PlyError(m_path + ": " + why); }
+    [[noreturn]] void fail(const std::string& why) { throw ply_error(m_path, why); }
 
   private:
     std::istream& m_in;
@@ -166,174 +176,206 @@ class Reader {
     const std::string& m_path;
 };
 
-}  // namespace
-
-PlyMesh read_ply(const std::string& path) {
-    if (std::string why = not_a_regular_file(path); !why.empty())
-        throw PlyError(path + ": cannot read PLY file: " + why);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw PlyError(path + ": cannot open PLY file: " + std::strerror(errno));
-    std::string line;
-    if (!std::getline(in, line) || line.substr(0, 3) != "ply")
-        throw PlyError(path + ": not a PLY file (missing \"ply\" magic)");
+struct Header {
     Format format = Format::Ascii;
-    bool have_format = false;
     std::vector<Element> elements;
+};
+
+Format parse_format(const std::string& f, const std::string& path) {
+    if (f == "ascii") return Format::Ascii;
+    if (f == "binary_little_endian") return Format::BinaryLE;
+    if (f == "binary_big_endian") return Format::BinaryBE;
+    throw ply_error(path, "unknown PLY format \"" + f + "\"");
+}
+
+// The property a header line declares; `words` is the line after "property".
+Property parse_property(std::istringstream& words, const std::string& line,
+                        const std::string& path) {
+    Property p;
+    std::string t;
+    words >> t;
+    if (t == "list") {
+        std::string ct, it;
+        words >> ct >> it >> p.name;
+        p.is_list = true;
+        if (!parse_scalar(ct, &p.count_type) || !parse_scalar(it, &p.type))
+            throw ply_error(path, "unknown property type in \"" + line + "\"");
+    } else {
+        words >> p.name;
+        if (!parse_scalar(t, &p.type)) throw ply_error(path, "unknown property type \"" + t + "\"");
+    }
+    return p;
+}
+
+// The header lines after "ply", up to end_header.
+Header read_header(std::istream& in, const std::string& path) {
+    Header h;
+    bool have_format = false;
+    std::string line;
     for (;;) {
-        if (!std::getline(in, line)) throw PlyError(path + ": PLY header has no end_header");
+        if (!std::getline(in, line)) throw ply_error(path, "PLY header has no end_header");
         if (!line.empty() && line.back() == '\r') line.pop_back();
-        std::istringstream ls(line);
+        std::istringstream words(line);
         std::string word;
-        ls >> word;
+        words >> word;
         if (word == "end_header") break;
         if (word == "comment" || word == "obj_info" || word.empty()) continue;
         if (word == "format") {
             std::string f;
-            ls >> f;
-            if (f == "ascii")
-                format = Format::Ascii;
-            else if (f == "binary_little_endian")
-                format = Format::BinaryLE;
-            else if (f == "binary_big_endian")
-                format = Format::BinaryBE;
-            else
-                throw PlyError(path + ": unknown PLY format \"" + f + "\"");
+            words >> f;
+            h.format = parse_format(f, path);
             have_format = true;
         } else if (word == "element") {
             Element e;
             long long count = -1;
-            if (!(ls >> e.name >> count) || count < 0)  // a count beyond long long fails too
-                throw PlyError(path + ": malformed element line \"" + line + "\"");
+            if (!(words >> e.name >> count) || count < 0)  // a count beyond long long fails too
+                throw ply_error(path, "malformed element line \"" + line + "\"");
             e.count = static_cast<std::size_t>(count);
-            elements.push_back(std::move(e));
+            h.elements.push_back(std::move(e));
         } else if (word == "property") {
-            if (elements.empty()) throw PlyError(path + ": property before any element");
-            Property p;
-            std::string t;
-            ls >> t;
-            if (t == "list") {
-                std::string ct, it;
-                ls >> ct >> it >> p.name;
-                p.is_list = true;
-                if (!parse_scalar(ct, &p.count_type) || !parse_scalar(it, &p.type))
-                    throw PlyError(path + ": unknown property type in \"" + line + "\"");
-            } else {
-                ls >> p.name;
-                if (!parse_scalar(t, &p.type))
-                    throw PlyError(path + ": unknown property type \"" + t + "\"");
-            }
-            elements.back().props.push_back(p);
+            if (h.elements.empty()) throw ply_error(path, "property before any element");
+            h.elements.back().props.push_back(parse_property(words, line, path));
         } else {
-            throw PlyError(path + ": unexpected PLY header line \"" + line + "\"");
+            throw ply_error(path, "unexpected PLY header line \"" + line + "\"");
         }
     }
-    if (!have_format) throw PlyError(path + ": PLY header has no format line");
+    if (!have_format) throw ply_error(path, "PLY header has no format line");
+    return h;
+}
 
-    PlyMesh mesh;
-    Reader r(in, format, path);
-    bool have_vertices = false;
-    for (const Element& e : elements) {
-        // Without properties there is nothing to read, however large the count.
-        if (e.props.empty() && e.name != "vertex") continue;
-        if (e.name == "vertex") {
-            have_vertices = true;
-            int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
-            for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
-                const std::string& n = e.props[k].name;
-                if (n == "x")
-                    ix = k;
-                else if (n == "y")
-                    iy = k;
-                else if (n == "z")
-                    iz = k;
-                else if (n == "nx")
-                    inx = k;
-                else if (n == "ny")
-                    iny = k;
-                else if (n == "nz")
-                    inz = k;
-                else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s")
-                    iu = k;
-                else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t")
-                    iv = k;
-            }
-            if (ix < 0 || iy < 0 || iz < 0) r.fail("vertex element lacks x, y, z properties");
-            bool normals = inx >= 0 && iny >= 0 && inz >= 0;
-            bool uvs = iu >= 0 && iv >= 0;
-            std::vector<double> vals(e.props.size());
-            for (std::size_t i = 0; i < e.count; ++i) {
-                for (std::size_t k = 0; k < e.props.size(); ++k) {
-                    const Property& p = e.props[k];
-                    if (p.is_list) {
-                        const std::size_t n = r.read_count(p.count_type, kMaxSkippedList);
-                        for (std::size_t c = 0; c < n; ++c) r.read(p.type);
-                        vals[k] = 0;
-                    } else {
-                        vals[k] = r.read(p.type);
-                    }
-                }
-                auto get = [&](int k) { return r.to_float(vals[k], i, e.props[k].name); };
-                mesh.positions.insert(mesh.positions.end(), {get(ix), get(iy), get(iz)});
-                if (normals)
-                    mesh.normals.insert(mesh.normals.end(), {get(inx), get(iny), get(inz)});
-                if (uvs) mesh.uvs.insert(mesh.uvs.end(), {get(iu), get(iv)});
-            }
-        } else if (e.name == "face") {
-            for (std::size_t i = 0; i < e.count; ++i) {
-                for (const Property& p : e.props) {
-                    if (!p.is_list) {
-                        r.read(p.type);
-                        continue;
-                    }
-                    // Other lists of a face (texture coordinates, say) are read and dropped.
-                    const bool indices = p.name == "vertex_indices" || p.name == "vertex_index";
-                    const std::size_t n =
-                        r.read_count(p.count_type, indices ? kMaxFaceList : kMaxSkippedList);
-                    if (!indices) {
-                        for (std::size_t c = 0; c < n; ++c) r.read(p.type);
-                        continue;
-                    }
-                    std::vector<int> f(n);
-                    for (auto& x : f) x = r.read_index(p.type);
-                    if (n == 3) {
-                        mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
-                    } else if (n == 4) {
-                        mesh.indices.insert(mesh.indices.end(),
-                                            {f[0], f[1], f[2], f[0], f[2], f[3]});
-                    } else {
-                        r.fail("face with " + std::to_string(n) +
-                               " vertices (only triangles and quads are supported)");
-                    }
-                }
-            }
-        } else {
-            for (std::size_t i = 0; i < e.count; ++i)
-                for (const Property& p : e.props) {
-                    if (p.is_list) {
-                        const std::size_t n = r.read_count(p.count_type, kMaxSkippedList);
-                        for (std::size_t c = 0; c < n; ++c) r.read(p.type);
-                    } else {
-                        r.read(p.type);
-                    }
-                }
+// Where a vertex element holds each attribute: the index of its property, -1 when absent.
+struct VertexLayout {
+    int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, u = -1, v = -1;
+
+    explicit VertexLayout(const Element& e) {
+        for (int k = 0; k < static_cast<int>(e.props.size()); ++k) {
+            const std::string& n = e.props[k].name;
+            if (n == "x")
+                x = k;
+            else if (n == "y")
+                y = k;
+            else if (n == "z")
+                z = k;
+            else if (n == "nx")
+                nx = k;
+            else if (n == "ny")
+                ny = k;
+            else if (n == "nz")
+                nz = k;
+            else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s")
+                u = k;
+            else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t")
+                v = k;
         }
     }
-    if (!have_vertices) throw PlyError(path + ": PLY file has no vertex element");
-    std::size_t nv = mesh.positions.size() / 3;
-    // Several vertex elements may each have normals or texture coordinates or not: the mesh
-    // needs them for every vertex or for none.
+};
+
+void read_vertices(Reader& r, const Element& e, PlyMesh& mesh) {
+    const VertexLayout at(e);
+    if (at.x < 0 || at.y < 0 || at.z < 0) r.fail("vertex element lacks x, y, z properties");
+    const bool normals = at.nx >= 0 && at.ny >= 0 && at.nz >= 0;
+    const bool uvs = at.u >= 0 && at.v >= 0;
+    std::vector<double> vals(e.props.size());
+    for (std::size_t i = 0; i < e.count; ++i) {
+        for (std::size_t k = 0; k < e.props.size(); ++k) {
+            const Property& p = e.props[k];
+            if (p.is_list) {
+                r.skip_list(p);
+                vals[k] = 0;
+            } else {
+                vals[k] = r.read(p.type);
+            }
+        }
+        auto get = [&](int k) { return r.to_float(vals[k], i, e.props[k].name); };
+        mesh.positions.insert(mesh.positions.end(), {get(at.x), get(at.y), get(at.z)});
+        if (normals) mesh.normals.insert(mesh.normals.end(), {get(at.nx), get(at.ny), get(at.nz)});
+        if (uvs) mesh.uvs.insert(mesh.uvs.end(), {get(at.u), get(at.v)});
+    }
+}
+
+void read_faces(Reader& r, const Element& e, PlyMesh& mesh) {
+    for (std::size_t i = 0; i < e.count; ++i) {
+        for (const Property& p : e.props) {
+            if (!p.is_list) {
+                r.read(p.type);
+                continue;
+            }
+            // Other lists of a face (texture coordinates, say) are read and dropped.
+            if (p.name != "vertex_indices" && p.name != "vertex_index") {
+                r.skip_list(p);
+                continue;
+            }
+            const std::size_t n = r.read_count(p.count_type, kMaxFaceList);
+            std::vector<int> f(n);
+            for (auto& x : f) x = r.read_index(p.type);
+            if (n == 3)
+                mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
+            else if (n == 4)
+                mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
+            else
+                r.fail("face with " + std::to_string(n) +
+                       " vertices (only triangles and quads are supported)");
+        }
+    }
+}
+
+void skip_element(Reader& r, const Element& e) {
+    for (std::size_t i = 0; i < e.count; ++i)
+        for (const Property& p : e.props) {
+            if (p.is_list)
+                r.skip_list(p);
+            else
+                r.read(p.type);
+        }
+}
+
+// Several vertex elements may each have normals or texture coordinates or not: the mesh needs
+// them for every vertex or for none. Every face index names a vertex.
+void check_mesh(const PlyMesh& mesh, const std::string& path) {
+    const std::size_t nv = mesh.positions.size() / 3;
     auto per_vertex = [&](const std::vector<float>& a, std::size_t k, const char* what) {
         if (!a.empty() && a.size() != k * nv)
-            throw PlyError(path + ": " + what + " given for " + std::to_string(a.size() / k) +
-                           " of " + std::to_string(nv) +
-                           " vertices (give them for every vertex or none)");
+            throw ply_error(path, std::string(what) + " given for " + std::to_string(a.size() / k) +
+                                      " of " + std::to_string(nv) +
+                                      " vertices (give them for every vertex or none)");
     };
     per_vertex(mesh.normals, 3, "normals (nx ny nz)");
     per_vertex(mesh.uvs, 2, "texture coordinates (u v)");
     for (int idx : mesh.indices)
         if (idx < 0 || static_cast<std::size_t>(idx) >= nv)
-            throw PlyError(path + ": face index " + std::to_string(idx) + " out of range (" +
-                           std::to_string(nv) + " vertices)");
+            throw ply_error(path, "face index " + std::to_string(idx) + " out of range (" +
+                                      std::to_string(nv) + " vertices)");
+}
+
+}  // namespace
+
+PlyMesh read_ply(const std::string& path) {
+    if (std::string why = not_a_regular_file(path); !why.empty())
+        throw ply_error(path, "cannot read PLY file: " + why);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ply_error(path, std::string("cannot open PLY file: ") + std::strerror(errno));
+    std::string line;
+    if (!std::getline(in, line) || line.substr(0, 3) != "ply")
+        throw ply_error(path, "not a PLY file (missing \"ply\" magic)");
+    const Header header = read_header(in, path);
+    PlyMesh mesh;
+    Reader r(in, header.format, path);
+    bool have_vertices = false;
+    for (const Element& e : header.elements) {
+        if (e.name == "vertex") {
+            have_vertices = true;
+            read_vertices(r, e, mesh);
+            continue;
+        }
+        // Without properties there is nothing to read, however large the count.
+        if (e.props.empty()) continue;
+        if (e.name == "face")
+            read_faces(r, e, mesh);
+        else
+            skip_element(r, e);
+    }
+    if (!have_vertices) throw ply_error(path, "PLY file has no vertex element");
+    check_mesh(mesh, path);
     return mesh;
 }
 

@@ -3,9 +3,10 @@
 // texture_s texture_t) and faces (triangles and quads; quads are split along their 0-2 diagonal).
 #pragma once
 
-#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "pbrt/error.h"
 
 namespace cmam::pbrt {
 
@@ -16,12 +17,11 @@ struct PlyMesh {
     std::vector<int> indices;      // three per triangle
 };
 
-/// Error reading a PLY file; what() names the file and the reason.
-class PlyError : public std::runtime_error {
-  public:
-    using std::runtime_error::runtime_error;
-};
+/// What read_ply throws: a SceneError not tied to a scene location, whose message names the file
+/// and the reason ("mesh.ply: PLY header has no end_header").
+using PlyError = SceneError;
 
+/// Reads the PLY file at `path`; PlyError when it cannot be read or is malformed.
 PlyMesh read_ply(const std::string& path);
 
 }  // namespace cmam::pbrt

@@ -2,7 +2,8 @@
 
 #include <cmath>
 #include <numbers>
-#include <stdexcept>
+
+#include "pbrt/error.h"
 
 namespace cmam::pbrt {
 
@@ -41,7 +42,7 @@ Mat4 Mat4::inverse() const {
         int piv = col;
         for (int r = col + 1; r < 4; ++r)
             if (std::abs(a[r][col]) > std::abs(a[piv][col])) piv = r;
-        if (std::abs(a[piv][col]) < 1e-300) throw std::domain_error("singular matrix");
+        if (std::abs(a[piv][col]) < 1e-300) throw SceneError("singular matrix");
         std::swap(a[piv], a[col]);
         double inv = 1.0 / a[col][col];
         for (double& x : a[col]) x *= inv;
@@ -105,7 +106,7 @@ Mat4 scale(double x, double y, double z) {
 
 Mat4 rotate(double degrees, double ax, double ay, double az) {
     double len = std::sqrt(ax * ax + ay * ay + az * az);
-    if (len == 0) throw std::domain_error("rotation axis has zero length");
+    if (len == 0) throw SceneError("rotation axis has zero length");
     ax /= len;
     ay /= len;
     az /= len;
@@ -144,12 +145,12 @@ V3 normalized(const V3& a) {
 
 Mat4 look_at(const V3& eye, const V3& look, const V3& up) {
     V3 d = sub(look, eye);
-    if (length(d) == 0) throw std::domain_error("LookAt eye and look point coincide");
+    if (length(d) == 0) throw SceneError("LookAt eye and look point coincide");
     V3 dir = normalized(d);
-    if (length(up) == 0) throw std::domain_error("LookAt up vector has zero length");
+    if (length(up) == 0) throw SceneError("LookAt up vector has zero length");
     V3 right = cross(normalized(up), dir);
     if (length(right) == 0)
-        throw std::domain_error("LookAt up vector is parallel to the viewing direction");
+        throw SceneError("LookAt up vector is parallel to the viewing direction");
     right = normalized(right);
     V3 new_up = cross(dir, right);
     // world_from_camera has columns (right, up, dir, eye); LookAt yields its inverse.

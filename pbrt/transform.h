@@ -13,7 +13,7 @@ struct Mat4 {
     static Mat4 identity();
     Mat4 operator*(const Mat4& b) const;
     Mat4 transposed() const;
-    /// Inverse; throws std::domain_error when singular.
+    /// Inverse; throws SceneError (not tied to a location) when singular.
     Mat4 inverse() const;
     bool is_identity() const;
     /// True when the upper 3x3 has a negative determinant (mirrors handedness).
@@ -25,9 +25,10 @@ struct Mat4 {
 
 Mat4 translate(double x, double y, double z);
 Mat4 scale(double x, double y, double z);
-/// Rotation by `degrees` about `axis` (normalised here).
+/// Rotation by `degrees` about `axis` (normalised here; SceneError when it has zero length).
 Mat4 rotate(double degrees, double ax, double ay, double az);
-/// pbrt-v3 LookAt: returns camera_from_world. Throws std::domain_error for degenerate input.
+/// pbrt-v3 LookAt: returns camera_from_world. Throws SceneError (not tied to a location) for
+/// degenerate input.
 Mat4 look_at(const std::array<double, 3>& eye, const std::array<double, 3>& look,
              const std::array<double, 3>& up);
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "expect_throw.h"
 #include "temp_dir.h"
 
 using namespace cmam::pbrt;
@@ -36,6 +37,27 @@ TEST(Parser, ParameterTypesAndAliases) {
     EXPECT_EQ(p.find("N")->type, ParamType::Normal);
     auto sp = *p.get_rgb("sp");  // a flat spectrum is a near-white
     EXPECT_NEAR(0.212671 * sp[0] + 0.715160 * sp[1] + 0.072169 * sp[2], 1.0, 0.02);
+}
+
+// Every type prints its pbrt-v3 name, which parses back to it; the aliases parse too, and the
+// error for an unknown type lists the names without them.
+TEST(Parser, ParameterTypeNamesRoundTrip) {
+    for (int k = 0; k <= static_cast<int>(ParamType::Texture); ++k)
+        EXPECT_EQ(parse_param_type(to_string(ParamType(k))), ParamType(k)) << k;
+    EXPECT_EQ(parse_param_type("point"), ParamType::Point3);
+    EXPECT_EQ(parse_param_type("vector"), ParamType::Vector3);
+    EXPECT_EQ(parse_param_type("normal3"), ParamType::Normal);
+    EXPECT_EQ(parse_param_type("color"), ParamType::Rgb);
+    EXPECT_EQ(parse_param_type("blackbody"), ParamType::Spectrum);
+    EXPECT_EQ(parse_param_type("Float"), std::nullopt);
+    EXPECT_STREQ(to_string(ParamType::Spectrum), "spectrum");
+    EXPECT_EQ(param_type_names(),
+              "integer, float, point2, vector2, point3, vector3, normal, rgb, spectrum, "
+              "blackbody, bool, string, texture");
+    EXPECT_THROW_MSG(parse_world("Shape \"sphere\" \"flaot radius\" 1"), SceneError,
+                     "t.pbrt:3:16: error: unknown parameter type \"flaot\" (expected integer, "
+                     "float, point2, vector2, point3, vector3, normal, rgb, spectrum, blackbody, "
+                     "bool, string, texture)");
 }
 
 TEST(Parser, SingleValuesWithoutBrackets) {
@@ -232,14 +254,9 @@ TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
     for (std::size_t i = 1; i < s.size(); i += 2) top = std::max(top, s[i]);
     EXPECT_LE(top, 1.0);
     EXPECT_GT(top, 0.999);
-    try {
-        parse_world("LightSource \"point\" \"blackbody I\" [-5 1]");
-        FAIL();
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(),
+    EXPECT_THROW_MSG(parse_world("LightSource \"point\" \"blackbody I\" [-5 1]"), SceneError,
                      "t.pbrt:3:21: error: blackbody \"I\" temperature must be a positive finite "
                      "number of kelvin, got -5");
-    }
 }
 
 TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
@@ -254,18 +271,12 @@ TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
         << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
         << "Material \"matte\" \"spectrum Kd\" [400 0.2 500 0.5 600 0.9 700 0.4]\n"
         << "Material \"matte\" \"spectrum Kd\" \"spds/missing.spd\"\nWorldEnd\n";
-    try {
-        parse_file((dir / "main.pbrt").string());
-        FAIL();
-    } catch (const SceneError& e) {  // the third names a file that is not there
-        EXPECT_NE(std::string(e.what()).find(":5:18: error: cannot read spectrum file"),
-                  std::string::npos)
-            << e.what();
-        EXPECT_NE(std::string(e.what()).find("missing.spd\": file not found (named by spectrum "
-                                             "\"Kd\")"),
-                  std::string::npos)
-            << e.what();
-    }
+    // The third names a file that is not there.
+    const std::string main = (dir / "main.pbrt").string();
+    EXPECT_THROW_MSG(parse_file(main), SceneError,
+                     main + ":5:18: error: cannot read spectrum file \"" +
+                         (dir / "spds/missing.spd").string() +
+                         "\": file not found (named by spectrum \"Kd\")");
     std::ofstream(dir / "main.pbrt")
         << kHeader << "Material \"matte\" \"spectrum Kd\" \"spds/k.spd\"\n"
         << "Material \"matte\" \"spectrum Kd\" [400 0.2 500 0.5 600 0.9 700 0.4]\nWorldEnd\n";
@@ -280,13 +291,8 @@ TEST(Parser, UnusedParameterErrorNamesEntity) {
     SceneDesc d = parse_world("Shape \"sphere\" \"float radius\" 1 \"float bogus\" 3");
     const ParamSet& p = d.shapes[0].entity.params;
     p.get_float("radius", 1);
-    try {
-        p.check_unused("shape \"sphere\"", {});
-        FAIL();
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(),
+    EXPECT_THROW_MSG(p.check_unused("shape \"sphere\"", {}), SceneError,
                      "t.pbrt:3:33: error: unknown parameter \"bogus\" for shape \"sphere\"");
-    }
 }
 
 TEST(Parser, KnownButUnsupportedParameterWarns) {
@@ -305,16 +311,87 @@ TEST(Errors, MessagesEscapeWhatATerminalWouldActOn) {
     EXPECT_EQ(printable("a\x1b[31m\x07z"), "a\\x1b[31m\\x07z");
     EXPECT_EQ(printable("caf\xc3\xa9 \xff\xc3"), "caf\xc3\xa9 \\xff\\xc3");
     EXPECT_EQ(printable("two\nlines\t"), "two\nlines\\x09");
-    try {
+    const std::string what = cmam::test::thrown_text<SceneError>([] {
         parse_string(
             "\x7f"
             "ELF\x02\x01",
             "bin.pbrt");
-        FAIL() << "a binary file must not parse";
-    } catch (const SceneError& e) {
-        const std::string what = e.what();
-        EXPECT_EQ(what.rfind("bin.pbrt:1:1: error: unknown directive \\x7fELF\\x02\\x01", 0), 0u)
-            << what;
-        for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
+    });
+    EXPECT_EQ(
+        what.rfind("bin.pbrt:1:1: error: unknown directive \\x7fELF\\x02\\x01 (supported: ", 0), 0u)
+        << what;
+    for (char c : what) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n');
+}
+
+// The directives the unknown-directive error lists are the ones the parser reads: each listed
+// one parses, and so do the pbrt-v3 directives cmam reads without listing them.
+TEST(Parser, TheUnknownDirectiveErrorListsTheDirectivesItReads) {
+    const cmam::test::TempDir tmp("cmam_directives");
+    const std::string part = (tmp.path / "part.pbrt").string();
+    std::ofstream(part) << "Shape \"sphere\"\n";
+    // Every pbrt-v3 directive, in the error's order, with text before and inside the world
+    // block that uses it.
+    struct Use {
+        const char* name;
+        bool listed;
+        std::string options, world;
+    };
+    const Use uses[] = {
+        {"LookAt", true, "LookAt 0 0 -1  0 0 0  0 1 0", ""},
+        {"Translate", true, "", "Translate 1 0 0"},
+        {"Rotate", true, "", "Rotate 30 0 0 1"},
+        {"Scale", true, "", "Scale 1 2 3"},
+        {"Transform", true, "", "Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]"},
+        {"ConcatTransform", true, "", "ConcatTransform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]"},
+        {"Identity", true, "", "Identity"},
+        {"CoordinateSystem", true, "", "CoordinateSystem \"c\""},
+        {"CoordSysTransform", true, "", "CoordinateSystem \"c\" CoordSysTransform \"c\""},
+        {"ReverseOrientation", true, "", "ReverseOrientation"},
+        {"WorldBegin", true, "", ""},
+        {"WorldEnd", true, "", ""},
+        {"AttributeBegin", true, "", "AttributeBegin AttributeEnd"},
+        {"AttributeEnd", true, "", "AttributeBegin AttributeEnd"},
+        {"TransformBegin", true, "", "TransformBegin TransformEnd"},
+        {"TransformEnd", true, "", "TransformBegin TransformEnd"},
+        {"Include", true, "", "Include \"" + part + "\""},
+        {"MakeNamedMaterial", true, "", "MakeNamedMaterial \"m\" \"string type\" \"matte\""},
+        {"NamedMaterial", true, "",
+         "MakeNamedMaterial \"m\" \"string type\" \"matte\" NamedMaterial \"m\""},
+        {"Material", true, "", "Material \"matte\""},
+        {"Texture", true, "", "Texture \"t\" \"float\" \"constant\""},
+        {"Shape", true, "", "Shape \"sphere\""},
+        {"LightSource", true, "", "LightSource \"point\""},
+        {"AreaLightSource", true, "", "AreaLightSource \"diffuse\""},
+        {"Camera", true, "Camera \"perspective\"", ""},
+        {"Film", true, "Film \"image\"", ""},
+        {"Sampler", true, "Sampler \"random\"", ""},
+        {"PixelFilter", true, "PixelFilter \"box\"", ""},
+        {"Integrator", true, "Integrator \"whitted\"", ""},
+        {"Accelerator", true, "Accelerator \"bvh\"", ""},
+        {"ObjectBegin", true, "", "ObjectBegin \"o\" ObjectEnd"},
+        {"ObjectEnd", true, "", "ObjectBegin \"o\" ObjectEnd"},
+        {"ObjectInstance", true, "", "ObjectBegin \"o\" ObjectEnd ObjectInstance \"o\""},
+        {"SurfaceIntegrator", false, "SurfaceIntegrator \"whitted\"", ""},
+        {"ActiveTransform", false, "", "ActiveTransform All"},
+        {"TransformTimes", false, "", "TransformTimes 0 1"},
+        {"MakeNamedMedium", false, "", "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\""},
+        {"MediumInterface", false, "", "MediumInterface \"fog\" \"\""},
+    };
+    std::string listed;
+    for (const Use& u : uses) {
+        if (u.listed) listed += (listed.empty() ? "" : ", ") + std::string(u.name);
+        const std::string scene = u.options + "\nWorldBegin\n" + u.world + "\nWorldEnd\n";
+        ASSERT_NE(scene.find(u.name), std::string::npos) << u.name;
+        EXPECT_NO_THROW(parse_string(scene)) << u.name << ":\n" << scene;
     }
+    EXPECT_THROW_MSG(parse_string("WorldBegin\nBogus\n"), SceneError,
+                     "<string>:2:1: error: unknown directive Bogus (supported: " + listed + ")");
+    EXPECT_THROW_MSG(
+        parse_string("WorldBegin\nBogus\n"), SceneError,
+        "<string>:2:1: error: unknown directive Bogus (supported: LookAt, Translate, Rotate, "
+        "Scale, Transform, ConcatTransform, Identity, CoordinateSystem, CoordSysTransform, "
+        "ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
+        "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, "
+        "Texture, Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, "
+        "Integrator, Accelerator, ObjectBegin, ObjectEnd, ObjectInstance)");
 }

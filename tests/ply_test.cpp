@@ -9,6 +9,8 @@
 #include <fstream>
 #include <vector>
 
+#include "expect_throw.h"
+
 using namespace cmam::pbrt;
 namespace fs = std::filesystem;
 
@@ -27,6 +29,21 @@ std::string write_temp(const std::string& name, const std::string& bytes) {
     std::ofstream(p, std::ios::binary) << bytes;
     g_written.paths.push_back(p);
     return p.string();
+}
+
+// A file the reader rejects, and the message it gives after the file's name.
+struct BadFile {
+    const char* name;
+    std::string text;
+    std::string expected;
+};
+
+void expect_rejected(const std::vector<BadFile>& files) {
+    for (const BadFile& f : files) {
+        const std::string path = write_temp(f.name, f.text);
+        EXPECT_THROW_MSG(read_ply(path), SceneError, "error: " + path + ": " + f.expected)
+            << f.name;
+    }
 }
 }  // namespace
 
@@ -81,19 +98,17 @@ TEST(Ply, ErrorsNameTheFile) {
                    "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                    "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
                    "end_header\n0 0 0\n3 0 1 2\n");
-    try {
-        read_ply(path);
-        FAIL();
-    } catch (const PlyError& e) {
-        EXPECT_EQ(std::string(e.what()), path + ": face index 1 out of range (1 vertices)");
-    }
+    EXPECT_THROW_MSG(read_ply(path), SceneError,
+                     "error: " + path + ": face index 1 out of range (1 vertices)");
     std::string trunc =
         write_temp("d.ply",
                    "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
                    "property float z\nend_header\n0 0 0\n1 1\n");
-    EXPECT_THROW(read_ply(trunc), PlyError);
-    EXPECT_THROW(read_ply(write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n")),
-                 PlyError);
+    EXPECT_THROW_MSG(read_ply(trunc), SceneError,
+                     "error: " + trunc + ": unexpected end of data or malformed number");
+    const std::string headless = write_temp("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\n");
+    EXPECT_THROW_MSG(read_ply(headless), SceneError,
+                     "error: " + headless + ": PLY header has no end_header");
 }
 
 // Numbers that do not fit what they are read into are errors naming the file and the value,
@@ -102,21 +117,8 @@ TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
     const std::string head =
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
         "property double z\n";
-    auto error_of = [](const std::string& path) -> std::string {
-        try {
-            read_ply(path);
-        } catch (const PlyError& e) {
-            return e.what();
-        }
-        return "no error";
-    };
-    struct Case {
-        const char* name;
-        std::string text;
-        std::string expected;
-    };
     const std::string verts = "0 0 0\n1 0 0\n0 1 0\n";
-    const Case cases[] = {
+    expect_rejected({
         {"f.ply",
          head + "element face 1\nproperty list double int vertex_indices\nend_header\n" + verts +
              "1e30 0 1 2\n",
@@ -145,11 +147,7 @@ TEST(Ply, OutOfRangeCountsIndicesAndCoordinatesAreErrors) {
          head + "element extra 1\nproperty list float uchar junk\nend_header\n" + verts +
              "-2 1 2\n",
          "invalid list length -2 (at most 2147483647)"},
-    };
-    for (const Case& c : cases) {
-        const std::string path = write_temp(c.name, c.text);
-        EXPECT_EQ(error_of(path), path + ": " + c.expected) << c.name;
-    }
+    });
     // An element without properties has nothing to read, whatever its count says (the count
     // once drove an empty loop of 2^63 steps).
     const PlyMesh m = read_ply(
@@ -164,12 +162,7 @@ TEST(Ply, AttributesGivenForSomeVertexElementsOnlyAreErrors) {
     const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
     const std::string plain = "element vertex 2\n" + xyz;
     const std::string end = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
-    struct Case {
-        const char* name;
-        std::string text;
-        std::string expected;
-    };
-    const Case cases[] = {
+    expect_rejected({
         {"uv_first.ply",
          "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz +
              "property float u\nproperty float v\n" + plain + end +
@@ -181,15 +174,39 @@ TEST(Ply, AttributesGivenForSomeVertexElementsOnlyAreErrors) {
              "property float nx\nproperty float ny\nproperty float nz\n" + end +
              "0 0 0\n1 0 0\n0 1 0 0 0 1\n3 0 1 2\n",
          "normals (nx ny nz) given for 1 of 3 vertices (give them for every vertex or none)"},
-    };
-    for (const Case& c : cases) {
-        const std::string path = write_temp(c.name, c.text);
-        std::string error = "no error";
-        try {
-            read_ply(path);
-        } catch (const PlyError& e) {
-            error = e.what();
-        }
-        EXPECT_EQ(error, path + ": " + c.expected) << c.name;
-    }
+    });
+}
+
+// Each way a header or a body can be wrong has its own message, after the file's name.
+TEST(Ply, EveryMalformationHasItsMessage) {
+    const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+    const std::string faces = "element face 1\nproperty list uchar int vertex_indices\n";
+    expect_rejected({
+        {"magic.ply", "plx\n", "not a PLY file (missing \"ply\" magic)"},
+        {"format.ply", "ply\nformat binary 1.0\n", "unknown PLY format \"binary\""},
+        {"orphan.ply", "ply\nformat ascii 1.0\nproperty float x\n", "property before any element"},
+        {"list.ply", "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar quad v\n",
+         "unknown property type in \"property list uchar quad v\""},
+        {"type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty real x\n",
+         "unknown property type \"real\""},
+        {"line.ply", "ply\nformat ascii 1.0\nvertices 3\n",
+         "unexpected PLY header line \"vertices 3\""},
+        {"noformat.ply", "ply\nelement vertex 0\nend_header\n", "PLY header has no format line"},
+        {"novertex.ply", "ply\nformat ascii 1.0\nend_header\n", "PLY file has no vertex element"},
+        {"noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
+         "vertex element lacks x, y, z properties"},
+        {"pentagon.ply",
+         "ply\nformat ascii 1.0\nelement vertex 5\n" + xyz + faces +
+             "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 2 0\n5 0 1 2 3 4\n",
+         "face with 5 vertices (only triangles and quads are supported)"},
+        {"short.ply",
+         "ply\nformat binary_little_endian 1.0\nelement vertex 1\n" + xyz + "end_header\n\x01\x02",
+         "unexpected end of data"},
+    });
+    const std::string dir = fs::temp_directory_path().string();
+    EXPECT_THROW_MSG(read_ply(dir), SceneError,
+                     "error: " + dir + ": cannot read PLY file: it is a directory");
+    const std::string missing = dir + "/cmam_ply_missing_" + std::to_string(::getpid()) + ".ply";
+    EXPECT_THROW_MSG(read_ply(missing), SceneError,
+                     "error: " + missing + ": cannot open PLY file: No such file or directory");
 }

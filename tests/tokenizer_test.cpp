@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "expect_throw.h"
+
 using namespace cmam::pbrt;
 
 namespace {
@@ -48,19 +50,15 @@ TEST(Tokenizer, Escapes) {
 }
 
 TEST(Tokenizer, UnterminatedStringIsLocated) {
-    try {
-        all("Shape\n  \"sphere");
-        FAIL() << "no error";
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(), "f.pbrt:2:3: error: unterminated string");
-    }
+    EXPECT_THROW_MSG(all("Shape\n  \"sphere"), SceneError,
+                     "f.pbrt:2:3: error: unterminated string");
+    // A string ends on its line, and a backslash at the end of the text escapes nothing.
+    EXPECT_THROW_MSG(all("Shape \"sph\nere\""), SceneError,
+                     "f.pbrt:1:7: error: unterminated string");
+    EXPECT_THROW_MSG(all("\n \"a\\"), SceneError, "f.pbrt:2:2: error: unterminated string");
 }
 
 TEST(Tokenizer, BadEscape) {
-    try {
-        all(R"("a\q")");
-        FAIL() << "no error";
-    } catch (const SceneError& e) {
-        EXPECT_STREQ(e.what(), "f.pbrt:1:1: error: unknown escape \\q in string");
-    }
+    EXPECT_THROW_MSG(all(R"("a\q")"), SceneError,
+                     "f.pbrt:1:1: error: unknown escape \\q in string");
 }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "expect_throw.h"
 #include "pbrt/parser.h"
 
 using namespace cmam::pbrt;
@@ -35,8 +36,24 @@ TEST(Transform, LookAtMapsEyeToOriginAndViewToPlusZ) {
 }
 
 TEST(Transform, LookAtRejectsDegenerateInput) {
-    EXPECT_THROW(look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}), std::domain_error);
-    EXPECT_THROW(look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}), std::domain_error);
+    EXPECT_THROW_MSG(look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}), SceneError,
+                     "error: LookAt eye and look point coincide");
+    EXPECT_THROW_MSG(look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}), SceneError,
+                     "error: LookAt up vector is parallel to the viewing direction");
+    EXPECT_THROW_MSG(look_at({0, 0, 0}, {0, 0, 1}, {0, 0, 0}), SceneError,
+                     "error: LookAt up vector has zero length");
+    // The directive's error is located at it.
+    EXPECT_THROW_MSG(parse_string("Camera \"perspective\"\nLookAt 1 2 3  1 2 3  0 1 0"), SceneError,
+                     "<string>:2:1: error: LookAt eye and look point coincide");
+}
+
+TEST(Transform, SingularMatricesAndZeroAxesAreErrors) {
+    EXPECT_THROW_MSG(scale(1, 0, 1).inverse(), SceneError, "error: singular matrix");
+    EXPECT_THROW_MSG(rotate(30, 0, 0, 0), SceneError, "error: rotation axis has zero length");
+    EXPECT_THROW_MSG(parse_string("Scale 1 0 1\nCamera \"perspective\"\nWorldBegin WorldEnd"),
+                     SceneError, "<string>:2:1: error: the camera transform is singular");
+    EXPECT_THROW_MSG(parse_string("Rotate 30 0 0 0"), SceneError,
+                     "<string>:1:1: error: Rotate axis has zero length");
 }
 
 TEST(Transform, InverseAndHandedness) {
