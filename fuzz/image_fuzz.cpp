@@ -1,5 +1,5 @@
 // fuzz — image loading on arbitrary bytes: render::load_texture (and so render::read_image)
-// returns a texture or throws ImageIoError. The input's last byte picks the file's extension
+// returns a texture or throws RenderError. The input's last byte picks the file's extension
 // (the reader is chosen by the file's first bytes; the extension matters only for TGA) and
 // whether the texture is read as float or RGB; the rest is the file.
 #include <cstddef>
@@ -36,7 +36,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
         const bool is_float = (select / kCount) & 1;
         cmam::render::load_texture(path, is_float, std::nullopt, 1.0f,
                                    cmam::texture::WrapMode::Repeat);
-    } catch (const cmam::render::ImageIoError&) {
+    } catch (const cmam::render::RenderError&) {
     }
     return 0;
 }

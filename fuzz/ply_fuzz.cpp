@@ -1,4 +1,4 @@
-// fuzz — the PLY reader on arbitrary bytes: it returns a mesh or throws PlyError. A mesh it
+// fuzz — the PLY reader on arbitrary bytes: it returns a mesh or throws SceneError. A mesh it
 // returns is then built as a "plymesh" shape, so what the reader lets through (element counts,
 // partial normals or uvs, indices) reaches render::build_scene, which must reject it with a
 // SceneError or build it.
@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     cmam::fuzz::write_file(path, data, size);
     try {
         cmam::pbrt::read_ply(path);
-    } catch (const cmam::pbrt::PlyError&) {
+    } catch (const cmam::pbrt::SceneError&) {
         return 0;
     }
     try {

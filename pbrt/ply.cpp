@@ -17,8 +17,8 @@ namespace cmam::pbrt {
 namespace {
 
 // An error of the file at `path`: its message names the file first.
-PlyError ply_error(const std::string& path, const std::string& why) {
-    return PlyError(path + ": " + why);
+SceneError ply_error(const std::string& path, const std::string& why) {
+    return SceneError(path + ": " + why);
 }
 
 enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };

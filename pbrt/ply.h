@@ -17,11 +17,9 @@ struct PlyMesh {
     std::vector<int> indices;      // three per triangle
 };
 
-/// What read_ply throws: a SceneError not tied to a scene location, whose message names the file
-/// and the reason ("mesh.ply: PLY header has no end_header").
-using PlyError = SceneError;
-
-/// Reads the PLY file at `path`; PlyError when it cannot be read or is malformed.
+/// Reads the PLY file at `path`. When it cannot be read or is malformed: a SceneError not tied
+/// to a scene location, whose message names the file and the reason ("mesh.ply: PLY header has
+/// no end_header").
 PlyMesh read_ply(const std::string& path);
 
 }  // namespace cmam::pbrt

@@ -28,7 +28,7 @@
 #include <memory>
 #include <mutex>
 
-// Each C library reports errors its own way; the decoders turn every one into a CodecError.
+// Each C library reports errors its own way; the decoders turn every one into a RenderError.
 // libpng and libjpeg leave a failed call by longjmp: the functions that call them keep their
 // state in heap objects owned by a guard declared before setjmp, so nothing whose destructor
 // matters is skipped and nothing read after the jump lives in a register.
@@ -46,13 +46,13 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 
 File open_for_reading(const std::string& path) {
     File f(std::fopen(path.c_str(), "rb"));
-    if (!f) throw CodecError(std::strerror(errno));
+    if (!f) throw RenderError(std::strerror(errno));
     return f;
 }
 
 // Multiplied in double: a header's width × height × channels may exceed 64 bits.
 void check_size(RawImage& img, const SizeCheck& check) {
-    if (img.width <= 0 || img.height <= 0 || img.channels <= 0) throw CodecError("empty image");
+    if (img.width <= 0 || img.height <= 0 || img.channels <= 0) throw RenderError("empty image");
     check(img);
     img.pixels.resize(static_cast<std::size_t>(img.width) * img.height * img.channels);
 }
@@ -85,8 +85,8 @@ RawImage decode_png(const std::string& path, const SizeCheck& check) {
     const auto img = std::make_unique<RawImage>();
     s->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &s->message, png_error_to_jump,
                                     png_ignore_warning);
-    if (!s->png || !(s->info = png_create_info_struct(s->png))) throw CodecError("out of memory");
-    if (setjmp(png_jmpbuf(s->png))) throw CodecError(s->message.text);
+    if (!s->png || !(s->info = png_create_info_struct(s->png))) throw RenderError("out of memory");
+    if (setjmp(png_jmpbuf(s->png))) throw RenderError(s->message.text);
     png_init_io(s->png, f.get());
     // Ancillary chunks other than transparency are not used: skipped unread, so that a text or
     // profile chunk whose length claims a gigabyte allocates nothing (libpng would allocate it).
@@ -147,8 +147,8 @@ std::vector<unsigned char> encode_png(int w, int h, const unsigned char* rgb) {
     const auto s = std::make_unique<PngWriteState>();
     s->png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &s->message, png_error_to_jump,
                                      png_ignore_warning);
-    if (!s->png || !(s->info = png_create_info_struct(s->png))) throw CodecError("out of memory");
-    if (setjmp(png_jmpbuf(s->png))) throw CodecError(s->message.text);
+    if (!s->png || !(s->info = png_create_info_struct(s->png))) throw RenderError("out of memory");
+    if (setjmp(png_jmpbuf(s->png))) throw RenderError(s->message.text);
     png_set_write_fn(s->png, &s->out, png_append, png_no_flush);
     png_set_IHDR(s->png, s->info, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
@@ -196,13 +196,13 @@ RawImage decode_jpeg(const std::string& path, const SizeCheck& check) {
     const auto s = std::make_unique<JpegReadState>();
     const auto img = std::make_unique<RawImage>();
     s->cinfo.err = &install_jpeg_errors(s->error)->mgr;
-    if (setjmp(s->error.jump)) throw CodecError(s->error.text);
+    if (setjmp(s->error.jump)) throw RenderError(s->error.text);
     jpeg_create_decompress(&s->cinfo);
     s->created = true;
     jpeg_stdio_src(&s->cinfo, f.get());
     jpeg_read_header(&s->cinfo, TRUE);
     if (s->cinfo.jpeg_color_space == JCS_CMYK || s->cinfo.jpeg_color_space == JCS_YCCK)
-        throw CodecError("CMYK JPEG images are not supported (convert it to RGB)");
+        throw RenderError("CMYK JPEG images are not supported (convert it to RGB)");
     s->cinfo.out_color_space = s->cinfo.num_components == 1 ? JCS_GRAYSCALE : JCS_RGB;
     jpeg_calc_output_dimensions(&s->cinfo);
     img->width = static_cast<int>(s->cinfo.output_width);
@@ -239,7 +239,7 @@ struct JpegWriteState {
 std::vector<unsigned char> encode_jpeg(int w, int h, const unsigned char* rgb) {
     const auto s = std::make_unique<JpegWriteState>();
     s->cinfo.err = &install_jpeg_errors(s->error)->mgr;
-    if (setjmp(s->error.jump)) throw CodecError(s->error.text);
+    if (setjmp(s->error.jump)) throw RenderError(s->error.text);
     jpeg_create_compress(&s->cinfo);
     s->created = true;
     jpeg_mem_dest(&s->cinfo, &s->buffer, &s->size);
@@ -282,7 +282,7 @@ struct TiffCloser {
 using Tiff = std::unique_ptr<TIFF, TiffCloser>;
 
 [[noreturn]] void tiff_fail(const char* fallback) {
-    throw CodecError(t_tiff_message[0] ? t_tiff_message : fallback);
+    throw RenderError(t_tiff_message[0] ? t_tiff_message : fallback);
 }
 
 RawImage decode_tiff(const std::string& path, const SizeCheck& check) {
@@ -298,7 +298,7 @@ RawImage decode_tiff(const std::string& path, const SizeCheck& check) {
     TIFFGetFieldDefaulted(t.get(), TIFFTAG_BITSPERSAMPLE, &bits);
     TIFFGetFieldDefaulted(t.get(), TIFFTAG_SAMPLEFORMAT, &format);
     TIFFGetFieldDefaulted(t.get(), TIFFTAG_PLANARCONFIG, &planar);
-    if (w > 0x7fffffffu || h > 0x7fffffffu) throw CodecError("image too large");
+    if (w > 0x7fffffffu || h > 0x7fffffffu) throw RenderError("image too large");
     RawImage img;
     img.width = static_cast<int>(w);
     img.height = static_cast<int>(h);
@@ -313,7 +313,7 @@ RawImage decode_tiff(const std::string& path, const SizeCheck& check) {
         check_size(img, check);
         std::vector<unsigned char> row(static_cast<std::size_t>(TIFFScanlineSize(t.get())));
         const std::size_t n = static_cast<std::size_t>(w) * spp;
-        if (row.size() < n * (bits / 8)) throw CodecError("inconsistent scanline size");
+        if (row.size() < n * (bits / 8)) throw RenderError("inconsistent scanline size");
         for (std::uint32_t y = 0; y < h; ++y) {
             if (TIFFReadScanline(t.get(), row.data(), y, 0) < 0) tiff_fail("corrupt TIFF data");
             float* dst = &img.pixels[y * n];
@@ -330,7 +330,7 @@ RawImage decode_tiff(const std::string& path, const SizeCheck& check) {
         return img;
     }
     char why[1024] = "";
-    if (!TIFFRGBAImageOK(t.get(), why)) throw CodecError(why[0] ? why : "unsupported TIFF layout");
+    if (!TIFFRGBAImageOK(t.get(), why)) throw RenderError(why[0] ? why : "unsupported TIFF layout");
     img.channels = spp == 2 || spp >= 4 ? 4 : 3;
     img.is_8bit = true;
     check_size(img, check);
@@ -360,7 +360,7 @@ std::vector<std::string> exr_channels(const Imf::ChannelList& list) {
     }
     if (has("Y")) return {"Y"};
     if (list.begin() != list.end()) return {list.begin().name()};
-    throw CodecError("the file has no channels");
+    throw RenderError("the file has no channels");
 }
 
 // The size of a value of one of OpenEXR's fixed-size attribute types; -1 for the others.
@@ -404,7 +404,7 @@ void precheck_exr(const std::string& path, const SizeCheck& check) {
         return false;
     };
     auto corrupt = [](const std::string& why) {
-        return CodecError("corrupt OpenEXR header" + (why.empty() ? "" : ": " + why));
+        return RenderError("corrupt OpenEXR header" + (why.empty() ? "" : ": " + why));
     };
     std::string name, type;
     bool have_window = false;
@@ -458,8 +458,8 @@ void precheck_exr(const std::string& path, const SizeCheck& check) {
     if (!in) throw corrupt("");
     if (!have_window || channels < 0)
         throw corrupt(!have_window ? "no data window" : "no channel list");
-    if (w <= 0 || h <= 0 || channels == 0) throw CodecError("empty image");
-    if (w > 0x7fffffff || h > 0x7fffffff) throw CodecError("image too large");
+    if (w <= 0 || h <= 0 || channels == 0) throw RenderError("empty image");
+    if (w > 0x7fffffff || h > 0x7fffffff) throw RenderError("image too large");
     RawImage img;
     img.width = static_cast<int>(w);
     img.height = static_cast<int>(h);
@@ -474,7 +474,7 @@ RawImage decode_exr(const std::string& path, const SizeCheck& check) {
         const Imath::Box2i dw = in.header().dataWindow();
         const std::int64_t w = std::int64_t(dw.max.x) - dw.min.x + 1;
         const std::int64_t h = std::int64_t(dw.max.y) - dw.min.y + 1;
-        if (w > 0x7fffffff || h > 0x7fffffff) throw CodecError("image too large");
+        if (w > 0x7fffffff || h > 0x7fffffff) throw RenderError("image too large");
         const std::vector<std::string> names = exr_channels(in.header().channels());
         RawImage img;
         img.width = static_cast<int>(w);
@@ -489,10 +489,10 @@ RawImage decode_exr(const std::string& path, const SizeCheck& check) {
         in.setFrameBuffer(fb);
         in.readPixels(dw.min.y, dw.max.y);
         return img;
-    } catch (const CodecError&) {
+    } catch (const RenderError&) {
         throw;
     } catch (const std::exception& e) {
-        throw CodecError(e.what());
+        throw RenderError(e.what());
     }
 }
 
@@ -536,7 +536,7 @@ std::vector<unsigned char> encode_exr(int w, int h, const float* rgb,
         }
         return stream.take();
     } catch (const std::exception& e) {
-        throw CodecError(e.what());
+        throw RenderError(e.what());
     }
 }
 
@@ -547,15 +547,15 @@ std::vector<unsigned char> encode_exr(int w, int h, const float* rgb,
 // by |scale| when it is not 1, as pbrt-v3 reads them.
 RawImage decode_pfm(const std::string& path, const SizeCheck& check) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw CodecError(std::strerror(errno));
+    if (!in) throw RenderError(std::strerror(errno));
     std::string magic;
     long long w = 0, h = 0;
     double scale = 0;
     if (!(in >> magic >> w >> h >> scale) || (magic != "PF" && magic != "Pf"))
-        throw CodecError("malformed PFM header");
-    if (!std::isspace(in.get())) throw CodecError("malformed PFM header");
+        throw RenderError("malformed PFM header");
+    if (!std::isspace(in.get())) throw RenderError("malformed PFM header");
     if (w <= 0 || h <= 0 || w > 0x7fffffff || h > 0x7fffffff || !(scale == scale) || scale == 0)
-        throw CodecError("malformed PFM header");
+        throw RenderError("malformed PFM header");
     RawImage img;
     img.width = static_cast<int>(w);
     img.height = static_cast<int>(h);
@@ -566,7 +566,7 @@ RawImage decode_pfm(const std::string& path, const SizeCheck& check) {
     for (long long y = h - 1; y >= 0; --y) {
         float* dst = &img.pixels[static_cast<std::size_t>(y) * row];
         if (!in.read(reinterpret_cast<char*>(dst), static_cast<std::streamsize>(row * 4)))
-            throw CodecError("truncated PFM data");
+            throw RenderError("truncated PFM data");
         if (swap)
             for (std::size_t i = 0; i < row; ++i) {
                 std::uint32_t v;
@@ -603,7 +603,7 @@ struct StbFree {
 RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga) {
     RawImage img;
     if (!stbi_info(path.c_str(), &img.width, &img.height, &img.channels))
-        throw CodecError(is_tga ? std::string("corrupt TGA data (") + stbi_failure_reason() + ")"
+        throw RenderError(is_tga ? std::string("corrupt TGA data (") + stbi_failure_reason() + ")"
                                 : std::string("unknown image format"));
     const bool hdr = stbi_is_hdr(path.c_str());
     const bool wide = !hdr && stbi_is_16_bit(path.c_str());
@@ -612,7 +612,7 @@ RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga
     int w = 0, h = 0, c = 0;
     const std::size_t n = img.pixels.size();
     auto fail = [] {
-        return CodecError(std::string("corrupt data (") + stbi_failure_reason() + ")");
+        return RenderError(std::string("corrupt data (") + stbi_failure_reason() + ")");
     };
     if (hdr) {
         std::unique_ptr<float, StbFree> p(stbi_loadf(path.c_str(), &w, &h, &c, img.channels));
@@ -629,7 +629,7 @@ RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga
         if (!p) throw fail();
         for (std::size_t i = 0; i < n; ++i) img.pixels[i] = p.get()[i] * (1.0f / 255.0f);
     }
-    if (w != img.width || h != img.height) throw CodecError("inconsistent image size");
+    if (w != img.width || h != img.height) throw RenderError("inconsistent image size");
     return img;
 }
 
@@ -657,9 +657,9 @@ RawImage decode(const std::string& path, const SizeCheck& check) {
     {
         File f = open_for_reading(path);
         n = std::fread(head, 1, sizeof(head), f.get());
-        if (std::ferror(f.get())) throw CodecError(std::strerror(errno));
+        if (std::ferror(f.get())) throw RenderError(std::strerror(errno));
     }
-    if (n == 0) throw CodecError("empty file");
+    if (n == 0) throw RenderError("empty file");
     if (starts_with(head, n, "\x89PNG\r\n\x1a\n", 8)) return decode_png(path, check);
     if (starts_with(head, n, "\xff\xd8\xff", 3)) return decode_jpeg(path, check);
     if (starts_with(head, n, "\x76\x2f\x31\x01", 4)) return decode_exr(path, check);
@@ -703,9 +703,9 @@ std::vector<unsigned char> encode_8bit(Output format, int w, int h, const unsign
             ok = stbi_write_bmp_to_func(stb_append, &out, w, h, 3, rgb);
             break;
         default:
-            throw CodecError("not an 8-bit format");
+            throw RenderError("not an 8-bit format");
     }
-    if (!ok) throw CodecError("the image could not be encoded");
+    if (!ok) throw RenderError("the image could not be encoded");
     return out;
 }
 
@@ -713,10 +713,10 @@ std::vector<unsigned char> encode_float(Output format, int w, int h, const float
                                         const std::vector<std::string>& names) {
     if (format == Output::Exr) return encode_exr(w, h, rgb, names);
     if (format == Output::Pfm) return encode_pfm(w, h, rgb);
-    if (format != Output::Hdr) throw CodecError("not a float format encoded in memory");
+    if (format != Output::Hdr) throw RenderError("not a float format encoded in memory");
     std::vector<unsigned char> out;
     if (!stbi_write_hdr_to_func(stb_append, &out, w, h, 3, rgb))
-        throw CodecError("the image could not be encoded");
+        throw RenderError("the image could not be encoded");
     return out;
 }
 

@@ -13,16 +13,15 @@
 
 namespace cmam::render::codec {
 
-/// A reason a file cannot be read or an image encoded (without the file's name); image_io.cpp
-/// adds the name.
-using CodecError = RenderError;
+// The codecs throw RenderError with the reason alone (without the file's name); image_io.cpp
+// adds the name.
 
 /// Called with the image's size and channels (pixels still empty) before the pixels are
-/// allocated; throws CodecError to refuse the image.
+/// allocated; throws RenderError to refuse the image.
 using SizeCheck = std::function<void(const RawImage&)>;
 
 /// Decodes the file, choosing the format by its first bytes (by the extension only for TGA,
-/// which has no signature). Throws CodecError.
+/// which has no signature). Throws RenderError.
 RawImage decode(const std::string& path, const SizeCheck& check);
 
 /// The file name's extension in lower case, with the dot (".png"); "" if none.

@@ -35,12 +35,12 @@ RawImage read_image(const std::string& path) {
     const std::string where = "cannot read image \"" + path + "\": ";
     std::error_code ec;
     const fs::file_status st = fs::status(path, ec);
-    if (!fs::exists(st)) throw ImageIoError(where + "file not found");
-    if (fs::is_directory(st)) throw ImageIoError(where + "it is a directory");
+    if (!fs::exists(st)) throw RenderError(where + "file not found");
+    if (fs::is_directory(st)) throw RenderError(where + "it is a directory");
     auto check = [&](const RawImage& img) {
         const double bytes = double(img.width) * img.height * img.channels * sizeof(float);
         if (bytes > double(g_image_memory_limit.load()))
-            throw codec::CodecError(std::to_string(img.width) + "x" + std::to_string(img.height) +
+            throw RenderError(std::to_string(img.width) + "x" + std::to_string(img.height) +
                                     " with " + std::to_string(img.channels) +
                                     (img.channels == 1 ? " channel" : " channels") + " needs " +
                                     std::to_string(static_cast<long long>(bytes / (1 << 20))) +
@@ -49,10 +49,10 @@ RawImage read_image(const std::string& path) {
     };
     try {
         return codec::decode(path, check);
-    } catch (const codec::CodecError& e) {
-        throw ImageIoError(where + e.what());
+    } catch (const RenderError& e) {
+        throw RenderError(where + e.what());
     } catch (const std::bad_alloc&) {
-        throw ImageIoError(where + "out of memory");
+        throw RenderError(where + "out of memory");
     }
 }
 
@@ -121,7 +121,7 @@ class Temporary {
         : m_lock(g_write_mutex), m_target(std::move(target)), m_tmp(std::move(tmp)) {
         const std::string t = m_tmp.string();
         if (t.size() >= sizeof(g_temporary))
-            throw ImageIoError(cannot_write(m_target, "the path is too long"));
+            throw RenderError(cannot_write(m_target, "the path is too long"));
         std::copy(t.begin(), t.end(), g_temporary);
         g_temporary[t.size()] = '\0';
         g_interrupted = 0;
@@ -168,7 +168,7 @@ class Temporary {
         sync_and_close();
     }
     void commit() {
-        if (g_interrupted) throw ImageIoError(cannot_write(m_target, "interrupted by a signal"));
+        if (g_interrupted) throw RenderError(cannot_write(m_target, "interrupted by a signal"));
         if (::rename(m_tmp.c_str(), m_target.c_str()) != 0) fail();
         m_committed = true;
     }
@@ -183,7 +183,7 @@ class Temporary {
     [[noreturn]] void fail() {
         // errno of the failed call; a write that wrote nothing without an error is a full disk.
         const int e = errno != 0 ? errno : ENOSPC;
-        throw ImageIoError(cannot_write(m_target, std::strerror(e)));
+        throw RenderError(cannot_write(m_target, std::strerror(e)));
     }
     void sync_and_close() {
         errno = 0;
@@ -214,14 +214,14 @@ void set_write_test_hook(void (*hook)()) {
 
 namespace {
 
-// Encodes with `encode` (which throws CodecError) and writes the bytes atomically.
+// Encodes with `encode` (which throws RenderError) and writes the bytes atomically.
 template <class Encode>
 void write_encoded(const std::string& path, const std::string& ext, Encode&& encode) {
     std::vector<unsigned char> bytes;
     try {
         bytes = encode();
-    } catch (const codec::CodecError& e) {
-        throw ImageIoError(cannot_write(path, e.what()));
+    } catch (const RenderError& e) {
+        throw RenderError(cannot_write(path, e.what()));
     }
     Temporary tmp(path, temporary_for(fs::path(path), ext));
     tmp.write(bytes);
@@ -236,19 +236,19 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
     const fs::path target(path);
     const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
     if (!fs::is_directory(dir))
-        throw ImageIoError("cannot write \"" + path + "\": directory \"" + dir.string() +
+        throw RenderError("cannot write \"" + path + "\": directory \"" + dir.string() +
                            "\" does not exist");
     const codec::Output format = codec::output_format(ext);
     if (format == codec::Output::Unsupported)
-        throw ImageIoError("cannot write \"" + path + "\": unsupported output format \"" + ext +
+        throw RenderError("cannot write \"" + path + "\": unsupported output format \"" + ext +
                            "\" (use .exr, .pfm or .png)");
     if (format == codec::Output::Tiff) {
         // libtiff writes the temporary itself; it is flushed to disk before the rename.
         Temporary tmp(path, temporary_for(target, ext));
         try {
             codec::write_tiff(tmp.path().string(), w, h, rgb.data());
-        } catch (const codec::CodecError& e) {
-            throw ImageIoError(cannot_write(path, e.what()));
+        } catch (const RenderError& e) {
+            throw RenderError(cannot_write(path, e.what()));
         }
         tmp.sync_written();
         tmp.commit();

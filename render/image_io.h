@@ -17,8 +17,6 @@
 
 namespace cmam::render {
 
-/// Image files that cannot be read or written: RenderError, with the file's name and the reason.
-using ImageIoError = RenderError;
 
 /// Pixels as read from a file: top row first, `channels` floats per pixel, values as stored
 /// (8-bit data scaled to [0,1], no colour conversion).
@@ -28,7 +26,7 @@ struct RawImage {
     std::vector<float> pixels;
 };
 
-/// Reads an image; throws ImageIoError naming the file and the reason. An image whose pixels
+/// Reads an image; throws RenderError naming the file and the reason. An image whose pixels
 /// (as 32-bit floats) would take more than the image memory limit is refused, with its size,
 /// before anything is allocated.
 RawImage read_image(const std::string& path);

@@ -367,7 +367,8 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
                  const TexContext& ctx, float du, float dv) {
     if (!(du > 0)) du = 0.0005f;
     if (!(dv > 0)) dv = 0.0005f;
-    const auto [dpdu, dpdv] = hit.partials();
+    const Partials partials = hit.partials();
+    const Vec3 &dpdu = partials.dpdu, &dpdv = partials.dpdv;
     const Vec3 n = hit.ns, dndu = hit.normal_offset(dpdu), dndv = hit.normal_offset(dpdv);
     // The displacement at the point and one step along u and along v (the world point moves
     // with them, for the textures that read it).

@@ -6,10 +6,6 @@
 
 namespace cmam::render {
 
-bool is_tessellated_quadric(const std::string& type) {
-    return type == "cylinder" || type == "cone" || type == "paraboloid" || type == "hyperboloid";
-}
-
 QuadricMesh tessellate(const std::string& type, const QuadricParams& p, int segments) {
     const double phi_max = std::clamp(p.phimax, 0.0, 360.0) * std::numbers::pi / 180;
     const int nu =

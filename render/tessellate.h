@@ -21,9 +21,6 @@ struct QuadricParams {
     double p1[3] = {0, 0, 0}, p2[3] = {1, 1, 1};  // hyperboloid
 };
 
-/// True for the shapes tessellate() makes.
-bool is_tessellated_quadric(const std::string& type);
-
 /// The mesh of `type` ("cylinder", "cone", "paraboloid" or "hyperboloid"); `segments` steps
 /// around the full circle (fewer for a partial phimax).
 QuadricMesh tessellate(const std::string& type, const QuadricParams& p, int segments = 128);

@@ -266,7 +266,7 @@ TEST(HostileInput, CameraAndGlassParametersThatGiveNonFiniteRaysAreLocatedErrors
 }
 
 // NaN and infinite light, material, texture and shape parameters, and transforms that are not
-// finite, once rendered black without a word: each is a located error naming the value.
+// finite, would render black without a word: each is a located error naming the value.
 TEST(HostileInput, NumbersTheRendererUsesMustBeFinite) {
     const std::string tri = "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]";
     const std::pair<std::string, std::string> cases[] = {

@@ -13,6 +13,8 @@
 #include <fstream>
 #include <random>
 
+#include "expect_throw.h"
+
 using namespace cmam::render;
 namespace fs = std::filesystem;
 
@@ -207,13 +209,17 @@ TEST(ImageIo, FailedWriteLeavesTheOldFileAndNoTemporary) {
     TempDir d;
     std::string p = (d.path / "keep.xyz").string();
     std::ofstream(p) << "old contents";
-    EXPECT_THROW(write_image(p, 2, 2, gradient(2, 2)), ImageIoError);
+    EXPECT_THROW_MSG(write_image(p, 2, 2, gradient(2, 2)), RenderError,
+                     "cannot write \"" + p +
+                         "\": unsupported output format \".xyz\" (use .exr, .pfm or .png)");
     std::ifstream in(p);
     std::string s((std::istreambuf_iterator<char>(in)), {});
     EXPECT_EQ(s, "old contents");
     EXPECT_EQ(d.entries(), 1u);
-    EXPECT_THROW(write_image((d.path / "nodir" / "x.png").string(), 2, 2, gradient(2, 2)),
-                 ImageIoError);
+    const std::string nodir = (d.path / "nodir").string();
+    EXPECT_THROW_MSG(write_image(nodir + "/x.png", 2, 2, gradient(2, 2)), RenderError,
+                     "cannot write \"" + nodir + "/x.png\": directory \"" + nodir +
+                         "\" does not exist");
 }
 
 TEST(ImageIo, OverwriteReplacesWholeFile) {
@@ -234,7 +240,7 @@ TEST(ImageIo, UnreadableImagesNameFileAndReason) {
     try {
         read_image(p);
         FAIL();
-    } catch (const ImageIoError& e) {
+    } catch (const RenderError& e) {
         EXPECT_EQ(std::string(e.what()).rfind("cannot read image \"" + p + "\": ", 0), 0u)
             << e.what();
     }
@@ -250,7 +256,7 @@ TEST(ImageIo, ImagesOverTheMemoryLimitAreRefusedBeforeReading) {
     try {
         read_image(p);
         FAIL();
-    } catch (const ImageIoError& e) {
+    } catch (const RenderError& e) {
         EXPECT_NE(std::string(e.what()).find("\"" + p +
                                              "\": 65535x65535 with 3 channels needs "
                                              "49150 MB, over the limit of 1024 MB"),
@@ -260,7 +266,9 @@ TEST(ImageIo, ImagesOverTheMemoryLimitAreRefusedBeforeReading) {
     const std::string small = (d.path / "small.exr").string();
     write_image(small, 4, 4, gradient(4, 4));
     set_image_memory_limit(4 * 4 * 3 * sizeof(float) - 1);
-    EXPECT_THROW(read_image(small), ImageIoError);
+    EXPECT_THROW_MSG(read_image(small), RenderError,
+                     "cannot read image \"" + small +
+                         "\": 4x4 with 3 channels needs 0 MB, over the limit of 0 MB");
     set_image_memory_limit(4 * 4 * 3 * sizeof(float));
     EXPECT_EQ(read_image(small).width, 4);
     set_image_memory_limit(std::size_t(1) << 40);
@@ -280,7 +288,7 @@ TEST(ImageIo, WriteThatRunsOutOfSpaceFailsAndKeepsTheOldFile) {
             FileSizeLimit limit(old.size() + 512);
             write_image(p, 128, 128, noise(128, 128));
             ADD_FAILURE() << "no error reported";
-        } catch (const ImageIoError& e) {
+        } catch (const RenderError& e) {
             EXPECT_EQ(std::string(e.what()), "cannot write \"" + p + "\": File too large");
         }
         EXPECT_EQ(contents(p), old);
@@ -310,7 +318,8 @@ TEST(ImageIo, SignalDuringAWriteRemovesTheTemporary) {
 
     set_write_test_hook([] { std::raise(SIGINT); });
     void (*saved)(int) = std::signal(SIGINT, note_signal);
-    EXPECT_THROW(write_image(p, 8, 8, gradient(8, 8)), ImageIoError);
+    EXPECT_THROW_MSG(write_image(p, 8, 8, gradient(8, 8)), RenderError,
+                     "cannot write \"" + p + "\": interrupted by a signal");
     std::signal(SIGINT, saved);
     set_write_test_hook(nullptr);
     EXPECT_EQ(g_signal_seen, SIGINT);

@@ -97,7 +97,7 @@ std::vector<std::string> Builder::names_of(const Entity& e) {
 }
 
 // Numbers the renderer uses must be finite in single precision (a NaN or infinite light,
-// material or shape parameter once rendered black without a word).
+// material or shape parameter would render black without a word).
 bool Builder::is_finite_float(double v) {
     return std::abs(v) <= std::numeric_limits<float>::max();
 }
@@ -123,12 +123,12 @@ std::array<double, 3> Builder::finite_point(const Entity& e, const std::string& 
 Mat4 Builder::inverse_or_error(const Mat4& m, const pbrt::FileLoc& loc, const char* message) {
     try {
         return m.inverse();
-    } catch (const std::domain_error&) {
+    } catch (const SceneError&) {
         throw SceneError(loc, message);
     }
 }
 
-// A shape's or light's transform: every entry finite (NaN or infinite transforms once gave
+// A shape's or light's transform: every entry finite (NaN or infinite transforms would give
 // black images).
 void Builder::finite_transform(const Mat4& m, const pbrt::FileLoc& loc, const char* what) {
     for (const auto& row : m.m)

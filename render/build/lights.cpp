@@ -18,7 +18,7 @@ std::shared_ptr<const texture::FilteredTexture> Builder::light_image(const Entit
     try {
         return std::make_shared<const texture::FilteredTexture>(
             load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat));
-    } catch (const ImageIoError& err) {
+    } catch (const RenderError& err) {
         throw SceneError(p.loc, err.what());
     }
 }
@@ -70,8 +70,8 @@ void Builder::spot_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
     l.intensity = light_intensity(e, "I", scale);
     auto from = finite_point(e, "from", {0, 0, 0});
     auto to = finite_point(e, "to", {0, 0, 1});
-    // pbrt-v3 names the falloff "conedeltaangle"; "conedelta" is read too (cmam read only
-    // that name before).
+    // pbrt-v3 names the falloff "conedeltaangle"; "conedelta" is accepted too, for scenes
+    // written for earlier cmam versions.
     const char* delta_name = e.params.find("conedelta") && !e.params.find("conedeltaangle")
                                  ? "conedelta"
                                  : "conedeltaangle";

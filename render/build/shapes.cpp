@@ -72,8 +72,8 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     if (!mesh) {
         try {
             mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path));
-        } catch (const pbrt::PlyError& err) {
-            throw SceneError(fp->loc, err.what());
+        } catch (const SceneError& err) {
+            throw SceneError(fp->loc, err.message());
         }
     }
     e.params.check_unused("shape \"plymesh\"", m_warn,

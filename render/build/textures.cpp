@@ -93,7 +93,7 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     texture::Image level0;
     try {
         level0 = load_texture(path, is_float, gamma, scale, *wrap);
-    } catch (const ImageIoError& err) {
+    } catch (const RenderError& err) {
         throw SceneError(fp->loc, err.what());
     }
     auto img = std::make_unique<texture::FilteredTexture>(std::move(level0));
