@@ -8,6 +8,7 @@
 #include "app/command.h"
 #include "app/common.h"
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/scene.h"
 
 namespace cmam::app {

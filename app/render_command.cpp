@@ -13,6 +13,7 @@
 #include "app/command.h"
 #include "app/common.h"
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
 #include "render/memory.h"

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/integrator.h"
 #include "render/scene.h"
 

@@ -13,6 +13,7 @@
 #include "eval/metrics.h"
 #include "eval/report.h"
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/footprint/method.h"
 #include "render/image_io.h"
 #include "render/integrator.h"

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "eval/error.h"
+#include "render/build_scene.h"
 #include "render/scene.h"
 
 namespace cmam::eval {

@@ -9,6 +9,7 @@
 #include "fuzz/fuzz_util.h"
 #include "pbrt/parser.h"
 #include "pbrt/ply.h"
+#include "render/build_scene.h"
 #include "render/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {

@@ -604,7 +604,7 @@ RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga
     RawImage img;
     if (!stbi_info(path.c_str(), &img.width, &img.height, &img.channels))
         throw RenderError(is_tga ? std::string("corrupt TGA data (") + stbi_failure_reason() + ")"
-                                : std::string("unknown image format"));
+                                 : std::string("unknown image format"));
     const bool hdr = stbi_is_hdr(path.c_str());
     const bool wide = !hdr && stbi_is_16_bit(path.c_str());
     img.is_8bit = !hdr && !wide;

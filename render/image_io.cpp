@@ -41,11 +41,11 @@ RawImage read_image(const std::string& path) {
         const double bytes = double(img.width) * img.height * img.channels * sizeof(float);
         if (bytes > double(g_image_memory_limit.load()))
             throw RenderError(std::to_string(img.width) + "x" + std::to_string(img.height) +
-                                    " with " + std::to_string(img.channels) +
-                                    (img.channels == 1 ? " channel" : " channels") + " needs " +
-                                    std::to_string(static_cast<long long>(bytes / (1 << 20))) +
-                                    " MB, over the limit of " +
-                                    std::to_string(g_image_memory_limit.load() >> 20) + " MB");
+                              " with " + std::to_string(img.channels) +
+                              (img.channels == 1 ? " channel" : " channels") + " needs " +
+                              std::to_string(static_cast<long long>(bytes / (1 << 20))) +
+                              " MB, over the limit of " +
+                              std::to_string(g_image_memory_limit.load() >> 20) + " MB");
     };
     try {
         return codec::decode(path, check);
@@ -237,11 +237,11 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
     const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
     if (!fs::is_directory(dir))
         throw RenderError("cannot write \"" + path + "\": directory \"" + dir.string() +
-                           "\" does not exist");
+                          "\" does not exist");
     const codec::Output format = codec::output_format(ext);
     if (format == codec::Output::Unsupported)
         throw RenderError("cannot write \"" + path + "\": unsupported output format \"" + ext +
-                           "\" (use .exr, .pfm or .png)");
+                          "\" (use .exr, .pfm or .png)");
     if (format == codec::Output::Tiff) {
         // libtiff writes the temporary itself; it is flushed to disk before the rename.
         Temporary tmp(path, temporary_for(target, ext));

@@ -17,7 +17,6 @@
 
 namespace cmam::render {
 
-
 /// Pixels as read from a file: top row first, `channels` floats per pixel, values as stored
 /// (8-bit data scaled to [0,1], no colour conversion).
 struct RawImage {

@@ -1,5 +1,6 @@
 // render — the built scene: camera, film, textures, materials, lights and Embree geometry.
-// Built from a pbrt::SceneDesc by build_scene(); rendering reads it from many threads.
+// Built from a pbrt::SceneDesc by build_scene() (build_scene.h); rendering reads it from many
+// threads.
 #pragma once
 
 #include <cmam/texture/cmam.h>
@@ -16,8 +17,6 @@
 #include <string_view>
 #include <vector>
 
-#include "pbrt/error.h"
-#include "pbrt/scene_desc.h"
 #include "render/envmap.h"
 #include "render/footprint/method.h"
 #include "render/math.h"
@@ -307,21 +306,5 @@ class Scene {
     RTCScene m_scene = nullptr;
     std::vector<RTCScene> m_object_scenes;
 };
-
-struct BuildOptions {
-    int spp_override = 0;  // 0: the scene's sampler
-    /// Replace every image texture by its mean and every checkerboard by the mean of its two
-    /// inputs: the "untextured" render that separates geometric edges from texture detail.
-    bool untextured = false;
-    // Overrides for every image texture (the scene file's choices otherwise).
-    std::optional<FootprintMethod> lod;
-    std::optional<texture::FilterKind> filter;
-    TagPolicy tags = TagPolicy::Scanline;
-    texture::CmamOptions cmam;
-};
-
-/// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.
-std::unique_ptr<Scene> build_scene(const pbrt::SceneDesc& desc, const BuildOptions& options,
-                                   const pbrt::WarningSink& warn);
 
 }  // namespace cmam::render

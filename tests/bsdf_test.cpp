@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "render/build_scene.h"
 #include "render/integrator.h"
 #include "render/shading.h"
 #include "scene_util.h"

@@ -11,6 +11,7 @@
 #include "eval/metrics.h"
 #include "expect_throw.h"
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/image_io.h"
 #include "render/integrator.h"
 #include "temp_dir.h"

@@ -10,6 +10,7 @@
 
 #include "pbrt/input_file.h"
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/integrator.h"
 #include "render/scene.h"
 

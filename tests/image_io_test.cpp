@@ -209,17 +209,17 @@ TEST(ImageIo, FailedWriteLeavesTheOldFileAndNoTemporary) {
     TempDir d;
     std::string p = (d.path / "keep.xyz").string();
     std::ofstream(p) << "old contents";
-    EXPECT_THROW_MSG(write_image(p, 2, 2, gradient(2, 2)), RenderError,
-                     "cannot write \"" + p +
-                         "\": unsupported output format \".xyz\" (use .exr, .pfm or .png)");
+    EXPECT_THROW_MSG(
+        write_image(p, 2, 2, gradient(2, 2)), RenderError,
+        "cannot write \"" + p + "\": unsupported output format \".xyz\" (use .exr, .pfm or .png)");
     std::ifstream in(p);
     std::string s((std::istreambuf_iterator<char>(in)), {});
     EXPECT_EQ(s, "old contents");
     EXPECT_EQ(d.entries(), 1u);
     const std::string nodir = (d.path / "nodir").string();
-    EXPECT_THROW_MSG(write_image(nodir + "/x.png", 2, 2, gradient(2, 2)), RenderError,
-                     "cannot write \"" + nodir + "/x.png\": directory \"" + nodir +
-                         "\" does not exist");
+    EXPECT_THROW_MSG(
+        write_image(nodir + "/x.png", 2, 2, gradient(2, 2)), RenderError,
+        "cannot write \"" + nodir + "/x.png\": directory \"" + nodir + "\" does not exist");
 }
 
 TEST(ImageIo, OverwriteReplacesWholeFile) {

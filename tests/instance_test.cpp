@@ -6,6 +6,7 @@
 #include <string>
 
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/integrator.h"
 #include "render/scene.h"
 

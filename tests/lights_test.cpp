@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "render/build_scene.h"
 #include "render/envmap.h"
 #include "render/image_io.h"
 #include "render/integrator.h"

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/scene.h"
 
 using namespace cmam;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 
 using namespace cmam::render;
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "render/build_scene.h"
 #include "render/integrator.h"
 #include "scene_util.h"
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/integrator.h"
 #include "scene_util.h"
 

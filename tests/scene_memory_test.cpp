@@ -9,6 +9,7 @@
 #include <string>
 
 #include "pbrt/parser.h"
+#include "render/build_scene.h"
 #include "render/scene.h"
 
 namespace {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "render/build_scene.h"
+
 namespace cmam::render::build_detail {
 
 std::string q(const std::string& s) {

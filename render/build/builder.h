@@ -14,6 +14,7 @@
 #include "pbrt/error.h"
 #include "pbrt/ply.h"
 #include "pbrt/scene_desc.h"
+#include "render/build_scene.h"
 #include "render/scene.h"
 #include "render/tessellate.h"
 

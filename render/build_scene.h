@@ -1,0 +1,30 @@
+// render — building a renderable Scene from a parsed pbrt-v3 scene (the code is in build/).
+// The one header of the tracer that sees the scene format.
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include "pbrt/error.h"
+#include "pbrt/scene_desc.h"
+#include "render/scene.h"
+
+namespace cmam::render {
+
+struct BuildOptions {
+    int spp_override = 0;  // 0: the scene's sampler
+    /// Replace every image texture by its mean and every checkerboard by the mean of its two
+    /// inputs: the "untextured" render that separates geometric edges from texture detail.
+    bool untextured = false;
+    // Overrides for every image texture (the scene file's choices otherwise).
+    std::optional<FootprintMethod> lod;
+    std::optional<texture::FilterKind> filter;
+    TagPolicy tags = TagPolicy::Scanline;
+    texture::CmamOptions cmam;
+};
+
+/// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.
+std::unique_ptr<Scene> build_scene(const pbrt::SceneDesc& desc, const BuildOptions& options,
+                                   const pbrt::WarningSink& warn);
+
+}  // namespace cmam::render
