@@ -22,9 +22,7 @@ std::vector<float> noise(int w, int h, int c, unsigned seed) {
 }
 
 Polygon to_polygon(const Vec2d* v, int n) {
-    Polygon p;
-    for (int i = 0; i < n; ++i) p.push_back({v[i].u, v[i].v});
-    return p;
+    return Polygon(v, v + n);
 }
 
 // A random parallelogram (centre, two sides) in texel space; sides from 0.05 to 20 texels.

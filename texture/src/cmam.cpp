@@ -230,7 +230,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             double perimeter = 0;
             for (int k = 0; k < 3; ++k)
                 perimeter +=
-                    std::hypot(tri[(k + 1) % 3].x - tri[k].x, tri[(k + 1) % 3].y - tri[k].y);
+                    std::hypot(tri[(k + 1) % 3].u - tri[k].u, tri[(k + 1) % 3].v - tri[k].v);
             const int L = tex.pyramid().levels();
             const int want = perimeter > kMaxPerimeter
                                  ? static_cast<int>(std::ceil(std::log2(perimeter / kMaxPerimeter)))
@@ -246,7 +246,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
                     for (int c = 0; c < 4; ++c) integral[c] += img.mean()[c] * area;  // the mean
                     continue;  // (integrating would cost the perimeter in texels there)
                 }
-                for (P2& p : piece) p = {p.x * kx, p.y * ky};
+                for (Vec2d& p : piece) p = {p.u * kx, p.v * ky};
                 Texel t = polygon_integral(tex.level_sat(level), piece);
                 for (int c = 0; c < 4; ++c) integral[c] += t[c] / (kx * ky);
             }
@@ -255,7 +255,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             if (info) in.texels_read = 16;
             Texel out{};
             if (new_area > 1e-9) {
-                std::vector<P2> pts = cache.hull;
+                std::vector<Vec2d> pts = cache.hull;
                 pts.insert(pts.end(), tri.begin(), tri.end());
                 cache.hull = convex_hull(std::move(pts));
                 for (int c = 0; c < 4; ++c) {

@@ -3,15 +3,12 @@
 // extent with this value type; filters (MIP, SAT, EWA) consume it. Nothing here knows rays.
 #pragma once
 
+#include <cmam/texture/vec2.h>
+
 #include <array>
 #include <cstdint>
 
 namespace cmam::texture {
-
-/// A texture-space vector or point in (u,v) units (not texels).
-struct Vec2d {
-    double u = 0, v = 0;
-};
 
 /// A ray's tag as the CMAM sees it (paper §3.1): the ray ID (scanline or pixel) and the
 /// recursion level (0 for primary rays, +1 per specular bounce). `seq` numbers the camera
