@@ -18,6 +18,9 @@ struct Named {
     E value;
     std::string_view name;
 };
+/// Spelled out for compilers without deduction for aggregates (Clang before 17).
+template <class E>
+Named(E, std::string_view) -> Named<E>;
 
 template <class E, std::size_t N>
 struct NameTable {
