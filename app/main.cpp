@@ -104,8 +104,8 @@ int run_lookup(const LookupArgs& a) {
                           ", \"texels_read\": " + std::to_string(info.texels_read) +
                           ", \"fallback\": " + (info.fallback ? "true" : "false");
         if (region && *kind == texture::FilterKind::Sat)
-            out += ", \"rectangle_texels\": [" + num(info.rect[0]) + ", " + num(info.rect[1]) +
-                   ", " + num(info.rect[2]) + ", " + num(info.rect[3]) + "]";
+            out += ", \"rectangle_texels\": [" + num(info.rect.lo.u) + ", " + num(info.rect.lo.v) +
+                   ", " + num(info.rect.hi.u) + ", " + num(info.rect.hi.v) + "]";
         if (region && *kind == texture::FilterKind::Ewa)
             out += ", \"ellipse_texels\": {\"major\": " + num(info.major) +
                    ", \"minor\": " + num(info.minor) + "}";
@@ -127,8 +127,8 @@ int run_lookup(const LookupArgs& a) {
     if (!region)
         std::printf("footprint: none (bilinear at level 0)\n");
     else if (*kind == texture::FilterKind::Sat)
-        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect[0],
-                    info.rect[2], info.rect[1], info.rect[3]);
+        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect.lo.u,
+                    info.rect.hi.u, info.rect.lo.v, info.rect.hi.v);
     else if (*kind == texture::FilterKind::Ewa)
         std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n",
                     info.major, info.minor);

@@ -89,18 +89,18 @@ struct CmamCache {
 
 /// The region the paper's rules build for the current sample, in level-0 texels.
 struct CmamRegion {
-    int matches = 0;                // 0: no match; 1: the most recent matches; 2: both match
-    double width = 0;               // MIP: segment length (1 match) or bounding-box diagonal (2)
-    double rect[4] = {0, 0, 0, 0};  // SAT: x0, y0, x1, y1 (after the minimum-extent rule)
-    double a[2] = {0, 0}, b[2] = {0, 0};  // EWA: the two axis vectors (texels)
-    bool orthogonal_fallback = false;     // EWA: sin(theta) < 0.2 switched to the R2 reading
-    bool nearly_collinear = false;        // two matches with sin(theta) < 0.2
-    double triangle_area = 0;             // two matches: the three samples' triangle (texels^2)
-    double hull_new_area = -1;            // hull weighting: area of the new pieces (-1: not used)
-    bool used_above = false;              // 2-D CMAM: the sample above took part
+    int matches = 0;                   // 0: no match; 1: the most recent matches; 2: both match
+    double width = 0;                  // MIP: segment length (1 match) or bounding-box diagonal (2)
+    Box2d rect;                        // SAT: the rectangle (after the minimum-extent rule)
+    Vec2d a, b;                        // EWA: the two axis vectors (texels)
+    bool orthogonal_fallback = false;  // EWA: sin(theta) < 0.2 switched to the R2 reading
+    bool nearly_collinear = false;     // two matches with sin(theta) < 0.2
+    double triangle_area = 0;          // two matches: the three samples' triangle (texels^2)
+    double hull_new_area = -1;         // hull weighting: area of the new pieces (-1: not used)
+    bool used_above = false;           // 2-D CMAM: the sample above took part
     // 2-D CMAM with positioned tags: from the current sample to its stratum's centre (texels),
     // where the footprint is centred; a and b are then the Jacobian columns solved for.
-    double offset[2] = {0, 0};
+    Vec2d offset;
 };
 
 /// The 2-D CMAM's region from the current sample p0, its left neighbour (may be null) and the

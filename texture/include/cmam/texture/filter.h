@@ -61,7 +61,7 @@ struct LookupInfo {
     bool fallback = false;  // non-finite input: the texture mean was returned
     // The region filtered, in level-0 texels: a rectangle (SAT), ellipse semi-axes (EWA),
     // parallelogram sides (area; 0 for a CMAM triangle) or the footprint width (trilinear).
-    double rect[4] = {0, 0, 0, 0};  // x0, y0, x1, y1
+    Box2d rect;
     double major = 0, minor = 0, width = 0;
     double area = 0;  // area: the region's area in level-0 texels^2
 };
