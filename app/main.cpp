@@ -85,8 +85,7 @@ int run_lookup(const LookupArgs& a) {
         std::cerr << "cmam: warning: --maxaniso " << a.max_aniso << " is above cmam's limit of "
                   << texture::kEwaMaxAnisotropy << ", which is used instead\n";
     texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, *wrap));
-    texture::LookupInfo info;
-    texture::Texel v = tex.lookup(uv[0], uv[1], fp, {*kind, a.max_aniso}, &info);
+    const auto [v, info] = tex.lookup_with_info(uv[0], uv[1], fp, {*kind, a.max_aniso});
     const texture::Image& img = tex.image();
     bool region = fp.kind != texture::Footprint::Kind::None &&
                   *kind != texture::FilterKind::Nearest && *kind != texture::FilterKind::Bilinear &&

@@ -131,8 +131,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
                 opts.sat_box = static_cast<tx::CmamSatBox>(in.ConsumeIntegralInRange(0, 1));
                 const tx::Footprint fp = footprint(in);
                 const double u = number(in), v = number(in);
-                tx::LookupInfo info;
-                check_finite(texture.lookup(u, v, fp, opts, &info), channels,
+                check_finite(texture.lookup_with_info(u, v, fp, opts).value, channels,
                              "FilteredTexture::lookup");
                 break;
             }
@@ -145,9 +144,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
                 tag.x = static_cast<float>(in.ConsumeFloatingPointInRange(-1.0, 17.0));
                 tag.y = static_cast<float>(in.ConsumeFloatingPointInRange(-1.0, 17.0));
                 const double u = number(in), v = number(in);
-                tx::LookupInfo info;
-                tx::CmamRegion region;
-                check_finite(tx::cmam_lookup(texture, cache, tag, u, v, cmam, &info, &region),
+                check_finite(tx::cmam_lookup_with_info(texture, cache, tag, u, v, cmam).value,
                              channels, "cmam_lookup");
                 break;
             }

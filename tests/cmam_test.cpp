@@ -81,10 +81,9 @@ TEST(Cmam, TCmam2CaseOneOnTheMipTexture) {
         RayTag tag{7, 0, 0};
         cmam_lookup(tex, cache, tag, 0.3, 0.6, o);  // cached sample
         tag.seq = 1;
-        CmamRegion r;
-        float v = cmam_lookup(tex, cache, tag, 0.8, 0.6, o, nullptr, &r)[0];
-        EXPECT_EQ(r.matches, 1);
-        return std::pair{v, r};
+        const CmamResult x = cmam_lookup_with_info(tex, cache, tag, 0.8, 0.6, o);
+        EXPECT_EQ(x.region.matches, 1);
+        return std::pair{x.value[0], x.region};
     };
     CmamOptions o;
     o.filter = FilterKind::Trilinear;
@@ -124,21 +123,22 @@ TEST(Cmam, MatchingShiftsTheCacheAndComparesTagAndLevel) {
     CmamOptions o;
     CmamCache c;
     CmamRegion r;
-    cmam_lookup(tex, c, {3, 0, 0}, 0.1, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {3, 0, 0}, 0.1, 0.1, o).region;
     EXPECT_EQ(r.matches, 0);
     EXPECT_TRUE(c.last.valid);
     EXPECT_FALSE(c.second_last.valid);
-    cmam_lookup(tex, c, {3, 0, 1}, 0.2, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {3, 0, 1}, 0.2, 0.1, o).region;
     EXPECT_EQ(r.matches, 1);
     EXPECT_DOUBLE_EQ(c.second_last.s, 0.4);
     EXPECT_DOUBLE_EQ(c.last.s, 0.8);
-    cmam_lookup(tex, c, {3, 0, 2}, 0.3, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {3, 0, 2}, 0.3, 0.1, o).region;
     EXPECT_EQ(r.matches, 2);
-    cmam_lookup(tex, c, {3, 1, 3}, 0.4, 0.1, o, nullptr, &r);  // reflected ray: another level
+    // A reflected ray: another level.
+    r = cmam_lookup_with_info(tex, c, {3, 1, 3}, 0.4, 0.1, o).region;
     EXPECT_EQ(r.matches, 0);
-    cmam_lookup(tex, c, {4, 1, 4}, 0.5, 0.1, o, nullptr, &r);  // another ID (next scanline)
+    r = cmam_lookup_with_info(tex, c, {4, 1, 4}, 0.5, 0.1, o).region;  // another ID (next scanline)
     EXPECT_EQ(r.matches, 0);
-    cmam_lookup(tex, c, {4, 1, 5}, 0.6, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {4, 1, 5}, 0.6, 0.1, o).region;
     EXPECT_EQ(r.matches, 1);
 }
 
@@ -149,12 +149,12 @@ TEST(Cmam, TCmam3AdjacencyRejectsSamplesAcrossAnOccluder) {
     CmamCache a;
     CmamRegion r;
     cmam_lookup(tex, a, {5, 0, 10}, 0.10, 0.5, o);
-    cmam_lookup(tex, a, {5, 0, 21}, 0.21, 0.5, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, a, {5, 0, 21}, 0.21, 0.5, o).region;
     EXPECT_EQ(r.matches, 0) << "a footprint spanning the occluder";
     o.adjacent_only = false;  // the paper's literal matching would span it
     CmamCache b;
     cmam_lookup(tex, b, {5, 0, 10}, 0.10, 0.5, o);
-    cmam_lookup(tex, b, {5, 0, 21}, 0.21, 0.5, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, b, {5, 0, 21}, 0.21, 0.5, o).region;
     EXPECT_EQ(r.matches, 1);
 }
 
@@ -170,9 +170,9 @@ TEST(Cmam, ModuleObjectIsTheWholeApi) {
 TEST(Cmam, NonFiniteCoordinatesGiveTheMean) {
     FilteredTexture tex(tmip1());
     CmamCache c;
-    LookupInfo info;
-    EXPECT_FLOAT_EQ(cmam_lookup(tex, c, {}, std::nan(""), 0.5, CmamOptions{}, &info)[0], 2.5f);
-    EXPECT_TRUE(info.fallback);
+    const CmamResult x = cmam_lookup_with_info(tex, c, {}, std::nan(""), 0.5, CmamOptions{});
+    EXPECT_FLOAT_EQ(x.value[0], 2.5f);
+    EXPECT_TRUE(x.info.fallback);
     EXPECT_FALSE(c.last.valid);
 }
 
@@ -193,33 +193,31 @@ TEST(CmamHull, OnlyTheNewPartOfEachTriangleIsIntegrated) {
     o.adjacent_only = false;
     CmamCache c;
     RayTag tag{9, 0, 0};
-    CmamRegion r;
     // Samples (texels): (0,0), (1,0), then (0,1): triangle (0,0),(1,0),(0,1), area 0.5, all new.
     cmam_lookup(tex, c, tag, 0.0, 0.0, o);
     cmam_lookup(tex, c, tag, 0.5, 0.0, o);
-    float v1 = cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r)[0];
-    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
-    EXPECT_NEAR(v1, 1.0, 1e-6);  // all inside texel (0,0)
+    CmamResult x = cmam_lookup_with_info(tex, c, tag, 0.0, 0.5, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.5, 1e-12);
+    EXPECT_NEAR(x.value[0], 1.0, 1e-6);  // all inside texel (0,0)
     // Next sample (1,1): triangle (1,1),(0,1),(1,0): new area 0.5, also in texel (0,0).
-    float v2 = cmam_lookup(tex, c, tag, 0.5, 0.5, o, nullptr, &r)[0];
-    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
-    EXPECT_NEAR(v2, 1.0, 1e-6);
+    x = cmam_lookup_with_info(tex, c, tag, 0.5, 0.5, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.5, 1e-12);
+    EXPECT_NEAR(x.value[0], 1.0, 1e-6);
     // A triangle inside the hull [0,1]^2 adds nothing: the running mean comes back.
     cmam_lookup(tex, c, tag, 0.1, 0.1, o);
-    float v3 = cmam_lookup(tex, c, tag, 0.2, 0.1, o, nullptr, &r)[0];
-    EXPECT_NEAR(r.hull_new_area, 0.0, 1e-12);
-    EXPECT_NEAR(v3, 1.0, 1e-6);
+    x = cmam_lookup_with_info(tex, c, tag, 0.2, 0.1, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.0, 1e-12);
+    EXPECT_NEAR(x.value[0], 1.0, 1e-6);
     // A triangle reaching into texel (1,0): only the part outside the hull counts.
-    float v4 = cmam_lookup(tex, c, tag, 1.0, 0.25, o, nullptr,
-                           &r)[0];  // (2, 0.5) with (0.4,0.2),(0.2,0.2)
-    EXPECT_GT(r.hull_new_area, 0);
-    EXPECT_GT(v4, 1.0f);
+    x = cmam_lookup_with_info(tex, c, tag, 1.0, 0.25, o);  // (2, 0.5) with (0.4,0.2),(0.2,0.2)
+    EXPECT_GT(x.region.hull_new_area, 0);
+    EXPECT_GT(x.value[0], 1.0f);
     // A new ID (the next pixel) starts a new hull.
     tag.id = 10;
     cmam_lookup(tex, c, tag, 0.0, 0.0, o);
     cmam_lookup(tex, c, tag, 0.5, 0.0, o);
-    cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r);
-    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
+    x = cmam_lookup_with_info(tex, c, tag, 0.0, 0.5, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.5, 1e-12);
 }
 
 TEST(Cmam2d, RegionUsesTheLeftAndUpperNeighboursAsJacobianColumns) {
@@ -248,16 +246,16 @@ TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
     CmamCache c;
     CmamRegion r;
     for (uint32_t x = 0; x < 4; ++x) cmam_lookup(tex, c, {0, 0, x}, 0.1 * x, 0.5, o);  // row 0
-    cmam_lookup(tex, c, {1, 0, 0}, 0.0, 0.55, o, nullptr, &r);  // row 1, x = 0
+    r = cmam_lookup_with_info(tex, c, {1, 0, 0}, 0.0, 0.55, o).region;  // row 1, x = 0
     EXPECT_TRUE(r.used_above);
     EXPECT_EQ(r.matches, 0);  // no left neighbour, but the sample above gives a region
     EXPECT_NEAR(length(r.b), 0.05 * 4, 1e-9);
-    cmam_lookup(tex, c, {1, 0, 1}, 0.1, 0.55, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {1, 0, 1}, 0.1, 0.55, o).region;
     EXPECT_TRUE(r.used_above);
     EXPECT_EQ(r.matches, 1);
-    cmam_lookup(tex, c, {1, 1, 2}, 0.2, 0.55, o, nullptr, &r);  // a reflected ray: level 1
+    r = cmam_lookup_with_info(tex, c, {1, 1, 2}, 0.2, 0.55, o).region;  // a reflected ray: level 1
     EXPECT_FALSE(r.used_above);
-    cmam_lookup(tex, c, {3, 0, 2}, 0.2, 0.6, o, nullptr, &r);  // ID 3 after 1: no row above
+    r = cmam_lookup_with_info(tex, c, {3, 0, 2}, 0.2, 0.6, o).region;  // ID 3 after 1: no row above
     EXPECT_FALSE(r.used_above);
 }
 
@@ -272,19 +270,16 @@ TEST(Cmam, FarOrNonNumericSamplesGiveTheMeanAndAreNotCached) {
             o.max_aniso = aniso;
             o.hull = f == FilterKind::Sat;
             CmamCache c;
-            CmamRegion r;
-            LookupInfo info;
-            const Texel far = cmam_lookup(tex, c, {2, 0, 0}, 1e12, 0.5, o, &info);
-            EXPECT_TRUE(info.fallback);
-            EXPECT_FLOAT_EQ(far[0], tex.image().mean()[0]);
+            const CmamResult far = cmam_lookup_with_info(tex, c, {2, 0, 0}, 1e12, 0.5, o);
+            EXPECT_TRUE(far.info.fallback);
+            EXPECT_FLOAT_EQ(far.value[0], tex.image().mean()[0]);
             EXPECT_FALSE(c.last.valid);
-            cmam_lookup(tex, c, {2, 0, 1}, 0.25, 0.5, o, &info, &r);
-            EXPECT_EQ(r.matches, 0);
-            const Texel near = cmam_lookup(tex, c, {2, 0, 2}, 0.3, 0.5, o, &info, &r);
-            EXPECT_EQ(r.matches, 1);
-            EXPECT_TRUE(std::isfinite(near[0]));
-            EXPECT_GE(near[0], 0.0f);
-            EXPECT_LE(near[0], 7.0f);
+            EXPECT_EQ(cmam_lookup_with_info(tex, c, {2, 0, 1}, 0.25, 0.5, o).region.matches, 0);
+            const CmamResult near = cmam_lookup_with_info(tex, c, {2, 0, 2}, 0.3, 0.5, o);
+            EXPECT_EQ(near.region.matches, 1);
+            EXPECT_TRUE(std::isfinite(near.value[0]));
+            EXPECT_GE(near.value[0], 0.0f);
+            EXPECT_LE(near.value[0], 7.0f);
         }
 }
 

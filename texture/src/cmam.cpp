@@ -127,7 +127,10 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
     return r;
 }
 
-Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
+namespace {
+
+// The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
+Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
@@ -282,7 +285,24 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         for (int k = 0; k + 1 < fp.point_count; ++k)
             fp.points[k + 1] = {cached[k].s / W, cached[k].t / H};
     }
-    return tex.lookup(u, v, fp, fo, info);
+    if (!info) return tex.lookup(u, v, fp, fo);
+    const LookupResult filtered = tex.lookup_with_info(u, v, fp, fo);
+    *info = filtered.info;
+    return filtered.value;
+}
+
+}  // namespace
+
+Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
+                  const CmamOptions& o) {
+    return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
+}
+
+CmamResult cmam_lookup_with_info(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u,
+                                 double v, const CmamOptions& o) {
+    CmamResult r;
+    r.value = lookup_into(tex, cache, tag, u, v, o, &r.info, &r.region);
+    return r;
 }
 
 }  // namespace cmam::texture

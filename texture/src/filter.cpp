@@ -108,8 +108,20 @@ bool finite(const Footprint& fp, double u, double v) {
 }
 }  // namespace
 
-Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
-                              LookupInfo* info) const {
+Texel FilteredTexture::lookup(double u, double v, const Footprint& fp,
+                              const FilterOptions& opts) const {
+    return lookup_into(u, v, fp, opts, nullptr);
+}
+
+LookupResult FilteredTexture::lookup_with_info(double u, double v, const Footprint& fp,
+                                               const FilterOptions& opts) const {
+    LookupResult r;
+    r.value = lookup_into(u, v, fp, opts, &r.info);
+    return r;
+}
+
+Texel FilteredTexture::lookup_into(double u, double v, const Footprint& fp,
+                                   const FilterOptions& opts, LookupInfo* info) const {
     // Written only when the caller asks for it (no scratch copy to clear on the hot paths).
     auto note = [info](int texels_read, bool fallback = false) {
         if (info) {
@@ -283,14 +295,16 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
         }
         case FilterKind::Trilinear:
         default: {
-            double lambda = 0;
-            Texel t = pyramid().trilinear(u, v, r.width, &lambda);
-            in.width = r.width;
-            in.lambda = lambda;
-            in.level_lo = static_cast<int>(std::floor(lambda));
-            in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-            in.texels_read = in.level_lo == in.level_hi ? 4 : 8;
-            return t;
+            const MipPyramid& pyr = pyramid();
+            if (info) {
+                const double lambda = pyr.trilinear_lambda(r.width);
+                info->width = r.width;
+                info->lambda = lambda;
+                info->level_lo = static_cast<int>(std::floor(lambda));
+                info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
+                info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
+            }
+            return pyr.trilinear(u, v, r.width);
         }
     }
 }

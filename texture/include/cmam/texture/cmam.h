@@ -121,8 +121,18 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
 /// and then updating `cache` (the cache shifts: most recent becomes second, current becomes
 /// most recent).
 Texel cmam_lookup(const FilteredTexture& texture, CmamCache& cache, RayTag tag, double u, double v,
-                  const CmamOptions& options, LookupInfo* info = nullptr,
-                  CmamRegion* region = nullptr);
+                  const CmamOptions& options);
+
+/// A CMAM lookup's value, what its filter did and the region it built.
+struct CmamResult {
+    Texel value{};
+    LookupInfo info;
+    CmamRegion region;
+};
+/// cmam_lookup() with what the filter did and the region (the 1-D region is built for it even
+/// where the filter does not need it). The value and the cache's update are cmam_lookup()'s.
+CmamResult cmam_lookup_with_info(const FilteredTexture& texture, CmamCache& cache, RayTag tag,
+                                 double u, double v, const CmamOptions& options);
 
 /// Convenience object for a ray tracer: one per textured object and worker thread.
 class Cmam {
