@@ -10,22 +10,6 @@
 
 namespace cmam::texture {
 
-/// A ray's tag as the CMAM sees it (paper §3.1): the ray ID (scanline or pixel) and the
-/// recursion level (0 for primary rays, +1 per specular bounce). `seq` numbers the camera
-/// samples of one ID in the order they are traced (algorithms.md §6.3.2), so the CMAM can
-/// accept only adjacent samples.
-struct RayTag {
-    uint32_t id = 0;
-    uint32_t level = 0;
-    uint32_t seq = 0;
-    /// Optional, beyond the paper: the camera sample's position on the image plane in strata
-    /// (x across, y down; stratum (i,j) covers [i,i+1)x[j,j+1)). With it the 2-D CMAM turns its
-    /// neighbours' differences into the Jacobian exactly, however the samples are jittered, and
-    /// centres the footprint on the sample's stratum (algorithms.md §6.3.1).
-    bool positioned = false;
-    double x = 0, y = 0;
-};
-
 /// How EWA reads the CMAM's two non-orthogonal vectors (algorithms.md §6.2 item 3): R1
 /// conjugate semi-diameters, R2 an orthogonal minor axis of the same length, R3 the minor
 /// vector orthogonalised against the major.
