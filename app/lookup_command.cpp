@@ -57,7 +57,7 @@ LookupAt lookup_point(const LookupArgs& a) {
 }
 
 // What one lookup returned and read.
-struct LookupResult {
+struct LookupReport {
     texture::FilterKind kind;
     LookupAt at;
     texture::Texel value;
@@ -65,7 +65,7 @@ struct LookupResult {
     bool region;  // the filter read a footprint's region (not a point, not the fallback)
 };
 
-void print_json(const std::string& image_path, const texture::Image& img, const LookupResult& r) {
+void print_json(const std::string& image_path, const texture::Image& img, const LookupReport& r) {
     const auto num = json_number;
     const texture::LookupInfo& info = r.info;
     const texture::Texel& v = r.value;
@@ -79,8 +79,8 @@ void print_json(const std::string& image_path, const texture::Image& img, const 
                       ", \"texels_read\": " + std::to_string(info.texels_read) +
                       ", \"fallback\": " + (info.fallback ? "true" : "false");
     if (r.region && r.kind == texture::FilterKind::Sat)
-        out += ", \"rectangle_texels\": [" + num(info.rect[0]) + ", " + num(info.rect[1]) + ", " +
-               num(info.rect[2]) + ", " + num(info.rect[3]) + "]";
+        out += ", \"rectangle_texels\": [" + num(info.rect.lo.u) + ", " + num(info.rect.lo.v) + ", " +
+               num(info.rect.hi.u) + ", " + num(info.rect.hi.v) + "]";
     if (r.region && r.kind == texture::FilterKind::Ewa)
         out += ", \"ellipse_texels\": {\"major\": " + num(info.major) +
                ", \"minor\": " + num(info.minor) + "}";
@@ -94,7 +94,7 @@ void print_json(const std::string& image_path, const texture::Image& img, const 
     std::printf("%s}\n", out.c_str());
 }
 
-void print_text(const LookupResult& r) {
+void print_text(const LookupReport& r) {
     const texture::LookupInfo& info = r.info;
     std::printf("value (linear RGB): %.6f %.6f %.6f\n", r.value[0], r.value[1], r.value[2]);
     std::printf("filter: %s, MIP levels %d..%d (lambda %.4f), texels read: %d%s\n",
@@ -104,8 +104,8 @@ void print_text(const LookupResult& r) {
     if (!r.region)
         std::printf("footprint: none (bilinear at level 0)\n");
     else if (r.kind == texture::FilterKind::Sat)
-        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect[0],
-                    info.rect[2], info.rect[1], info.rect[3]);
+        std::printf("footprint: rectangle [%.4f, %.4f] x [%.4f, %.4f] texels\n", info.rect.lo.u,
+                    info.rect.hi.u, info.rect.lo.v, info.rect.hi.v);
     else if (r.kind == texture::FilterKind::Ewa)
         std::printf("footprint: ellipse, axes %.4f and %.4f texels (after the anisotropy clamp)\n",
                     info.major, info.minor);
@@ -123,12 +123,15 @@ void print_text(const LookupResult& r) {
 }
 
 int run_lookup(const LookupArgs& a) {
-    LookupResult r{a.filter, lookup_point(a), {}, {}, false};
+    LookupReport r{a.filter, lookup_point(a), {}, {}, false};
     if (r.kind == texture::FilterKind::Ewa && a.max_aniso > texture::kEwaMaxAnisotropy)
         std::cerr << "cmam: warning: --maxaniso " << a.max_aniso << " is above cmam's limit of "
                   << texture::kEwaMaxAnisotropy << ", which is used instead\n";
     texture::FilteredTexture tex(render::load_texture(a.image, false, std::nullopt, 1.0f, a.wrap));
-    r.value = tex.lookup(r.at.u, r.at.v, r.at.footprint, {r.kind, a.max_aniso}, &r.info);
+    const texture::LookupResult looked =
+        tex.lookup_with_info(r.at.u, r.at.v, r.at.footprint, {r.kind, a.max_aniso});
+    r.value = looked.value;
+    r.info = looked.info;
     r.region = r.at.footprint.kind != texture::Footprint::Kind::None &&
                r.kind != texture::FilterKind::Nearest && r.kind != texture::FilterKind::Bilinear &&
                !r.info.fallback;

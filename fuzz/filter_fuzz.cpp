@@ -70,7 +70,7 @@ tx::FilterKind filter_kind(FuzzedDataProvider& in) {
 /// they are (the entry points' range check).
 tx::Polygon polygon(FuzzedDataProvider& in, double texels) {
     const int n = in.ConsumeIntegralInRange(3, 8);
-    std::vector<tx::P2> points;
+    std::vector<tx::Vec2d> points;
     bool in_range = true;
     for (int i = 0; i < n; ++i) {
         tx::Vec2d p = vec(in, texels);
@@ -78,7 +78,7 @@ tx::Polygon polygon(FuzzedDataProvider& in, double texels) {
         // (beyond 2^30 the entry points take the mean at once, as they do for NaN).
         for (double* c : {&p.u, &p.v})
             if (std::isfinite(*c) && std::abs(*c) < 0x1p30) *c = std::fmod(*c, 0x1p12);
-        points.push_back({p.u, p.v});
+        points.push_back(p);
         in_range = in_range && std::abs(p.u) < 0x1p30 && std::abs(p.v) < 0x1p30;
     }
     return in_range ? tx::convex_hull(points) : points;
@@ -131,8 +131,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
                 opts.sat_box = static_cast<tx::CmamSatBox>(in.ConsumeIntegralInRange(0, 1));
                 const tx::Footprint fp = footprint(in);
                 const double u = number(in), v = number(in);
-                tx::LookupInfo info;
-                check_finite(texture.lookup(u, v, fp, opts, &info), channels,
+                check_finite(texture.lookup_with_info(u, v, fp, opts).value, channels,
                              "FilteredTexture::lookup");
                 break;
             }
@@ -145,20 +144,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
                 tag.x = static_cast<float>(in.ConsumeFloatingPointInRange(-1.0, 17.0));
                 tag.y = static_cast<float>(in.ConsumeFloatingPointInRange(-1.0, 17.0));
                 const double u = number(in), v = number(in);
-                tx::LookupInfo info;
-                tx::CmamRegion region;
-                check_finite(tx::cmam_lookup(texture, cache, tag, u, v, cmam, &info, &region),
+                check_finite(tx::cmam_lookup_with_info(texture, cache, tag, u, v, cmam).value,
                              channels, "cmam_lookup");
                 break;
             }
             case 2: {
                 const tx::Polygon p = polygon(in, texel_scale);
                 if (p.size() < 3) break;
-                std::vector<tx::Vec2d> vertices;
-                for (const tx::P2& q : p) vertices.push_back({q.x, q.y});
                 const int level = in.ConsumeIntegralInRange(0, texture.pyramid().levels() - 1);
-                texture.row_prefix(level).integral(vertices.data(),
-                                                   static_cast<int>(vertices.size()));
+                texture.row_prefix(level).integral(p.data(), static_cast<int>(p.size()));
                 break;
             }
             default: {

@@ -370,8 +370,8 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
         // miss) and the MIP level its filter read.
         const CmamRecord* r = ctx.cmam_record;
         if (!r || !r->filled) return;
-        const double la = std::hypot(r->region.a[0], r->region.a[1]),
-                     lb = std::hypot(r->region.b[0], r->region.b[1]);
+        const double la = std::hypot(r->region.a.u, r->region.a.v),
+                     lb = std::hypot(r->region.b.u, r->region.b.v);
         aov->v[0] = float(std::max(la, lb));
         aov->v[1] = float(std::min(la, lb));
         aov->v[2] = float(std::max(0.0, r->info.lambda));

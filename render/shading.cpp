@@ -12,10 +12,9 @@ texture::Texel lookup_image(const texture::FilteredTexture& image,
         ++counts->point_sampled;
     else
         ++counts->by_filter[static_cast<int>(filter.kind)];
-    texture::LookupInfo info;
-    texture::Texel x = image.lookup(s, t, footprint, filter, &info);
-    counts->non_finite += info.fallback;
-    return x;
+    const texture::LookupResult r = image.lookup_with_info(s, t, footprint, filter);
+    counts->non_finite += r.info.fallback;
+    return r.value;
 }
 
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx) {
@@ -146,11 +145,18 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
                 CmamRecord* rec =
                     ctx.cmam_record && ctx.cmam_record->node == in.node ? ctx.cmam_record : &own;
                 const bool want = ctx.counts || rec != &own;
-                x = texture::cmam_lookup(*n.image,
-                                         ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node),
-                                                         ctx.footprints.path),
-                                         ctx.footprints.tag, s, t, o, want ? &rec->info : nullptr,
-                                         want && (o.two_d || rec != &own) ? &rec->region : nullptr);
+                texture::CmamCache& cache =
+                    ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node),
+                                    ctx.footprints.path);
+                if (want) {
+                    const texture::CmamResult r =
+                        texture::cmam_lookup_with_info(*n.image, cache, ctx.footprints.tag, s, t, o);
+                    x = r.value;
+                    rec->info = r.info;
+                    rec->region = r.region;
+                } else {
+                    x = texture::cmam_lookup(*n.image, cache, ctx.footprints.tag, s, t, o);
+                }
                 rec->filled = true;
                 if (ctx.counts) {
                     ++ctx.counts->by_filter[static_cast<int>(o.filter)];

@@ -22,9 +22,7 @@ std::vector<float> noise(int w, int h, int c, unsigned seed) {
 }
 
 Polygon to_polygon(const Vec2d* v, int n) {
-    Polygon p;
-    for (int i = 0; i < n; ++i) p.push_back({v[i].u, v[i].v});
-    return p;
+    return Polygon(v, v + n);
 }
 
 // A random parallelogram (centre, two sides) in texel space; sides from 0.05 to 20 texels.
@@ -269,11 +267,10 @@ TEST(Area, CollinearAndNonFiniteFootprints) {
     const Texel x =
         t.lookup(0.5, 0.5, Footprint::axes({0.25, 0.125}, {-0.5, -0.25}), {FilterKind::Area});
     EXPECT_TRUE(std::isfinite(x[0]));
-    LookupInfo info;
-    const Texel m =
-        t.lookup(0.5, 0.5, Footprint::axes({NAN, 0}, {0, 0.1}), {FilterKind::Area}, &info);
-    EXPECT_TRUE(info.fallback);
-    EXPECT_EQ(m[0], t.image().mean()[0]);
+    const LookupResult m =
+        t.lookup_with_info(0.5, 0.5, Footprint::axes({NAN, 0}, {0, 0.1}), {FilterKind::Area});
+    EXPECT_TRUE(m.info.fallback);
+    EXPECT_EQ(m.value[0], t.image().mean()[0]);
     EXPECT_EQ(area_parallelogram(t, 0.5, INFINITY, {0.1, 0}, {0, 0.1}).value[0],
               t.image().mean()[0]);
 }

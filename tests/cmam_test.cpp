@@ -17,12 +17,11 @@ CmamCache::Entry at(double s, double t) {
     return {RayTag{}, s, t, true};
 }
 double area(const CmamRegion& r) {
-    return kPi * std::abs(r.a[0] * r.b[1] - r.a[1] * r.b[0]);
+    return kPi * std::abs(cross(r.a, r.b));
 }
 // Singular values of [a b] (the true semi-axes of the conjugate-diameter ellipse).
-std::pair<double, double> sigma(const double* a, const double* b) {
-    double A = a[1] * a[1] + b[1] * b[1], C = a[0] * a[0] + b[0] * b[0],
-           B = -2 * (a[0] * a[1] + b[0] * b[1]);
+std::pair<double, double> sigma(Vec2d a, Vec2d b) {
+    double A = a.v * a.v + b.v * b.v, C = a.u * a.u + b.u * b.u, B = -2 * (a.u * a.v + b.u * b.v);
     double root = std::sqrt((A - C) * (A - C) + B * B);
     return {std::sqrt((A + C + root) / 2), std::sqrt((A + C - root) / 2)};
 }
@@ -34,27 +33,27 @@ TEST(CmamRegion, TCmam1CaseTwoGeometry) {
     CmamRegion r = cmam_region(10, 10, cached, 2, o);
     EXPECT_NEAR(r.width, 2.5, 1e-12);
     EXPECT_NEAR(std::log2(r.width), 1.321928, 1e-6);
-    EXPECT_DOUBLE_EQ(r.a[0], 2);
-    EXPECT_DOUBLE_EQ(r.a[1], 0.5);
-    EXPECT_DOUBLE_EQ(r.b[0], 0.5);
-    EXPECT_DOUBLE_EQ(r.b[1], 1.5);
+    EXPECT_DOUBLE_EQ(r.a.u, 2);
+    EXPECT_DOUBLE_EQ(r.a.v, 0.5);
+    EXPECT_DOUBLE_EQ(r.b.u, 0.5);
+    EXPECT_DOUBLE_EQ(r.b.v, 1.5);
     EXPECT_FALSE(r.orthogonal_fallback);
     auto [s1, s2] = sigma(r.a, r.b);
     EXPECT_NEAR(s1, 2.309017, 1e-6);
     EXPECT_NEAR(s2, 1.190983, 1e-6);
     EXPECT_NEAR(area(r), 8.639380, 1e-6);
-    EXPECT_NEAR(std::log2(std::hypot(r.b[0], r.b[1])), 0.661, 1e-3);
+    EXPECT_NEAR(std::log2(length(r.b)), 0.661, 1e-3);
     EXPECT_NEAR(std::log2(s2), 0.252, 1e-3);
-    EXPECT_DOUBLE_EQ(r.rect[0], 10);
-    EXPECT_DOUBLE_EQ(r.rect[2], 12);
-    EXPECT_DOUBLE_EQ(r.rect[1], 10);
-    EXPECT_DOUBLE_EQ(r.rect[3], 11.5);
+    EXPECT_DOUBLE_EQ(r.rect.lo.u, 10);
+    EXPECT_DOUBLE_EQ(r.rect.hi.u, 12);
+    EXPECT_DOUBLE_EQ(r.rect.lo.v, 10);
+    EXPECT_DOUBLE_EQ(r.rect.hi.v, 11.5);
     o.ellipse = CmamEllipse::Orthogonal;
     EXPECT_NEAR(area(cmam_region(10, 10, cached, 2, o)), 10.240339, 1e-6);
     o.ellipse = CmamEllipse::Orthogonalised;
     CmamRegion r3 = cmam_region(10, 10, cached, 2, o);
     EXPECT_NEAR(area(r3), 8.639380, 1e-6);
-    EXPECT_NEAR(r3.a[0] * r3.b[0] + r3.a[1] * r3.b[1], 0, 1e-12);
+    EXPECT_NEAR(dot(r3.a, r3.b), 0, 1e-12);
 }
 
 TEST(CmamRegion, TCmam1CollinearFallsBackAndKeepsAMinimumExtent) {
@@ -62,11 +61,11 @@ TEST(CmamRegion, TCmam1CollinearFallsBackAndKeepsAMinimumExtent) {
     CmamRegion r = cmam_region(10, 10, cached, 2, CmamOptions{});
     EXPECT_NEAR(std::log2(r.width), 1, 1e-12);
     EXPECT_TRUE(r.orthogonal_fallback);
-    EXPECT_NEAR(std::hypot(r.a[0], r.a[1]), 2, 1e-12);
-    EXPECT_NEAR(std::hypot(r.b[0], r.b[1]), 1, 1e-12);
-    EXPECT_NEAR(r.a[0] * r.b[0] + r.a[1] * r.b[1], 0, 1e-12);
-    EXPECT_NEAR(r.rect[3] - r.rect[1], 1, 1e-12);  // zero height -> 1 texel
-    EXPECT_NEAR(r.rect[2] - r.rect[0], 2, 1e-12);
+    EXPECT_NEAR(length(r.a), 2, 1e-12);
+    EXPECT_NEAR(length(r.b), 1, 1e-12);
+    EXPECT_NEAR(dot(r.a, r.b), 0, 1e-12);
+    EXPECT_NEAR(r.rect.hi.v - r.rect.lo.v, 1, 1e-12);  // zero height -> 1 texel
+    EXPECT_NEAR(r.rect.hi.u - r.rect.lo.u, 2, 1e-12);
 
     CmamCache::Entry row[2] = {at(9, 10.05), at(8, 10.2)};  // a perspective row
     CmamRegion p = cmam_region(10, 10, row, 2, CmamOptions{});
@@ -82,10 +81,9 @@ TEST(Cmam, TCmam2CaseOneOnTheMipTexture) {
         RayTag tag{7, 0, 0};
         cmam_lookup(tex, cache, tag, 0.3, 0.6, o);  // cached sample
         tag.seq = 1;
-        CmamRegion r;
-        float v = cmam_lookup(tex, cache, tag, 0.8, 0.6, o, nullptr, &r)[0];
-        EXPECT_EQ(r.matches, 1);
-        return std::pair{v, r};
+        const CmamResult x = cmam_lookup_with_info(tex, cache, tag, 0.8, 0.6, o);
+        EXPECT_EQ(x.region.matches, 1);
+        return std::pair{x.value[0], x.region};
     };
     CmamOptions o;
     o.filter = FilterKind::Trilinear;
@@ -94,10 +92,10 @@ TEST(Cmam, TCmam2CaseOneOnTheMipTexture) {
     EXPECT_NEAR(tri, 2.77, 1e-5);
     o.filter = FilterKind::Sat;
     auto [sat, rs] = run(o);
-    EXPECT_NEAR(rs.rect[0], 1.2, 1e-12);
-    EXPECT_NEAR(rs.rect[2], 3.2, 1e-12);
-    EXPECT_NEAR(rs.rect[1], 1.9, 1e-12);
-    EXPECT_NEAR(rs.rect[3], 2.9, 1e-12);
+    EXPECT_NEAR(rs.rect.lo.u, 1.2, 1e-12);
+    EXPECT_NEAR(rs.rect.hi.u, 3.2, 1e-12);
+    EXPECT_NEAR(rs.rect.lo.v, 1.9, 1e-12);
+    EXPECT_NEAR(rs.rect.hi.v, 2.9, 1e-12);
     EXPECT_NEAR(sat, 4.18, 1e-5);
     o.sat_box = CmamSatBox::Square;
     EXPECT_NEAR(run(o).first, 3.15, 1e-5);
@@ -125,21 +123,22 @@ TEST(Cmam, MatchingShiftsTheCacheAndComparesTagAndLevel) {
     CmamOptions o;
     CmamCache c;
     CmamRegion r;
-    cmam_lookup(tex, c, {3, 0, 0}, 0.1, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {3, 0, 0}, 0.1, 0.1, o).region;
     EXPECT_EQ(r.matches, 0);
     EXPECT_TRUE(c.last.valid);
     EXPECT_FALSE(c.second_last.valid);
-    cmam_lookup(tex, c, {3, 0, 1}, 0.2, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {3, 0, 1}, 0.2, 0.1, o).region;
     EXPECT_EQ(r.matches, 1);
     EXPECT_DOUBLE_EQ(c.second_last.s, 0.4);
     EXPECT_DOUBLE_EQ(c.last.s, 0.8);
-    cmam_lookup(tex, c, {3, 0, 2}, 0.3, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {3, 0, 2}, 0.3, 0.1, o).region;
     EXPECT_EQ(r.matches, 2);
-    cmam_lookup(tex, c, {3, 1, 3}, 0.4, 0.1, o, nullptr, &r);  // reflected ray: another level
+    // A reflected ray: another level.
+    r = cmam_lookup_with_info(tex, c, {3, 1, 3}, 0.4, 0.1, o).region;
     EXPECT_EQ(r.matches, 0);
-    cmam_lookup(tex, c, {4, 1, 4}, 0.5, 0.1, o, nullptr, &r);  // another ID (next scanline)
+    r = cmam_lookup_with_info(tex, c, {4, 1, 4}, 0.5, 0.1, o).region;  // another ID (next scanline)
     EXPECT_EQ(r.matches, 0);
-    cmam_lookup(tex, c, {4, 1, 5}, 0.6, 0.1, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, c, {4, 1, 5}, 0.6, 0.1, o).region;
     EXPECT_EQ(r.matches, 1);
 }
 
@@ -150,12 +149,12 @@ TEST(Cmam, TCmam3AdjacencyRejectsSamplesAcrossAnOccluder) {
     CmamCache a;
     CmamRegion r;
     cmam_lookup(tex, a, {5, 0, 10}, 0.10, 0.5, o);
-    cmam_lookup(tex, a, {5, 0, 21}, 0.21, 0.5, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, a, {5, 0, 21}, 0.21, 0.5, o).region;
     EXPECT_EQ(r.matches, 0) << "a footprint spanning the occluder";
     o.adjacent_only = false;  // the paper's literal matching would span it
     CmamCache b;
     cmam_lookup(tex, b, {5, 0, 10}, 0.10, 0.5, o);
-    cmam_lookup(tex, b, {5, 0, 21}, 0.21, 0.5, o, nullptr, &r);
+    r = cmam_lookup_with_info(tex, b, {5, 0, 21}, 0.21, 0.5, o).region;
     EXPECT_EQ(r.matches, 1);
 }
 
@@ -171,9 +170,9 @@ TEST(Cmam, ModuleObjectIsTheWholeApi) {
 TEST(Cmam, NonFiniteCoordinatesGiveTheMean) {
     FilteredTexture tex(tmip1());
     CmamCache c;
-    LookupInfo info;
-    EXPECT_FLOAT_EQ(cmam_lookup(tex, c, {}, std::nan(""), 0.5, CmamOptions{}, &info)[0], 2.5f);
-    EXPECT_TRUE(info.fallback);
+    const CmamResult x = cmam_lookup_with_info(tex, c, {}, std::nan(""), 0.5, CmamOptions{});
+    EXPECT_FLOAT_EQ(x.value[0], 2.5f);
+    EXPECT_TRUE(x.info.fallback);
     EXPECT_FALSE(c.last.valid);
 }
 
@@ -194,52 +193,50 @@ TEST(CmamHull, OnlyTheNewPartOfEachTriangleIsIntegrated) {
     o.adjacent_only = false;
     CmamCache c;
     RayTag tag{9, 0, 0};
-    CmamRegion r;
     // Samples (texels): (0,0), (1,0), then (0,1): triangle (0,0),(1,0),(0,1), area 0.5, all new.
     cmam_lookup(tex, c, tag, 0.0, 0.0, o);
     cmam_lookup(tex, c, tag, 0.5, 0.0, o);
-    float v1 = cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r)[0];
-    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
-    EXPECT_NEAR(v1, 1.0, 1e-6);  // all inside texel (0,0)
+    CmamResult x = cmam_lookup_with_info(tex, c, tag, 0.0, 0.5, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.5, 1e-12);
+    EXPECT_NEAR(x.value[0], 1.0, 1e-6);  // all inside texel (0,0)
     // Next sample (1,1): triangle (1,1),(0,1),(1,0): new area 0.5, also in texel (0,0).
-    float v2 = cmam_lookup(tex, c, tag, 0.5, 0.5, o, nullptr, &r)[0];
-    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
-    EXPECT_NEAR(v2, 1.0, 1e-6);
+    x = cmam_lookup_with_info(tex, c, tag, 0.5, 0.5, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.5, 1e-12);
+    EXPECT_NEAR(x.value[0], 1.0, 1e-6);
     // A triangle inside the hull [0,1]^2 adds nothing: the running mean comes back.
     cmam_lookup(tex, c, tag, 0.1, 0.1, o);
-    float v3 = cmam_lookup(tex, c, tag, 0.2, 0.1, o, nullptr, &r)[0];
-    EXPECT_NEAR(r.hull_new_area, 0.0, 1e-12);
-    EXPECT_NEAR(v3, 1.0, 1e-6);
+    x = cmam_lookup_with_info(tex, c, tag, 0.2, 0.1, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.0, 1e-12);
+    EXPECT_NEAR(x.value[0], 1.0, 1e-6);
     // A triangle reaching into texel (1,0): only the part outside the hull counts.
-    float v4 = cmam_lookup(tex, c, tag, 1.0, 0.25, o, nullptr,
-                           &r)[0];  // (2, 0.5) with (0.4,0.2),(0.2,0.2)
-    EXPECT_GT(r.hull_new_area, 0);
-    EXPECT_GT(v4, 1.0f);
+    x = cmam_lookup_with_info(tex, c, tag, 1.0, 0.25, o);  // (2, 0.5) with (0.4,0.2),(0.2,0.2)
+    EXPECT_GT(x.region.hull_new_area, 0);
+    EXPECT_GT(x.value[0], 1.0f);
     // A new ID (the next pixel) starts a new hull.
     tag.id = 10;
     cmam_lookup(tex, c, tag, 0.0, 0.0, o);
     cmam_lookup(tex, c, tag, 0.5, 0.0, o);
-    cmam_lookup(tex, c, tag, 0.0, 0.5, o, nullptr, &r);
-    EXPECT_NEAR(r.hull_new_area, 0.5, 1e-12);
+    x = cmam_lookup_with_info(tex, c, tag, 0.0, 0.5, o);
+    EXPECT_NEAR(x.region.hull_new_area, 0.5, 1e-12);
 }
 
 TEST(Cmam2d, RegionUsesTheLeftAndUpperNeighboursAsJacobianColumns) {
     CmamCache::Entry left = at(9, 10), above = at(10.5, 8);
     CmamRegion r = cmam_region_2d(10, 10, &left, above, CmamOptions{});
     EXPECT_TRUE(r.used_above);
-    EXPECT_DOUBLE_EQ(r.a[0], -1);
-    EXPECT_DOUBLE_EQ(r.a[1], 0);
-    EXPECT_DOUBLE_EQ(r.b[0], 0.5);
-    EXPECT_DOUBLE_EQ(r.b[1], -2);
+    EXPECT_DOUBLE_EQ(r.a.u, -1);
+    EXPECT_DOUBLE_EQ(r.a.v, 0);
+    EXPECT_DOUBLE_EQ(r.b.u, 0.5);
+    EXPECT_DOUBLE_EQ(r.b.v, -2);
     EXPECT_NEAR(r.width, std::hypot(0.5, 2.0), 1e-12);
     // The box around the parallelogram p0 +- (a +- b)/2: half extents 0.75 and 1.
-    EXPECT_NEAR(r.rect[0], 9.25, 1e-12);
-    EXPECT_NEAR(r.rect[2], 10.75, 1e-12);
-    EXPECT_NEAR(r.rect[1], 9, 1e-12);
-    EXPECT_NEAR(r.rect[3], 11, 1e-12);
+    EXPECT_NEAR(r.rect.lo.u, 9.25, 1e-12);
+    EXPECT_NEAR(r.rect.hi.u, 10.75, 1e-12);
+    EXPECT_NEAR(r.rect.lo.v, 9, 1e-12);
+    EXPECT_NEAR(r.rect.hi.v, 11, 1e-12);
     CmamRegion c = cmam_region_2d(10, 10, nullptr, above, CmamOptions{});  // no left: a circle
-    EXPECT_NEAR(std::hypot(c.a[0], c.a[1]), std::hypot(c.b[0], c.b[1]), 1e-12);
-    EXPECT_NEAR(c.a[0] * c.b[0] + c.a[1] * c.b[1], 0, 1e-12);
+    EXPECT_NEAR(length(c.a), length(c.b), 1e-12);
+    EXPECT_NEAR(dot(c.a, c.b), 0, 1e-12);
 }
 
 TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
@@ -249,16 +246,16 @@ TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
     CmamCache c;
     CmamRegion r;
     for (uint32_t x = 0; x < 4; ++x) cmam_lookup(tex, c, {0, 0, x}, 0.1 * x, 0.5, o);  // row 0
-    cmam_lookup(tex, c, {1, 0, 0}, 0.0, 0.55, o, nullptr, &r);  // row 1, x = 0
+    r = cmam_lookup_with_info(tex, c, {1, 0, 0}, 0.0, 0.55, o).region;  // row 1, x = 0
     EXPECT_TRUE(r.used_above);
     EXPECT_EQ(r.matches, 0);  // no left neighbour, but the sample above gives a region
-    EXPECT_NEAR(std::hypot(r.b[0], r.b[1]), 0.05 * 4, 1e-9);
-    cmam_lookup(tex, c, {1, 0, 1}, 0.1, 0.55, o, nullptr, &r);
+    EXPECT_NEAR(length(r.b), 0.05 * 4, 1e-9);
+    r = cmam_lookup_with_info(tex, c, {1, 0, 1}, 0.1, 0.55, o).region;
     EXPECT_TRUE(r.used_above);
     EXPECT_EQ(r.matches, 1);
-    cmam_lookup(tex, c, {1, 1, 2}, 0.2, 0.55, o, nullptr, &r);  // a reflected ray: level 1
+    r = cmam_lookup_with_info(tex, c, {1, 1, 2}, 0.2, 0.55, o).region;  // a reflected ray: level 1
     EXPECT_FALSE(r.used_above);
-    cmam_lookup(tex, c, {3, 0, 2}, 0.2, 0.6, o, nullptr, &r);  // ID 3 after 1: no row above
+    r = cmam_lookup_with_info(tex, c, {3, 0, 2}, 0.2, 0.6, o).region;  // ID 3 after 1: no row above
     EXPECT_FALSE(r.used_above);
 }
 
@@ -273,19 +270,16 @@ TEST(Cmam, FarOrNonNumericSamplesGiveTheMeanAndAreNotCached) {
             o.max_aniso = aniso;
             o.hull = f == FilterKind::Sat;
             CmamCache c;
-            CmamRegion r;
-            LookupInfo info;
-            const Texel far = cmam_lookup(tex, c, {2, 0, 0}, 1e12, 0.5, o, &info);
-            EXPECT_TRUE(info.fallback);
-            EXPECT_FLOAT_EQ(far[0], tex.image().mean()[0]);
+            const CmamResult far = cmam_lookup_with_info(tex, c, {2, 0, 0}, 1e12, 0.5, o);
+            EXPECT_TRUE(far.info.fallback);
+            EXPECT_FLOAT_EQ(far.value[0], tex.image().mean()[0]);
             EXPECT_FALSE(c.last.valid);
-            cmam_lookup(tex, c, {2, 0, 1}, 0.25, 0.5, o, &info, &r);
-            EXPECT_EQ(r.matches, 0);
-            const Texel near = cmam_lookup(tex, c, {2, 0, 2}, 0.3, 0.5, o, &info, &r);
-            EXPECT_EQ(r.matches, 1);
-            EXPECT_TRUE(std::isfinite(near[0]));
-            EXPECT_GE(near[0], 0.0f);
-            EXPECT_LE(near[0], 7.0f);
+            EXPECT_EQ(cmam_lookup_with_info(tex, c, {2, 0, 1}, 0.25, 0.5, o).region.matches, 0);
+            const CmamResult near = cmam_lookup_with_info(tex, c, {2, 0, 2}, 0.3, 0.5, o);
+            EXPECT_EQ(near.region.matches, 1);
+            EXPECT_TRUE(std::isfinite(near.value[0]));
+            EXPECT_GE(near.value[0], 0.0f);
+            EXPECT_LE(near.value[0], 7.0f);
         }
 }
 
@@ -336,15 +330,15 @@ TEST(Cmam2d, PositionedTagsSolveTheJacobianWhateverTheJitter) {
     const CmamCache::Entry cur = entry(10.8, 20.15), left = entry(9.1, 20.7),
                            above = entry(10.35, 19.9);
     const CmamRegion r = cmam_region_2d(cur.s, cur.t, &left, above, CmamOptions{}, cur.tag);
-    EXPECT_NEAR(r.a[0], 3, 1e-5);
-    EXPECT_NEAR(r.a[1], -1, 1e-5);
-    EXPECT_NEAR(r.b[0], 1, 1e-5);
-    EXPECT_NEAR(r.b[1], 2, 1e-5);
+    EXPECT_NEAR(r.a.u, 3, 1e-5);
+    EXPECT_NEAR(r.a.v, -1, 1e-5);
+    EXPECT_NEAR(r.b.u, 1, 1e-5);
+    EXPECT_NEAR(r.b.v, 2, 1e-5);
     auto [cs, ct] = map(10.5, 20.5);  // the stratum's centre
-    EXPECT_NEAR(cur.s + r.offset[0], cs, 1e-5);
-    EXPECT_NEAR(cur.t + r.offset[1], ct, 1e-5);
+    EXPECT_NEAR(cur.s + r.offset.u, cs, 1e-5);
+    EXPECT_NEAR(cur.t + r.offset.v, ct, 1e-5);
     // Without positions: the plain neighbour vectors, no move.
     const CmamRegion plain = cmam_region_2d(cur.s, cur.t, &left, above, CmamOptions{});
-    EXPECT_NEAR(plain.a[0], left.s - cur.s, 1e-12);
-    EXPECT_EQ(plain.offset[0], 0);
+    EXPECT_NEAR(plain.a.u, left.s - cur.s, 1e-12);
+    EXPECT_EQ(plain.offset.u, 0);
 }

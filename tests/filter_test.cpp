@@ -228,12 +228,12 @@ TEST(Mip, TrilinearLookupMatchesThePyramid) {
     for (int k = 0; k < 200; ++k) widths.push_back(std::exp2(9 * unit(rng) - 1));
     for (double w : widths) {
         const double u = unit(rng), v = unit(rng);
-        LookupInfo info;
-        const Texel a = t.lookup(u, v, Footprint::axes({w / 64, 0}, {0, 0.5 / 48}),
-                                 {FilterKind::Trilinear}, &info);
+        const auto [a, info] = t.lookup_with_info(u, v, Footprint::axes({w / 64, 0}, {0, 0.5 / 48}),
+                                                  {FilterKind::Trilinear});
         const Texel b = t.pyramid().trilinear(u, v, w);
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 1e-6) << "width " << w;
         EXPECT_NEAR(info.lambda, std::clamp(std::log2(w), 0.0, t.pyramid().levels() - 1.0), 1e-12);
+        EXPECT_NEAR(t.pyramid().trilinear_lambda(w), info.lambda, 1e-12) << "width " << w;
     }
 }
 
@@ -244,10 +244,11 @@ TEST(Mip, TrilinearIsContinuousAtLambdaOneAndLevelMonotonic) {
     FilteredTexture t(tmip1());
     double last = -1;
     for (double w = 0.25; w < 64; w *= 1.1) {
-        LookupInfo info;
-        t.lookup(0.3, 0.6, Footprint::axes({w / 4, 0}, {0, w / 8}), {FilterKind::Trilinear}, &info);
-        EXPECT_GE(info.lambda, last);
-        last = info.lambda;
+        const double lambda = t.lookup_with_info(0.3, 0.6, Footprint::axes({w / 4, 0}, {0, w / 8}),
+                                                 {FilterKind::Trilinear})
+                                  .info.lambda;
+        EXPECT_GE(lambda, last);
+        last = lambda;
     }
 }
 
@@ -345,9 +346,10 @@ TEST(Ewa, PowerOfTwoMinorAxisToSinglePrecisionReadsOneLevel) {
             EXPECT_NEAR(r.lambda, 3.0, 2e-7) << deg << " " << aniso;
             if (static_cast<float>(r.minor) != 8.0f) continue;
             EXPECT_EQ(r.lambda, 3.0) << deg << " " << aniso;
-            int level3 = 0;  // what the level-3 ellipse alone reads (level 3 is 32 texels wide)
-            ewa_level(p.level(3), 0.41, 0.27, au * 32.0, av * 32.0, bu * 32.0, bv * 32.0, &level3);
-            EXPECT_EQ(r.texels_read, level3) << deg << " " << aniso;
+            // What the level-3 ellipse alone reads (level 3 is 32 texels wide).
+            const EwaLevelResult level3 =
+                ewa_level(p.level(3), 0.41, 0.27, au * 32.0, av * 32.0, bu * 32.0, bv * 32.0);
+            EXPECT_EQ(r.texels_read, level3.texels_read) << deg << " " << aniso;
             rotated_one_level += r.minor != 8.0;
         }
     // Most rotations leave |b| inexact in double precision but exact in single.
@@ -410,8 +412,8 @@ TEST_P(EwaWrap, LevelMatchesABoundingBoxScan) {
             const double as = la * std::cos(th), at = la * std::sin(th);
             const double bs = -lb * std::sin(th), bt = lb * std::cos(th);
             const double u = 3 * unit(rng) - 1, v = 3 * unit(rng) - 1;
-            int ours_n = 0, ref_n = 0;
-            const Texel ours = ewa_level(img, u, v, as, at, bs, bt, &ours_n);
+            int ref_n = 0;
+            const auto [ours, ours_n] = ewa_level(img, u, v, as, at, bs, bt);
             const Texel ref = bounding_box_ewa(img, u, v, as, at, bs, bt, &ref_n);
             for (int c = 0; c < 3; ++c)
                 ASSERT_NEAR(ours[c], ref[c], 1e-5 * (1 + std::abs(ref[c])))
@@ -453,9 +455,9 @@ TEST_P(FilterWrap, NonFiniteInputsReturnTheMean) {
     FilteredTexture t(tmip1(wrap));
     double nan = std::nan("");
     double inf = std::numeric_limits<double>::infinity();
-    LookupInfo info;
-    EXPECT_FLOAT_EQ(t.lookup(nan, 0.5, Footprint::none(), {kind}, &info)[0], 2.5f);
-    EXPECT_TRUE(info.fallback);
+    const LookupResult r = t.lookup_with_info(nan, 0.5, Footprint::none(), {kind});
+    EXPECT_FLOAT_EQ(r.value[0], 2.5f);
+    EXPECT_TRUE(r.info.fallback);
     EXPECT_FLOAT_EQ(t.lookup(0.5, 0.5, Footprint::axes({inf, 0}, {0, 0.1}), {kind})[0], 2.5f);
     EXPECT_FLOAT_EQ(t.lookup(0.5, 0.5, Footprint::axes({0.1, nan}, {0, 0.1}), {kind})[0], 2.5f);
     EXPECT_TRUE(std::isfinite(
@@ -548,10 +550,9 @@ TEST(Colour, TCol1MinifiedSrgbCheckerIsLinearHalf) {
 
 TEST(Filter, PbrtTrilinearWidthUsesTheLargestComponent) {
     FilteredTexture t(tmip1());
-    LookupInfo gl, pbrt;
     Footprint fp = Footprint::axes({1.0 / 4, 1.0 / 4}, {0, 0.5 / 4});  // (1,1) and (0,0.5) texels
-    t.lookup(0.3, 0.6, fp, {FilterKind::Trilinear, 8, false}, &gl);
-    t.lookup(0.3, 0.6, fp, {FilterKind::Trilinear, 8, true}, &pbrt);
+    const LookupInfo gl = t.lookup_with_info(0.3, 0.6, fp, {FilterKind::Trilinear, 8, false}).info;
+    const LookupInfo pbrt = t.lookup_with_info(0.3, 0.6, fp, {FilterKind::Trilinear, 8, true}).info;
     EXPECT_NEAR(gl.width, std::sqrt(2.0), 1e-12);
     EXPECT_NEAR(pbrt.width, 1.0, 1e-12);
 }

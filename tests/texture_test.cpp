@@ -7,6 +7,8 @@
 #include <tuple>
 #include <vector>
 
+#include "expect_throw.h"
+
 using namespace cmam::texture;
 
 namespace {
@@ -82,9 +84,11 @@ TEST(Srgb, DecodeReferenceValues) {
 }
 
 TEST(Image, RejectsBadSizes) {
-    EXPECT_THROW(Image(0, 2, 1, {}), TextureError);
-    EXPECT_THROW(Image(2, 2, 1, {1, 2, 3}), TextureError);
-    EXPECT_THROW(Image(1, 1, 5, std::vector<float>(5)), TextureError);
+    EXPECT_THROW_CONTAINS(Image(0, 2, 1, {}), TextureError, "image size must be positive");
+    EXPECT_THROW_CONTAINS(Image(2, 2, 1, {1, 2, 3}), TextureError,
+                             "texel count does not match width*height*channels");
+    EXPECT_THROW_CONTAINS(Image(1, 1, 5, std::vector<float>(5)), TextureError,
+                             "image must have 1 to 4 channels");
 }
 
 // Texels are stored in 8x8 tiles; sizes that are not multiples of 8 pad the last tiles.

@@ -268,8 +268,7 @@ Texel RowPrefixTable::integral(const Vec2d* v0, int n) const {
     n = std::min(n, 8);  // the filters' regions have three or four
     double area2 = 0;
     for (int i = 0; i < n; ++i) {
-        const Vec2d a = v0[i], b = v0[(i + 1) % n];
-        area2 += a.u * b.v - b.u * a.v;
+        area2 += cross(v0[i], v0[(i + 1) % n]);
     }
     const double area = std::abs(area2) / 2;
     constexpr double kMax = detail::kMaxTexelCoord;
@@ -320,10 +319,6 @@ Texel RowPrefixTable::integral_in_range(const Vec2d* v0, int n, double area2) co
 }
 
 namespace {
-
-double length(Vec2d a) {
-    return std::sqrt(a.u * a.u + a.v * a.v);
-}
 
 // The level rule (algorithms.md §5.2) for a region `width` level-0 texels wide (its area over
 // its longest side) with perimeter `perimeter` there: the coarsest level where it is still
@@ -401,9 +396,9 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
         A = {0, 0};
         B = {0, 0};
     } else {
-        const double cross = A.u * B.v - A.v * B.u;
-        if (!(std::abs(cross) > 1e-6 * la * lb)) {
-            const double h = std::abs(cross) / la;
+        const double ab = cross(A, B);
+        if (!(std::abs(ab) > 1e-6 * la * lb)) {
+            const double h = std::abs(ab) / la;
             B = {-A.v / la * h, A.u / la * h};
             lb = h;
         }
@@ -426,7 +421,7 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
         lb = 1;
     }
     AreaRegion r;
-    r.area2 = 2 * (A.u * B.v - A.v * B.u);
+    r.area2 = 2 * cross(A, B);
     r.area = std::abs(r.area2) / 2;
     const double cs = u * W, ct = v * H;
     r.corners[0] = {cs - 0.5 * (A.u + B.u), ct - 0.5 * (A.v + B.v)};
@@ -473,7 +468,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
             r.knots = 16;
             r.major = major;
             r.minor = std::sqrt(std::min(la2, lb2));
-            r.area = std::abs(a.u * b.v - a.v * b.u) * W * H;
+            r.area = std::abs(cross(a, b)) * W * H;
             return r;
         }
     }
@@ -504,8 +499,8 @@ AreaResult area_polygon(const FilteredTexture& tex, const Vec2d* uv, int n) {
     double area2 = 0, longest = 0, perimeter = 0;
     for (int i = 0; i < n; ++i) {
         const Vec2d a = p[i], b = p[(i + 1) % n];
-        area2 += a.u * b.v - b.u * a.v;
-        const double side = length({b.u - a.u, b.v - a.v});
+        area2 += cross(a, b);
+        const double side = length(b - a);
         longest = std::max(longest, side);
         perimeter += side;
     }

@@ -32,71 +32,56 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
     CmamRegion r;
     r.matches = matches;
     if (matches == 0) return r;
+    const Vec2d p0{s0, t0}, p1{cached[0].s, cached[0].t};
     // Vectors from the current sample to the matching cached ones.
-    double v1[2] = {cached[0].s - s0, cached[0].t - t0};
-    double v2[2] = {0, 0};
-    if (matches == 2) {
-        v2[0] = cached[1].s - s0;
-        v2[1] = cached[1].t - t0;
-    }
+    const Vec2d v1 = p1 - p0;
+    Vec2d v2;
     // Bounding box of the samples.
-    double x0 = std::min(s0, cached[0].s), x1 = std::max(s0, cached[0].s);
-    double y0 = std::min(t0, cached[0].t), y1 = std::max(t0, cached[0].t);
+    Box2d box{{std::min(s0, p1.u), std::min(t0, p1.v)}, {std::max(s0, p1.u), std::max(t0, p1.v)}};
     if (matches == 2) {
-        x0 = std::min(x0, cached[1].s);
-        x1 = std::max(x1, cached[1].s);
-        y0 = std::min(y0, cached[1].t);
-        y1 = std::max(y1, cached[1].t);
+        const Vec2d p2{cached[1].s, cached[1].t};
+        v2 = p2 - p0;
+        box = {{std::min(box.lo.u, p2.u), std::min(box.lo.v, p2.v)},
+               {std::max(box.hi.u, p2.u), std::max(box.hi.v, p2.v)}};
     }
-    const double len1 = std::sqrt(v1[0] * v1[0] + v1[1] * v1[1]);
+    const double len1 = length(v1);
     // MIP: segment length, or the bounding box's diagonal.
-    r.width = matches == 1 ? len1 : std::sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0));
+    r.width = matches == 1 ? len1 : length(box.hi - box.lo);
     // SAT: the spanned rectangle (or the square alternative for one match).
     if (matches == 1 && o.sat_box == CmamSatBox::Square) {
-        r.rect[0] = s0 - len1 / 2;
-        r.rect[2] = s0 + len1 / 2;
-        r.rect[1] = t0 - len1 / 2;
-        r.rect[3] = t0 + len1 / 2;
+        const Vec2d half{len1 / 2, len1 / 2};
+        r.rect = {p0 - half, p0 + half};
     } else {
-        r.rect[0] = x0;
-        r.rect[1] = y0;
-        r.rect[2] = x1;
-        r.rect[3] = y1;
+        r.rect = box;
     }
     detail::sat_min_extent(r.rect, o.max_aniso);
     // EWA: a circle of radius |v1| (one match), or an ellipse from the two vectors.
     if (matches == 1) {
-        r.a[0] = len1;
-        r.b[1] = len1;
+        r.a = {len1, 0};
+        r.b = {0, len1};
         return r;
     }
-    const double len2 = std::sqrt(v2[0] * v2[0] + v2[1] * v2[1]);
-    const double* major = len1 >= len2 ? v1 : v2;
-    const double* minor = len1 >= len2 ? v2 : v1;
+    const double len2 = length(v2);
+    const Vec2d major = len1 >= len2 ? v1 : v2;
+    const Vec2d minor = len1 >= len2 ? v2 : v1;
     const double lmaj = std::max(len1, len2), lmin = std::min(len1, len2);
-    r.a[0] = major[0];
-    r.a[1] = major[1];
-    r.b[0] = minor[0];
-    r.b[1] = minor[1];
+    r.a = major;
+    r.b = minor;
     if (lmaj == 0) return r;
-    const double ux = major[0] / lmaj, uy = major[1] / lmaj;
-    const double cross = std::abs(major[0] * minor[1] - major[1] * minor[0]);
-    const double sin_theta = lmin > 0 ? cross / (lmaj * lmin) : 0;
-    r.triangle_area = cross / 2;
+    const Vec2d unit = major / lmaj;
+    const double span = std::abs(cross(major, minor));
+    const double sin_theta = lmin > 0 ? span / (lmaj * lmin) : 0;
+    r.triangle_area = span / 2;
     r.nearly_collinear = sin_theta < 0.2;
     CmamEllipse reading = o.ellipse;
     if (r.nearly_collinear) {  // nearly collinear: the conjugate ellipse would be a sliver
         reading = CmamEllipse::Orthogonal;
         r.orthogonal_fallback = o.ellipse != CmamEllipse::Orthogonal;
     }
-    if (reading == CmamEllipse::Orthogonal) {  // R2: minor axis perpendicular, length |b|
-        r.b[0] = -uy * lmin;
-        r.b[1] = ux * lmin;
-    } else if (reading == CmamEllipse::Orthogonalised) {  // R3: b minus its component along a
-        double along = minor[0] * ux + minor[1] * uy;
-        r.b[0] = minor[0] - along * ux;
-        r.b[1] = minor[1] - along * uy;
-    }
+    if (reading == CmamEllipse::Orthogonal)  // R2: minor axis perpendicular, length |b|
+        r.b = {-unit.v * lmin, unit.u * lmin};
+    else if (reading == CmamEllipse::Orthogonalised)  // R3: b minus its component along a
+        r.b = minor - dot(minor, unit) * unit;
     return r;
 }
 
@@ -104,58 +89,48 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
                           const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur) {
     CmamRegion r;
     r.used_above = true;
-    double b[2] = {above.s - s0, above.t - t0};
-    double a[2] = {0, 0};
+    Vec2d p0{s0, t0};
+    Vec2d b = Vec2d{above.s, above.t} - p0;
+    Vec2d a;
     if (left) {
-        a[0] = left->s - s0;
-        a[1] = left->t - t0;
+        a = Vec2d{left->s, left->t} - p0;
         r.matches = 1;
     } else {  // no left neighbour: a circle whose radius is the step to the sample above
-        a[0] = b[1];
-        a[1] = -b[0];
+        a = {b.v, -b.u};
     }
     if (left && cur.positioned && left->tag.positioned && above.tag.positioned) {
         // [a b] = J [dl da] with dl, da the neighbours' image-plane offsets (strata): solve for
         // J, whose columns are the steps of one stratum across and down, and move the centre
         // to the stratum's. Nearly coincident samples (|det| < 1/4) keep the plain vectors.
-        const double lx = left->tag.x - cur.x, ly = left->tag.y - cur.y;
-        const double ax = above.tag.x - cur.x, ay = above.tag.y - cur.y;
-        const double det = lx * ay - ax * ly;
+        const Vec2d dl{left->tag.x - cur.x, left->tag.y - cur.y};
+        const Vec2d da{above.tag.x - cur.x, above.tag.y - cur.y};
+        const double det = cross(dl, da);
         if (std::abs(det) >= 0.25) {
-            // inverse of [[lx ax] [ly ay]] = [[ay -ax] [-ly lx]] / det
-            const double jx[2] = {(a[0] * ay - b[0] * ly) / det, (a[1] * ay - b[1] * ly) / det};
-            const double jy[2] = {(b[0] * lx - a[0] * ax) / det, (b[1] * lx - a[1] * ax) / det};
-            const double cx = std::floor(cur.x) + 0.5 - cur.x, cy = std::floor(cur.y) + 0.5 - cur.y;
-            r.offset[0] = jx[0] * cx + jy[0] * cy;
-            r.offset[1] = jx[1] * cx + jy[1] * cy;
-            a[0] = jx[0];
-            a[1] = jx[1];
-            b[0] = jy[0];
-            b[1] = jy[1];
-            s0 += r.offset[0];
-            t0 += r.offset[1];
+            // inverse of [dl da] = [[da.v -da.u] [-dl.v dl.u]] / det
+            const Vec2d jx = (da.v * a - dl.v * b) / det;
+            const Vec2d jy = (dl.u * b - da.u * a) / det;
+            const Vec2d c{std::floor(cur.x) + 0.5 - cur.x, std::floor(cur.y) + 0.5 - cur.y};
+            r.offset = c.u * jx + c.v * jy;
+            a = jx;
+            b = jy;
+            p0 = p0 + r.offset;
         }
     }
-    const double la = std::sqrt(a[0] * a[0] + a[1] * a[1]),
-                 lb = std::sqrt(b[0] * b[0] + b[1] * b[1]);
-    r.width = std::max(la, lb);  // GL-style: the longer Jacobian column
+    r.width = std::max(length(a), length(b));  // GL-style: the longer Jacobian column
     // SAT: the box around the pixel's parallelogram p0 +- (a +- b) / 2.
-    double hs = 0.5 * (std::abs(a[0]) + std::abs(b[0])),
-           ht = 0.5 * (std::abs(a[1]) + std::abs(b[1]));
-    r.rect[0] = s0 - hs;
-    r.rect[2] = s0 + hs;
-    r.rect[1] = t0 - ht;
-    r.rect[3] = t0 + ht;
+    const Vec2d half{0.5 * (std::abs(a.u) + std::abs(b.u)), 0.5 * (std::abs(a.v) + std::abs(b.v))};
+    r.rect = {p0 - half, p0 + half};
     detail::sat_min_extent(r.rect, o.max_aniso);
     // EWA: the Jacobian columns are conjugate semi-diameters (algorithms.md §4.1).
-    r.a[0] = a[0];
-    r.a[1] = a[1];
-    r.b[0] = b[0];
-    r.b[1] = b[1];
+    r.a = a;
+    r.b = b;
     return r;
 }
 
-Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
+namespace {
+
+// The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
+Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
@@ -230,7 +205,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             double perimeter = 0;
             for (int k = 0; k < 3; ++k)
                 perimeter +=
-                    std::hypot(tri[(k + 1) % 3].x - tri[k].x, tri[(k + 1) % 3].y - tri[k].y);
+                    std::hypot(tri[(k + 1) % 3].u - tri[k].u, tri[(k + 1) % 3].v - tri[k].v);
             const int L = tex.pyramid().levels();
             const int want = perimeter > kMaxPerimeter
                                  ? static_cast<int>(std::ceil(std::log2(perimeter / kMaxPerimeter)))
@@ -246,7 +221,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
                     for (int c = 0; c < 4; ++c) integral[c] += img.mean()[c] * area;  // the mean
                     continue;  // (integrating would cost the perimeter in texels there)
                 }
-                for (P2& p : piece) p = {p.x * kx, p.y * ky};
+                for (Vec2d& p : piece) p = {p.u * kx, p.v * ky};
                 Texel t = polygon_integral(tex.level_sat(level), piece);
                 for (int c = 0; c < 4; ++c) integral[c] += t[c] / (kx * ky);
             }
@@ -255,7 +230,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             if (info) in.texels_read = 16;
             Texel out{};
             if (new_area > 1e-9) {
-                std::vector<P2> pts = cache.hull;
+                std::vector<Vec2d> pts = cache.hull;
                 pts.insert(pts.end(), tri.begin(), tri.end());
                 cache.hull = convex_hull(std::move(pts));
                 for (int c = 0; c < 4; ++c) {
@@ -278,9 +253,7 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             // The region from the table's origin to the texture coordinate (in the base tile).
             double s = s0 - std::floor(s0 / W) * W, t = t0 - std::floor(t0 / H) * H;
             in.texels_read = 16;
-            in.rect[0] = in.rect[1] = 0;
-            in.rect[2] = s;
-            in.rect[3] = t;
+            in.rect = {{0, 0}, {s, t}};
             return tex.sat().average(0, 0, std::max(s, 1e-6), std::max(t, 1e-6));
         }
         if (o.miss == CmamMiss::Average) {  // d = MAXLEVEL: the texture's average
@@ -302,9 +275,9 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     fo.sat_box = o.sat_box;
     Footprint fp;
     if (above.valid) {
-        fp = Footprint::axes({r.a[0] / W, r.a[1] / H}, {r.b[0] / W, r.b[1] / H});
-        u += r.offset[0] / W;  // the stratum's centre (positioned tags), else no move
-        v += r.offset[1] / H;
+        fp = Footprint::axes({r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
+        u += r.offset.u / W;  // the stratum's centre (positioned tags), else no move
+        v += r.offset.v / H;
     } else {
         fp.kind = Footprint::Kind::Points;
         fp.point_count = 1 + std::min(matches, 2);
@@ -312,7 +285,24 @@ Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         for (int k = 0; k + 1 < fp.point_count; ++k)
             fp.points[k + 1] = {cached[k].s / W, cached[k].t / H};
     }
-    return tex.lookup(u, v, fp, fo, info);
+    if (!info) return tex.lookup(u, v, fp, fo);
+    const LookupResult filtered = tex.lookup_with_info(u, v, fp, fo);
+    *info = filtered.info;
+    return filtered.value;
+}
+
+}  // namespace
+
+Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
+                  const CmamOptions& o) {
+    return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
+}
+
+CmamResult cmam_lookup_with_info(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u,
+                                 double v, const CmamOptions& o) {
+    CmamResult r;
+    r.value = lookup_into(tex, cache, tag, u, v, o, &r.info, &r.region);
+    return r;
 }
 
 }  // namespace cmam::texture

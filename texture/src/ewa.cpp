@@ -358,22 +358,18 @@ void ewa_accumulate_nc(const Image& img, double s0, double t0, const EwaEllipse&
 
 }  // namespace
 
-Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s,
-                double b_t, int* texels_read) {
+EwaLevelResult ewa_level(const Image& img, double u, double v, double a_s, double a_t, double b_s,
+                         double b_t) {
     const int W = img.width(), H = img.height(), nc = img.channels();
     const bool black = img.wrap_s() == WrapMode::Black || img.wrap_t() == WrapMode::Black;
-    if (W == 1 && H == 1 && !black) {  // every texel of the ellipse is this one
-        if (texels_read) *texels_read += 1;
-        return img.fetch(0, 0);
-    }
+    if (W == 1 && H == 1 && !black)  // every texel of the ellipse is this one
+        return {img.fetch(0, 0), 1};
     const double s0 = u * W - 0.5, t0 = v * H - 0.5;
     const EwaEllipse e = ewa_ellipse(a_s, a_t, b_s, b_t);
     // Beyond 2^30 texels the texture's mean, as for bilinear lookups: no coordinate outside an
     // integer's range is ever converted to one.
-    if (!(std::abs(s0) + e.hx < kMaxCoord && std::abs(t0) + e.hy < kMaxCoord)) {
-        if (texels_read) *texels_read += 1;
-        return img.mean();
-    }
+    if (!(std::abs(s0) + e.hx < kMaxCoord && std::abs(t0) + e.hy < kMaxCoord))
+        return {img.mean(), 1};
     const double inv_f = 1 / e.F, An = e.A * inv_f, Bn = e.B * inv_f, Cn = e.C * inv_f;
     float sum[4] = {0, 0, 0, 0};
     double wsum = 0;
@@ -389,13 +385,16 @@ Texel ewa_level(const Image& img, double u, double v, double a_s, double a_t, do
             ewa_accumulate_nc<0>(img, s0, t0, e, An, Bn, Cn, sum, &wsum, &count);
             break;
     }
-    if (texels_read) *texels_read += count;
-    Texel out{};
-    if (wsum <= 0) return texture::bilinear(img, u, v);
+    EwaLevelResult out;
+    out.texels_read = count;
+    if (wsum <= 0) {
+        out.value = texture::bilinear(img, u, v);
+        return out;
+    }
     // All four lanes (unused channels' sums are 0, and 1 / wsum is finite: a texel inside weighs
     // at least the table's smallest positive entry), so the loop is one multiply.
     const float inv = static_cast<float>(1 / wsum);
-    for (int c = 0; c < 4; ++c) out[c] = sum[c] * inv;
+    for (int c = 0; c < 4; ++c) out.value[c] = sum[c] * inv;
     return out;
 }
 
@@ -462,7 +461,9 @@ EwaResult ewa(const MipPyramid& pyr, double u, double v, double au, double av, d
     auto at_level = [&](int lev) {
         const Image& img = pyr.level(lev);
         const double ks = img.width() * inv_w, kt = img.height() * inv_h;
-        return ewa_level(img, u, v, as * ks, at * kt, bs * ks, bt * kt, &r.texels_read);
+        const EwaLevelResult e = ewa_level(img, u, v, as * ks, at * kt, bs * ks, bt * kt);
+        r.texels_read += e.texels_read;
+        return e.value;
     };
     Texel a = at_level(l);
     if (f == 0) {

@@ -108,8 +108,20 @@ bool finite(const Footprint& fp, double u, double v) {
 }
 }  // namespace
 
-Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
-                              LookupInfo* info) const {
+Texel FilteredTexture::lookup(double u, double v, const Footprint& fp,
+                              const FilterOptions& opts) const {
+    return lookup_into(u, v, fp, opts, nullptr);
+}
+
+LookupResult FilteredTexture::lookup_with_info(double u, double v, const Footprint& fp,
+                                               const FilterOptions& opts) const {
+    LookupResult r;
+    r.value = lookup_into(u, v, fp, opts, &r.info);
+    return r;
+}
+
+Texel FilteredTexture::lookup_into(double u, double v, const Footprint& fp,
+                                   const FilterOptions& opts, LookupInfo* info) const {
     // Written only when the caller asks for it (no scratch copy to clear on the hot paths).
     auto note = [info](int texels_read, bool fallback = false) {
         if (info) {
@@ -174,21 +186,22 @@ Texel FilteredTexture::lookup(double u, double v, const Footprint& fp, const Fil
             // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box,
             // at least one texel wide (a unit box is the bilinear value) with the anisotropy
             // clamp (algorithms.md §6.4).
-            double hs = 0.5 * (std::abs(a.u) + std::abs(b.u)) * W,
-                   ht = 0.5 * (std::abs(a.v) + std::abs(b.v)) * H;
-            double r[4] = {u * W - hs, v * H - ht, u * W + hs, v * H + ht};
+            const Vec2d c{u * W, v * H};
+            const Vec2d half{0.5 * (std::abs(a.u) + std::abs(b.u)) * W,
+                             0.5 * (std::abs(a.v) + std::abs(b.v)) * H};
+            Box2d r{c - half, c + half};
             constexpr double kMax = detail::kMaxTexelCoord;
-            if (!(std::max({std::abs(r[0]), std::abs(r[1]), std::abs(r[2]), std::abs(r[3])}) <
-                  kMax)) {
+            if (!(std::max({std::abs(r.lo.u), std::abs(r.lo.v), std::abs(r.hi.u),
+                            std::abs(r.hi.v)}) < kMax)) {
                 note(1, true);
                 return m_image.mean();
             }
             detail::sat_min_extent(r, opts.max_aniso);
             if (info) {
-                std::copy(r, r + 4, info->rect);
+                info->rect = r;
                 info->texels_read = 16;
             }
-            return sat().average(r[0], r[1], r[2], r[3]);
+            return sat().average(r.lo.u, r.lo.v, r.hi.u, r.hi.v);
         }
         case FilterKind::Ewa: {
             EwaResult r = ewa(pyramid(), u, v, a.u, a.v, b.u, b.v, opts.max_aniso);
@@ -248,12 +261,12 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
     LookupInfo& in = info ? *info : scratch;
     switch (opts.kind) {
         case FilterKind::Sat:
-            std::copy(r.rect, r.rect + 4, in.rect);
+            in.rect = r.rect;
             in.texels_read = 16;
-            return sat().average(r.rect[0], r.rect[1], r.rect[2], r.rect[3]);
+            return sat().average(r.rect.lo.u, r.rect.lo.v, r.rect.hi.u, r.rect.hi.v);
         case FilterKind::Ewa: {
-            EwaResult e = ewa(pyramid(), u, v, r.a[0] / W, r.a[1] / H, r.b[0] / W, r.b[1] / H,
-                              opts.max_aniso);
+            EwaResult e =
+                ewa(pyramid(), u, v, r.a.u / W, r.a.v / H, r.b.u / W, r.b.v / H, opts.max_aniso);
             in.lambda = e.lambda;
             in.level_lo = static_cast<int>(std::floor(e.lambda));
             in.level_hi = e.lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
@@ -270,8 +283,7 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
             if (r.triangle_area >= 1 && !r.nearly_collinear) {
                 a = area_polygon(*this, fp.points.data(), 3);
             } else {
-                a = area_parallelogram(*this, u, v, {r.a[0] / W, r.a[1] / H},
-                                       {r.b[0] / W, r.b[1] / H});
+                a = area_parallelogram(*this, u, v, {r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
                 in.major = a.major;
                 in.minor = a.minor;
             }
@@ -283,14 +295,16 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
         }
         case FilterKind::Trilinear:
         default: {
-            double lambda = 0;
-            Texel t = pyramid().trilinear(u, v, r.width, &lambda);
-            in.width = r.width;
-            in.lambda = lambda;
-            in.level_lo = static_cast<int>(std::floor(lambda));
-            in.level_hi = lambda > in.level_lo ? in.level_lo + 1 : in.level_lo;
-            in.texels_read = in.level_lo == in.level_hi ? 4 : 8;
-            return t;
+            const MipPyramid& pyr = pyramid();
+            if (info) {
+                const double lambda = pyr.trilinear_lambda(r.width);
+                info->width = r.width;
+                info->lambda = lambda;
+                info->level_lo = static_cast<int>(std::floor(lambda));
+                info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
+                info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
+            }
+            return pyr.trilinear(u, v, r.width);
         }
     }
 }

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cmam/texture/image.h>
+#include <cmam/texture/vec2.h>
 
 #include <algorithm>
 #include <bit>
@@ -24,17 +25,14 @@ namespace cmam::texture::detail {
 /// no coordinate is ever converted to an integer out of range and no sum loses all precision.
 inline constexpr double kMaxTexelCoord = 1073741824.0;
 
-/// Minimum extent of a SAT rectangle r = {x0, y0, x1, y1} (level-0 texels) per axis
-/// (algorithms.md §6.4): max(extent, 1 texel, other extent / maxAniso), centred on the original.
-inline void sat_min_extent(double* r, double max_aniso) {
+/// Minimum extent of a SAT rectangle (level-0 texels) per axis (algorithms.md §6.4):
+/// max(extent, 1 texel, other extent / maxAniso), centred on the original.
+inline void sat_min_extent(Box2d& r, double max_aniso) {
     if (!(max_aniso >= 1)) max_aniso = 1;  // below 1 (or NaN) would widen without bound
-    const double w = r[2] - r[0], h = r[3] - r[1];
-    const double nw = std::max({w, 1.0, h / max_aniso}), nh = std::max({h, 1.0, w / max_aniso});
-    const double cx = 0.5 * (r[0] + r[2]), cy = 0.5 * (r[1] + r[3]);
-    r[0] = cx - nw / 2;
-    r[2] = cx + nw / 2;
-    r[1] = cy - nh / 2;
-    r[3] = cy + nh / 2;
+    const double w = r.hi.u - r.lo.u, h = r.hi.v - r.lo.v;
+    const Vec2d half{std::max({w, 1.0, h / max_aniso}) / 2, std::max({h, 1.0, w / max_aniso}) / 2};
+    const Vec2d centre = 0.5 * (r.lo + r.hi);
+    r = {centre - half, centre + half};
 }
 
 /// floor(log2(x)) for x >= 1 (infinity included), exactly, from the binary exponent: a level

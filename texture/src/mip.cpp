@@ -89,18 +89,19 @@ Texel MipPyramid::bilinear(int l, double u, double v) const {
     return texture::bilinear(level(l), u, v);
 }
 
-Texel MipPyramid::trilinear(double u, double v, double width, double* lambda_used) const {
-    if (!(width > 1)) {  // magnification (or NaN width): level 0, no logarithm needed
-        if (lambda_used) *lambda_used = 0;
-        return bilinear(0, u, v);
-    }
+Texel MipPyramid::trilinear(double u, double v, double width) const {
+    // Magnification (or NaN width): level 0, no logarithm needed.
+    if (!(width > 1)) return bilinear(0, u, v);
     // The level is the width's binary exponent, so the texel reads need not wait for the
     // logarithm; only the blend weight does (FilteredTexture::lookup does the same with the
     // squared width's).
     const int l = detail::floor_log2(width);
     const double lambda = std::log2(width);
-    if (lambda_used) *lambda_used = std::min(lambda, double(levels() - 1));
     return trilinear_levels(u, v, l, static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));
+}
+
+double MipPyramid::trilinear_lambda(double width) const {
+    return width > 1 ? std::min(std::log2(width), double(levels() - 1)) : 0;
 }
 
 Texel MipPyramid::trilinear_lod(double u, double v, double lambda) const {

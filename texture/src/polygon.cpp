@@ -10,28 +10,28 @@ namespace cmam::texture {
 double signed_area(const Polygon& p) {
     double a = 0;
     for (std::size_t i = 0, n = p.size(); i < n; ++i) {
-        const P2 &u = p[i], &v = p[(i + 1) % n];
-        a += u.x * v.y - v.x * u.y;
+        a += cross(p[i], p[(i + 1) % n]);
     }
     return a / 2;
 }
 
 namespace {
-double side(P2 a, P2 b, P2 p) {
-    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+// Positive when p lies on the left of the directed line a -> b.
+double side(Vec2d a, Vec2d b, Vec2d p) {
+    return cross(b - a, p - a);
 }
 }  // namespace
 
-Polygon clip_left(const Polygon& p, P2 a, P2 b) {
+Polygon clip_left(const Polygon& p, Vec2d a, Vec2d b) {
     Polygon out;
     const std::size_t n = p.size();
     for (std::size_t i = 0; i < n; ++i) {
-        const P2 &cur = p[i], &nxt = p[(i + 1) % n];
+        const Vec2d &cur = p[i], &nxt = p[(i + 1) % n];
         double sc = side(a, b, cur), sn = side(a, b, nxt);
         if (sc >= 0) out.push_back(cur);
         if ((sc >= 0) != (sn >= 0)) {
             double t = sc / (sc - sn);
-            out.push_back({cur.x + t * (nxt.x - cur.x), cur.y + t * (nxt.y - cur.y)});
+            out.push_back(cur + t * (nxt - cur));
         }
     }
     return out;
@@ -44,7 +44,7 @@ std::vector<Polygon> difference(const Polygon& t, const Polygon& h) {
     if (h.size() < 3) return {rest};  // no hull yet: all of t is new
     constexpr double kTiny = 1e-12;
     for (std::size_t k = 0, n = h.size(); k < n && rest.size() >= 3; ++k) {
-        P2 a = h[k], b = h[(k + 1) % n];
+        const Vec2d a = h[k], b = h[(k + 1) % n];
         // The part outside edge k is new; the remainder continues inside it.
         Polygon outside = clip_left(rest, b, a);
         if (outside.size() >= 3 && std::abs(signed_area(outside)) > kTiny)
@@ -55,12 +55,10 @@ std::vector<Polygon> difference(const Polygon& t, const Polygon& h) {
     return pieces;
 }
 
-Polygon convex_hull(std::vector<P2> pts) {
+Polygon convex_hull(std::vector<Vec2d> pts) {
     std::sort(pts.begin(), pts.end(),
-              [](P2 a, P2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-    pts.erase(
-        std::unique(pts.begin(), pts.end(), [](P2 a, P2 b) { return a.x == b.x && a.y == b.y; }),
-        pts.end());
+              [](Vec2d a, Vec2d b) { return a.u < b.u || (a.u == b.u && a.v < b.v); });
+    pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
     if (pts.size() < 3) return pts;
     Polygon h(2 * pts.size());
     std::size_t k = 0;
@@ -80,8 +78,8 @@ Texel polygon_integral(const SummedAreaTable& sat, const Polygon& poly) {
     Texel out{};
     const int nc = sat.channels();
     constexpr double kMax = detail::kMaxTexelCoord;  // as for every filter
-    for (const P2& p : poly)
-        if (!(std::abs(p.x) < kMax && std::abs(p.y) < kMax)) {  // NaN included
+    for (const Vec2d& p : poly)
+        if (!(std::abs(p.u) < kMax && std::abs(p.v) < kMax)) {  // NaN included
             const double area = std::abs(signed_area(poly));
             if (std::isfinite(area))
                 for (int c = 0; c < nc; ++c) out[c] = static_cast<float>(sat.mean()[c] * area);
@@ -91,23 +89,23 @@ Texel polygon_integral(const SummedAreaTable& sat, const Polygon& poly) {
     const double sign = signed_area(poly) < 0 ? -1 : 1;
     std::vector<double> ts;
     for (std::size_t e = 0, n = poly.size(); e < n; ++e) {
-        const P2 a = poly[e], b = poly[(e + 1) % n];
-        const double dx = b.x - a.x, dy = b.y - a.y;
+        const Vec2d a = poly[e], b = poly[(e + 1) % n];
+        const double dx = b.u - a.u, dy = b.v - a.v;
         if (dy == 0) continue;  // contributes nothing to the integral of F dy
         // Split the edge where it crosses texel rows and columns.
         ts.assign({0.0, 1.0});
-        for (double y = std::floor(std::min(a.y, b.y)) + 1; y < std::max(a.y, b.y); y += 1)
-            ts.push_back((y - a.y) / dy);
+        for (double y = std::floor(std::min(a.v, b.v)) + 1; y < std::max(a.v, b.v); y += 1)
+            ts.push_back((y - a.v) / dy);
         if (dx != 0)
-            for (double x = std::floor(std::min(a.x, b.x)) + 1; x < std::max(a.x, b.x); x += 1)
-                ts.push_back((x - a.x) / dx);
+            for (double x = std::floor(std::min(a.u, b.u)) + 1; x < std::max(a.u, b.u); x += 1)
+                ts.push_back((x - a.u) / dx);
         std::sort(ts.begin(), ts.end());
         for (std::size_t k = 0; k + 1 < ts.size(); ++k) {
             const double t0 = ts[k], t1 = ts[k + 1];
             if (t1 <= t0) continue;
-            const double ym = a.y + 0.5 * (t0 + t1) * dy;
+            const double ym = a.v + 0.5 * (t0 + t1) * dy;
             const auto row = static_cast<int64_t>(std::floor(ym));
-            const double x0 = a.x + t0 * dx, x1 = a.x + t1 * dx;
+            const double x0 = a.u + t0 * dx, x1 = a.u + t1 * dx;
             // F(x, y) = integral of row `row` from 0 to x: linear in x within the cell.
             for (int c = 0; c < nc; ++c)
                 acc[c] += 0.5 * (sat.row_integral(x0, row, c) + sat.row_integral(x1, row, c)) *
@@ -122,11 +120,11 @@ Texel polygon_integral_cells(const Image& img, const Polygon& poly0) {
     Polygon poly = poly0;
     if (signed_area(poly) < 0) std::reverse(poly.begin(), poly.end());
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-    for (P2 p : poly) {
-        x0 = std::min(x0, p.x);
-        x1 = std::max(x1, p.x);
-        y0 = std::min(y0, p.y);
-        y1 = std::max(y1, p.y);
+    for (Vec2d p : poly) {
+        x0 = std::min(x0, p.u);
+        x1 = std::max(x1, p.u);
+        y0 = std::min(y0, p.v);
+        y1 = std::max(y1, p.v);
     }
     double acc[4] = {0, 0, 0, 0};
     for (auto j = static_cast<int64_t>(std::floor(y0)); j < y1; ++j)

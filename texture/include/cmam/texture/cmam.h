@@ -9,11 +9,28 @@
 #include <cmam/texture/filter.h>
 #include <cmam/texture/polygon.h>
 
+#include <cstdint>
 #include <optional>
 #include <string_view>
 #include <vector>
 
 namespace cmam::texture {
+
+/// A ray's tag as the CMAM sees it (paper §3.1): the ray ID (scanline or pixel) and the
+/// recursion level (0 for primary rays, +1 per specular bounce). `seq` numbers the camera
+/// samples of one ID in the order they are traced (algorithms.md §6.3.2), so the CMAM can
+/// accept only adjacent samples.
+struct RayTag {
+    uint32_t id = 0;
+    uint32_t level = 0;
+    uint32_t seq = 0;
+    /// Optional, beyond the paper: the camera sample's position on the image plane in strata
+    /// (x across, y down; stratum (i,j) covers [i,i+1)x[j,j+1)). With it the 2-D CMAM turns its
+    /// neighbours' differences into the Jacobian exactly, however the samples are jittered, and
+    /// centres the footprint on the sample's stratum (algorithms.md §6.3.1).
+    bool positioned = false;
+    double x = 0, y = 0;
+};
 
 /// What a sample that matches no cached sample gets (paper §3.2.1 item 1).
 enum class CmamMiss : uint8_t { Average, Point };
@@ -89,18 +106,18 @@ struct CmamCache {
 
 /// The region the paper's rules build for the current sample, in level-0 texels.
 struct CmamRegion {
-    int matches = 0;                // 0: no match; 1: the most recent matches; 2: both match
-    double width = 0;               // MIP: segment length (1 match) or bounding-box diagonal (2)
-    double rect[4] = {0, 0, 0, 0};  // SAT: x0, y0, x1, y1 (after the minimum-extent rule)
-    double a[2] = {0, 0}, b[2] = {0, 0};  // EWA: the two axis vectors (texels)
-    bool orthogonal_fallback = false;     // EWA: sin(theta) < 0.2 switched to the R2 reading
-    bool nearly_collinear = false;        // two matches with sin(theta) < 0.2
-    double triangle_area = 0;             // two matches: the three samples' triangle (texels^2)
-    double hull_new_area = -1;            // hull weighting: area of the new pieces (-1: not used)
-    bool used_above = false;              // 2-D CMAM: the sample above took part
+    int matches = 0;                   // 0: no match; 1: the most recent matches; 2: both match
+    double width = 0;                  // MIP: segment length (1 match) or bounding-box diagonal (2)
+    Box2d rect;                        // SAT: the rectangle (after the minimum-extent rule)
+    Vec2d a, b;                        // EWA: the two axis vectors (texels)
+    bool orthogonal_fallback = false;  // EWA: sin(theta) < 0.2 switched to the R2 reading
+    bool nearly_collinear = false;     // two matches with sin(theta) < 0.2
+    double triangle_area = 0;          // two matches: the three samples' triangle (texels^2)
+    double hull_new_area = -1;         // hull weighting: area of the new pieces (-1: not used)
+    bool used_above = false;           // 2-D CMAM: the sample above took part
     // 2-D CMAM with positioned tags: from the current sample to its stratum's centre (texels),
     // where the footprint is centred; a and b are then the Jacobian columns solved for.
-    double offset[2] = {0, 0};
+    Vec2d offset;
 };
 
 /// The 2-D CMAM's region from the current sample p0, its left neighbour (may be null) and the
@@ -121,8 +138,18 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
 /// and then updating `cache` (the cache shifts: most recent becomes second, current becomes
 /// most recent).
 Texel cmam_lookup(const FilteredTexture& texture, CmamCache& cache, RayTag tag, double u, double v,
-                  const CmamOptions& options, LookupInfo* info = nullptr,
-                  CmamRegion* region = nullptr);
+                  const CmamOptions& options);
+
+/// A CMAM lookup's value, what its filter did and the region it built.
+struct CmamResult {
+    Texel value{};
+    LookupInfo info;
+    CmamRegion region;
+};
+/// cmam_lookup() with what the filter did and the region (the 1-D region is built for it even
+/// where the filter does not need it). The value and the cache's update are cmam_lookup()'s.
+CmamResult cmam_lookup_with_info(const FilteredTexture& texture, CmamCache& cache, RayTag tag,
+                                 double u, double v, const CmamOptions& options);
 
 /// Convenience object for a ray tracer: one per textured object and worker thread.
 class Cmam {

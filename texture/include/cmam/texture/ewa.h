@@ -39,8 +39,13 @@ struct EwaEllipse {
 };
 EwaEllipse ewa_ellipse(double a_s, double a_t, double b_s, double b_t);
 
-/// One EWA evaluation at level `l` with axes in level-0 texels (exposed for tests).
-Texel ewa_level(const Image& level, double u, double v, double a_s, double a_t, double b_s,
-                double b_t, int* texels_read);
+/// One EWA evaluation on one level, with axes in that level's texels (exposed for tests): the
+/// value and the texels weighted.
+struct EwaLevelResult {
+    Texel value{};
+    int texels_read = 0;
+};
+EwaLevelResult ewa_level(const Image& level, double u, double v, double a_s, double a_t, double b_s,
+                         double b_t);
 
 }  // namespace cmam::texture

@@ -61,9 +61,15 @@ struct LookupInfo {
     bool fallback = false;  // non-finite input: the texture mean was returned
     // The region filtered, in level-0 texels: a rectangle (SAT), ellipse semi-axes (EWA),
     // parallelogram sides (area; 0 for a CMAM triangle) or the footprint width (trilinear).
-    double rect[4] = {0, 0, 0, 0};  // x0, y0, x1, y1
+    Box2d rect;
     double major = 0, minor = 0, width = 0;
     double area = 0;  // area: the region's area in level-0 texels^2
+};
+
+/// A filtered value and what the lookup did.
+struct LookupResult {
+    Texel value{};
+    LookupInfo info;
 };
 
 class FilteredTexture {
@@ -85,8 +91,11 @@ class FilteredTexture {
     bool sat_built() const { return m_sat_ready.load(std::memory_order_acquire) != nullptr; }
 
     /// Filtered value at (u,v) (unwrapped uv; v = 0 is the bottom row).
-    Texel lookup(double u, double v, const Footprint& fp, const FilterOptions& opts,
-                 LookupInfo* info = nullptr) const;
+    Texel lookup(double u, double v, const Footprint& fp, const FilterOptions& opts) const;
+    /// The same value and what the lookup did. Recording that costs every lookup a little (the
+    /// record cleared, a square root and the level's bounds on some paths): lookup() does not.
+    LookupResult lookup_with_info(double u, double v, const Footprint& fp,
+                                  const FilterOptions& opts) const;
 
   private:
     Image m_image;
@@ -100,6 +109,9 @@ class FilteredTexture {
     mutable std::vector<std::unique_ptr<RowPrefixTable>> m_row_prefix;  // guarded by m_build
     mutable std::unique_ptr<std::atomic<RowPrefixTable*>[]> m_row_prefix_ready;
 
+    // The lookup; `info`, when not null, receives what it did.
+    Texel lookup_into(double u, double v, const Footprint& fp, const FilterOptions& opts,
+                      LookupInfo* info) const;
     Texel lookup_points(double u, double v, const Footprint& fp, const FilterOptions& opts,
                         LookupInfo* info) const;
 };

@@ -3,31 +3,12 @@
 // extent with this value type; filters (MIP, SAT, EWA) consume it. Nothing here knows rays.
 #pragma once
 
+#include <cmam/texture/vec2.h>
+
 #include <array>
 #include <cstdint>
 
 namespace cmam::texture {
-
-/// A texture-space vector or point in (u,v) units (not texels).
-struct Vec2d {
-    double u = 0, v = 0;
-};
-
-/// A ray's tag as the CMAM sees it (paper §3.1): the ray ID (scanline or pixel) and the
-/// recursion level (0 for primary rays, +1 per specular bounce). `seq` numbers the camera
-/// samples of one ID in the order they are traced (algorithms.md §6.3.2), so the CMAM can
-/// accept only adjacent samples.
-struct RayTag {
-    uint32_t id = 0;
-    uint32_t level = 0;
-    uint32_t seq = 0;
-    /// Optional, beyond the paper: the camera sample's position on the image plane in strata
-    /// (x across, y down; stratum (i,j) covers [i,i+1)x[j,j+1)). With it the 2-D CMAM turns its
-    /// neighbours' differences into the Jacobian exactly, however the samples are jittered, and
-    /// centres the footprint on the sample's stratum (algorithms.md §6.3.1).
-    bool positioned = false;
-    double x = 0, y = 0;
-};
 
 /// How EWA reads the CMAM's two non-orthogonal vectors (algorithms.md §6.2 item 3): R1
 /// conjugate semi-diameters, R2 an orthogonal minor axis of the same length, R3 the minor

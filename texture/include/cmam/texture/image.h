@@ -18,7 +18,8 @@
 
 namespace cmam::texture {
 
-/// The one exception type of the filtering library.
+/// The one exception type of the filtering library: every error it reports is a TextureError
+/// with a fixed message. (Running out of memory is std::bad_alloc, as for any allocation.)
 class TextureError : public std::runtime_error {
   public:
     using std::runtime_error::runtime_error;

@@ -30,8 +30,9 @@ class MipPyramid {
     /// Bilinear lookup at level `l` (lattice s' = u*W_l - 1/2 with that level's own size).
     Texel bilinear(int l, double u, double v) const;
     /// Trilinear lookup for a footprint `width` in level-0 texels (lambda = log2(width)).
-    /// `lambda_used` (optional) receives the fractional level lambda, clamped to [0, L-1].
-    Texel trilinear(double u, double v, double width, double* lambda_used = nullptr) const;
+    Texel trilinear(double u, double v, double width) const;
+    /// The fractional level trilinear() reads for `width`: log2(width) clamped to [0, L-1].
+    double trilinear_lambda(double width) const;
     /// The same at a given level of detail `lambda` (log2 of the width in level-0 texels):
     /// lambda <= 0 (or NaN) is bilinear at level 0, lambda >= L-1 the coarsest level's mean.
     /// For callers that have the width squared: lambda = log2(width^2) / 2 needs no square root.

@@ -18,7 +18,7 @@ struct Named {
     E value;
     std::string_view name;
 };
-
+/// Spelled out for compilers without deduction for aggregates (Clang before 17).
 template <class E, class S>
 Named(E, S) -> Named<E>;
 

@@ -4,25 +4,24 @@
 #pragma once
 
 #include <cmam/texture/sat.h>
+#include <cmam/texture/vec2.h>
 
 #include <vector>
 
 namespace cmam::texture {
 
-struct P2 {
-    double x = 0, y = 0;
-};
-using Polygon = std::vector<P2>;  // vertices in order; counter-clockwise unless stated
+/// Vertices in texels, in order; counter-clockwise unless stated.
+using Polygon = std::vector<Vec2d>;
 
 /// Signed area (positive for counter-clockwise).
 double signed_area(const Polygon& p);
 /// The part of `p` on the left of the directed line a -> b (Sutherland-Hodgman).
-Polygon clip_left(const Polygon& p, P2 a, P2 b);
+Polygon clip_left(const Polygon& p, Vec2d a, Vec2d b);
 /// Convex pieces, disjoint, whose union is t \ h (t convex, h convex and counter-clockwise).
 /// No pieces means t lies inside h.
 std::vector<Polygon> difference(const Polygon& t, const Polygon& h);
 /// Convex hull, counter-clockwise (Andrew's monotone chain); collinear points dropped.
-Polygon convex_hull(std::vector<P2> points);
+Polygon convex_hull(std::vector<Vec2d> points);
 
 /// Exact integral of the box-reconstructed texture over `p` (texel space, any orientation gives
 /// the integral for its counter-clockwise version), via Green's theorem on the table's row
