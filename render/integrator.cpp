@@ -114,96 +114,120 @@ struct Tracer {
         return tmax <= 0 || !scene.occluded(o, d / len, 0, tmax);
     }
 
+    /// Light arriving at a shading point from one sample of a light: its direction, its
+    /// radiance (or intensity over distance squared), the density it was drawn with, and what a
+    /// shadow ray must clear (a distance, or for area lights the point on the light).
+    struct LightSample {
+        Rgb li;
+        Vec3 wi;
+        float dist = std::numeric_limits<float>::infinity();
+        float pdf = 1;
+        Vec3 target;  // area lights: the point sampled on the light
+    };
+
+    // Point, spot, goniometric and projection lights: a delta position.
+    static std::optional<LightSample> sample_positional(const Light& light, const SurfaceHit& h) {
+        LightSample ls;
+        Vec3 d = light.position - h.p;
+        float d2 = dot(d, d);
+        ls.dist = std::sqrt(d2);
+        ls.wi = d / ls.dist;
+        ls.li = light.intensity / d2;
+        if (light.image) ls.li = ls.li * light.image->scale(-ls.wi);
+        if (light.type == Light::Type::Spot) {
+            float c = dot(-ls.wi, light.direction);
+            if (c < light.cos_total) return std::nullopt;
+            if (c < light.cos_falloff_start) {
+                float delta = (c - light.cos_total) / (light.cos_falloff_start - light.cos_total);
+                ls.li = ls.li * ((delta * delta) * (delta * delta));
+            }
+        }
+        return ls;
+    }
+
+    std::optional<LightSample> sample_infinite(const Light& light, const SurfaceHit& h,
+                                               const Vec3& wo) {
+        LightSample ls;
+        if (light.env) {  // by the map's luminance
+            float u1 = rng.next_float(), u2 = rng.next_float();
+            const EnvironmentMap::Sample s = light.env->sample(u1, u2);
+            if (s.pdf == 0) return std::nullopt;
+            ls.li = light.intensity * s.radiance;
+            ls.wi = s.wi;
+            ls.pdf = s.pdf;
+            return ls;
+        }
+        // Cosine-weighted about the geometric normal on wo's side: the same expected value as
+        // pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
+        float u1 = rng.next_float(), u2 = rng.next_float();
+        float r = std::sqrt(u1), phi = 2 * kPi * u2;
+        Vec3 local(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u1)));
+        Frame f = Frame::from_z(faceforward(h.ng, wo));
+        ls.wi = f.to_world(local);
+        ls.pdf = local.z * kInvPi;
+        if (ls.pdf == 0) return std::nullopt;
+        ls.li = light.intensity;
+        return ls;
+    }
+
+    // One point: in the cone a round sphere subtends, else uniform by area with its density
+    // converted to solid angle.
+    std::optional<LightSample> sample_area(const Light& light, const SurfaceHit& h) {
+        const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
+        const float u1 = rng.next_float(), u2 = rng.next_float();
+        const std::optional<SurfaceSample> cone = prim.sample_cone(h.p, u1, u2);
+        const SurfaceSample s = cone ? *cone : prim.sample_area(u1, u2);
+        if (!cone && s.pdf == 0) return std::nullopt;
+        LightSample ls;
+        Vec3 d = s.p - h.p;
+        float d2 = dot(d, d);
+        if (d2 == 0) return std::nullopt;
+        ls.dist = std::sqrt(d2);
+        ls.wi = d / ls.dist;
+        float cos_l = dot(s.n, -ls.wi);
+        if (cos_l == 0 || (!light.two_sided && cos_l < 0)) return std::nullopt;
+        ls.pdf = cone ? s.pdf : s.pdf * d2 / std::abs(cos_l);
+        ls.target = s.p;
+        ls.li = light.intensity;
+        return ls;
+    }
+
+    std::optional<LightSample> sample_light(const Light& light, const SurfaceHit& h,
+                                            const Vec3& wo) {
+        switch (light.type) {
+            case Light::Type::Point:
+            case Light::Type::Spot:
+            case Light::Type::Goniometric:
+            case Light::Type::Projection:
+                return sample_positional(light, h);
+            case Light::Type::Distant: {
+                LightSample ls;
+                ls.wi = light.direction;
+                ls.li = light.intensity;
+                return ls;
+            }
+            case Light::Type::Infinite:
+                return sample_infinite(light, h, wo);
+            case Light::Type::Area:
+                return sample_area(light, h);
+        }
+        return std::nullopt;
+    }
+
     Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
         Rgb L{};
         for (const Light& light : scene.lights) {
             // Lights that are sampled (infinite, area) take light.samples shadow rays, averaged.
             Rgb sum{};
             for (int k = 0; k < light.samples; ++k) {
-                Vec3 wi;
-                Rgb li;
-                float dist = std::numeric_limits<float>::infinity();
-                float pdf = 1;
-                Vec3 target;  // area lights: the point sampled on the light
-                switch (light.type) {
-                    case Light::Type::Point:
-                    case Light::Type::Spot:
-                    case Light::Type::Goniometric:
-                    case Light::Type::Projection: {
-                        Vec3 d = light.position - h.p;
-                        float d2 = dot(d, d);
-                        dist = std::sqrt(d2);
-                        wi = d / dist;
-                        li = light.intensity / d2;
-                        if (light.image) li = li * light.image->scale(-wi);
-                        if (light.type == Light::Type::Spot) {
-                            float c = dot(-wi, light.direction);
-                            if (c < light.cos_total) continue;
-                            if (c < light.cos_falloff_start) {
-                                float delta = (c - light.cos_total) /
-                                              (light.cos_falloff_start - light.cos_total);
-                                li = li * ((delta * delta) * (delta * delta));
-                            }
-                        }
-                        break;
-                    }
-                    case Light::Type::Distant:
-                        wi = light.direction;
-                        li = light.intensity;
-                        break;
-                    case Light::Type::Infinite: {
-                        if (light.env) {  // by the map's luminance
-                            float u1 = rng.next_float(), u2 = rng.next_float();
-                            const EnvironmentMap::Sample s = light.env->sample(u1, u2);
-                            if (s.pdf == 0) continue;
-                            li = light.intensity * s.radiance;
-                            wi = s.wi;
-                            pdf = s.pdf;
-                            break;
-                        }
-                        // Cosine-weighted about the geometric normal on wo's side: the same
-                        // expected value as pbrt-v3's sphere sampling for reflection-only BSDFs,
-                        // lower variance.
-                        float u1 = rng.next_float(), u2 = rng.next_float();
-                        float r = std::sqrt(u1), phi = 2 * kPi * u2;
-                        Vec3 local(r * std::cos(phi), r * std::sin(phi),
-                                   std::sqrt(std::max(0.0f, 1 - u1)));
-                        Frame f = Frame::from_z(faceforward(h.ng, wo));
-                        wi = f.to_world(local);
-                        pdf = local.z * kInvPi;
-                        if (pdf == 0) continue;
-                        li = light.intensity;
-                        break;
-                    }
-                    case Light::Type::Area: {
-                        // One point: in the cone a round sphere subtends, else uniform by area with
-                        // its density converted to solid angle.
-                        const Primitive& prim =
-                            *scene.primitives[static_cast<std::size_t>(light.prim)];
-                        const float u1 = rng.next_float(), u2 = rng.next_float();
-                        const std::optional<SurfaceSample> cone = prim.sample_cone(h.p, u1, u2);
-                        const SurfaceSample s = cone ? *cone : prim.sample_area(u1, u2);
-                        if (!cone && s.pdf == 0) continue;
-                        Vec3 d = s.p - h.p;
-                        float d2 = dot(d, d);
-                        if (d2 == 0) continue;
-                        dist = std::sqrt(d2);
-                        wi = d / dist;
-                        float cos_l = dot(s.n, -wi);
-                        if (cos_l == 0 || (!light.two_sided && cos_l < 0)) continue;
-                        pdf = cone ? s.pdf : s.pdf * d2 / std::abs(cos_l);
-                        target = s.p;
-                        li = light.intensity;
-                        break;
-                    }
-                }
-                if (li.is_black()) continue;
-                Rgb fv = bsdf.f(wo, wi);
+                const std::optional<LightSample> ls = sample_light(light, h, wo);
+                if (!ls || ls->li.is_black()) continue;
+                Rgb fv = bsdf.f(wo, ls->wi);
                 if (fv.is_black()) continue;
-                if (light.type == Light::Type::Area ? !visible_point(h, wi, target)
-                                                    : !visible(h, wi, dist))
+                if (light.type == Light::Type::Area ? !visible_point(h, ls->wi, ls->target)
+                                                    : !visible(h, ls->wi, ls->dist))
                     continue;
-                sum += fv * li * (absdot(wi, h.ns) / pdf);
+                sum += fv * ls->li * (absdot(ls->wi, h.ns) / ls->pdf);
             }
             L += light.samples == 1 ? sum : sum / float(light.samples);
         }
@@ -455,134 +479,191 @@ void parallel_range(int n, int threads, Body&& body) {
 
 }  // namespace
 
+namespace {
+
+// Traces the film's samples into a framebuffer, a span of one row at a time.
+//
+// Scanline tags with several samples per pixel: the paper's scanline is a row of sample
+// strata. Sub-row sy of pixel row py has ID py * ny + sy, its samples are numbered left to
+// right (col * nx + sx), and the row is traced sub-row by sub-row, so each sample's cached
+// neighbours are one stratum to the left and (2-D CMAM) one stratum above, as the pixels are
+// at one sample per pixel. Pixel tags trace pixel by pixel. Either way every sample has the
+// same position and seed and each pixel sums its samples in the same order, so only the CMAM
+// sees the difference.
+class FilmTracer {
+  public:
+    FilmTracer(const Scene& scene, const RenderOptions& options, RenderStats* stats,
+               Framebuffer& fb)
+        : m_scene(scene),
+          m_film(scene.film),
+          m_options(options),
+          m_stats(stats),
+          m_fb(fb),
+          m_nx(scene.sampler.xsamples),
+          m_ny(scene.sampler.ysamples),
+          m_spp(m_nx * m_ny),
+          m_sub_rows(scene.tags == TagPolicy::Scanline),
+          m_footprints(scene.footprint_methods, scene.camera, m_spp) {}
+
+    int samples_x() const { return m_nx; }
+    bool sub_rows() const { return m_sub_rows; }
+
+    // Traces pixels [x_begin, x_end) of one row, after `prime` pixels to their left whose
+    // samples only feed the CMAM's caches (their radiance is dropped): they are what a row
+    // traced whole would have put there.
+    void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam) const {
+        Span sp{row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {},
+                {}};
+        draw_jitter(sp);
+        sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
+        if (m_sub_rows) {
+            for (int sy = 0; sy < m_ny; ++sy)
+                for (int i = 0; i < sp.n; ++i)
+                    for (int sx = 0; sx < m_nx; ++sx) trace_sample(sp, i, sx, sy, cmam);
+        } else {
+            for (int i = 0; i < sp.n; ++i)
+                for (int sy = 0; sy < m_ny; ++sy)
+                    for (int sx = 0; sx < m_nx; ++sx) trace_sample(sp, i, sx, sy, cmam);
+        }
+        float* out = &m_fb.rgb[(static_cast<std::size_t>(row) * m_fb.width + x_begin) * 3];
+        const double scale = m_options.aov == AovKind::None ? double(m_film.scale) : 1.0;
+        const std::size_t skip = static_cast<std::size_t>(prime) * 3;
+        for (std::size_t k = skip; k < sp.sum.size(); ++k)
+            out[k - skip] = static_cast<float>(sp.sum[k] / m_spp * scale);
+        sp.counts.add_to(m_stats);
+    }
+
+  private:
+    struct Span {
+        int row, py;
+        int c0, n;  // first column (primed pixels included) and pixel count
+        int prime;
+        std::vector<float> jitter;  // per pixel, 2 per sample
+        std::vector<uint64_t> seeds;
+        std::vector<double> sum;  // 3 per pixel
+        RayCounts counts;
+    };
+
+    // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
+    void draw_jitter(Span& sp) const {
+        sp.jitter.assign(static_cast<std::size_t>(sp.n) * m_spp * 2, 0.5f);
+        sp.seeds.resize(static_cast<std::size_t>(sp.n));
+        for (int i = 0; i < sp.n; ++i) {
+            const int px = m_film.x0 + sp.c0 + i;
+            sp.seeds[i] = mix_seed(uint64_t(sp.py) * uint64_t(m_film.xres) + uint64_t(px), 0x5eed);
+            if (!m_scene.sampler.jitter) continue;
+            Rng rng(sp.seeds[i]);
+            for (int k = 0; k < 2 * m_spp; ++k)
+                sp.jitter[static_cast<std::size_t>(i) * m_spp * 2 + k] = rng.next_float();
+        }
+    }
+
+    texture::RayTag tag_of(const Span& sp, int col, int sx, int sy, const float* j) const {
+        texture::RayTag tag;
+        if (m_sub_rows) {
+            tag.id = static_cast<uint32_t>(sp.py * m_ny + sy);
+            tag.seq = static_cast<uint32_t>(col * m_nx + sx);
+            tag.positioned = true;  // in strata: the 2-D CMAM's Jacobian and centre
+            tag.x = double(col) * m_nx + sx + j[0];
+            tag.y = double(sp.py) * m_ny + sy + j[1];
+        } else {
+            tag.id = static_cast<uint32_t>(sp.py * m_film.xres + m_film.x0 + col);
+            tag.seq = static_cast<uint32_t>(sy * m_nx + sx);
+        }
+        return tag;
+    }
+
+    void trace_sample(Span& sp, int i, int sx, int sy, CmamRowState& cmam) const {
+        const int col = sp.c0 + i, px = m_film.x0 + col, sample = sy * m_nx + sx;
+        const float* j = &sp.jitter[(static_cast<std::size_t>(i) * m_spp + sample) * 2];
+        const float fx = px + (sx + j[0]) / m_nx, fy = sp.py + (sy + j[1]) / m_ny;
+        const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
+        const texture::RayTag tag = tag_of(sp, col, sx, sy, j);
+        Aov aov{m_options.aov};
+        const RayFootprint fp =
+            m_footprints.camera_ray(fx, fy, ray.dir, tag, 0.5f - j[0], 0.5f - j[1]);
+        Rgb L = trace_one(m_scene, m_footprints, ray.org, ray.dir, fp,
+                          mix_seed(sp.seeds[i], uint64_t(sample) + 1),
+                          i < sp.prime ? nullptr : &sp.counts, &cmam,
+                          m_options.aov == AovKind::None ? nullptr : &aov);
+        if (m_options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
+        if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
+        double* acc = &sp.sum[static_cast<std::size_t>(i) * 3];
+        acc[0] += L.r;
+        acc[1] += L.g;
+        acc[2] += L.b;
+    }
+
+    const Scene& m_scene;
+    const FilmSettings& m_film;
+    const RenderOptions& m_options;
+    RenderStats* m_stats;
+    Framebuffer& m_fb;
+    const int m_nx, m_ny, m_spp;
+    const bool m_sub_rows;
+    const FootprintProducers m_footprints;
+};
+
+// Without the CMAM: rows in fixed blocks of 8, each row whole, so the image is the same for any
+// thread count.
+void render_rows(const FilmTracer& tracer, const RenderOptions& options, int height, int width) {
+    constexpr int kBlockRows = 8;
+    const int blocks = (height + kBlockRows - 1) / kBlockRows;
+    std::atomic<int> rows_done{0};
+    parallel_range(blocks, options.threads, [&](int begin, int end) {
+        CmamRowState cmam;
+        for (int b = begin; b < end; ++b)
+            for (int row = b * kBlockRows; row < std::min(height, (b + 1) * kBlockRows); ++row) {
+                tracer.span(row, 0, width, 0, cmam);
+                int done = ++rows_done;
+                if (options.progress) options.progress(done, height);
+            }
+    });
+}
+
+// With the CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top to
+// bottom with caches of its own, each row left to right: every row but the image's first has
+// the row above in the caches (the 2-D CMAM's Jacobian column), and each strip row starts with
+// the pixels to its left primed (the 1-D CMAM's neighbours; two at one sample per pixel, where
+// the region needs the two previous samples). Samples reach the caches exactly as in a
+// whole-row scan, and the image is the same for any thread count (algorithms.md §6.3.1).
+void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, int height,
+                        int width) {
+    const int strips = (width + kCmamStripWidth - 1) / kCmamStripWidth;
+    const int prime_pixels = tracer.sub_rows() ? (tracer.samples_x() >= 2 ? 1 : 2) : 0;
+    std::atomic<int> spans_done{0};
+    parallel_range(strips, options.threads, [&](int begin, int end) {
+        for (int k = begin; k < end; ++k) {
+            CmamRowState cmam;
+            const int x0 = k * kCmamStripWidth, x1 = std::min(width, x0 + kCmamStripWidth);
+            const int prime = std::min(x0, prime_pixels);
+            for (int row = 0; row < height; ++row) {
+                tracer.span(row, x0, x1, prime, cmam);
+                int done = ++spans_done;
+                if (options.progress) options.progress(done, strips * height);
+            }
+        }
+    });
+}
+
+}  // namespace
+
 Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
-    const FilmSettings& film = scene.film;
     Framebuffer fb;
-    fb.width = film.width();
-    fb.height = film.height();
+    fb.width = scene.film.width();
+    fb.height = scene.film.height();
     fb.rgb.assign(static_cast<std::size_t>(fb.width) * fb.height * 3, 0.0f);
-    const SamplerSettings& smp = scene.sampler;
-    const int nx = smp.xsamples, ny = smp.ysamples, spp = nx * ny;
-    const FootprintProducers footprints(scene.footprint_methods, scene.camera, spp);
     if (options.aov == AovKind::Footprint) fb.channel_names = {"major", "minor", "lambda"};
 
     std::unique_ptr<tbb::global_control> limit;
     if (options.threads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                       options.threads);
-    std::atomic<int> rows_done{0};
-
-    // Scanline tags with several samples per pixel: the paper's scanline is a row of sample
-    // strata. Sub-row sy of pixel row py has ID py * ny + sy, its samples are numbered left to
-    // right (col * nx + sx), and the row is traced sub-row by sub-row, so each sample's cached
-    // neighbours are one stratum to the left and (2-D CMAM) one stratum above, as the pixels
-    // are at one sample per pixel. Pixel tags trace pixel by pixel. Either way every sample has
-    // the same position and seed and each pixel sums its samples in the same order, so only the
-    // CMAM sees the difference.
-    const bool sub_rows = scene.tags == TagPolicy::Scanline;
-    // Traces pixels [x_begin, x_end) of one row, after `prime` pixels to their left whose samples
-    // only feed the CMAM's caches (their radiance is dropped): they are what a row traced whole
-    // would have put there.
-    auto render_span = [&](int row, int x_begin, int x_end, int prime, CmamRowState& cmam) {
-        const int py = film.y0 + row;
-        const int c0 = x_begin - prime, n = x_end - c0;
-        RayCounts counts;
-        // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
-        std::vector<float> jitter(static_cast<std::size_t>(n) * spp * 2, 0.5f);
-        std::vector<uint64_t> seeds(static_cast<std::size_t>(n));
-        for (int i = 0; i < n; ++i) {
-            const int px = film.x0 + c0 + i;
-            seeds[i] = mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
-            if (!smp.jitter) continue;
-            Rng rng(seeds[i]);
-            for (int k = 0; k < 2 * spp; ++k)
-                jitter[static_cast<std::size_t>(i) * spp * 2 + k] = rng.next_float();
-        }
-        std::vector<double> sum(static_cast<std::size_t>(n) * 3, 0.0);
-        auto trace_sample = [&](int i, int sx, int sy) {
-            const int col = c0 + i, px = film.x0 + col, sample = sy * nx + sx;
-            const float* j = &jitter[(static_cast<std::size_t>(i) * spp + sample) * 2];
-            const float fx = px + (sx + j[0]) / nx, fy = py + (sy + j[1]) / ny;
-            const CameraRay ray = scene.camera.generate_ray(fx, fy);
-            texture::RayTag tag;
-            if (sub_rows) {
-                tag.id = static_cast<uint32_t>(py * ny + sy);
-                tag.seq = static_cast<uint32_t>(col * nx + sx);
-                tag.positioned = true;  // in strata: the 2-D CMAM's Jacobian and centre
-                tag.x = double(col) * nx + sx + j[0];
-                tag.y = double(py) * ny + sy + j[1];
-            } else {
-                tag.id = static_cast<uint32_t>(py * film.xres + px);
-                tag.seq = static_cast<uint32_t>(sample);
-            }
-            Aov aov{options.aov};
-            const RayFootprint fp =
-                footprints.camera_ray(fx, fy, ray.dir, tag, 0.5f - j[0], 0.5f - j[1]);
-            Rgb L =
-                trace_one(scene, footprints, ray.org, ray.dir, fp,
-                          mix_seed(seeds[i], uint64_t(sample) + 1), i < prime ? nullptr : &counts,
-                          &cmam, options.aov == AovKind::None ? nullptr : &aov);
-            if (options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
-            if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
-            double* acc = &sum[static_cast<std::size_t>(i) * 3];
-            acc[0] += L.r;
-            acc[1] += L.g;
-            acc[2] += L.b;
-        };
-        if (sub_rows) {
-            for (int sy = 0; sy < ny; ++sy)
-                for (int i = 0; i < n; ++i)
-                    for (int sx = 0; sx < nx; ++sx) trace_sample(i, sx, sy);
-        } else {
-            for (int i = 0; i < n; ++i)
-                for (int sy = 0; sy < ny; ++sy)
-                    for (int sx = 0; sx < nx; ++sx) trace_sample(i, sx, sy);
-        }
-        float* out = &fb.rgb[(static_cast<std::size_t>(row) * fb.width + x_begin) * 3];
-        const double scale = options.aov == AovKind::None ? double(film.scale) : 1.0;
-        for (std::size_t k = static_cast<std::size_t>(prime) * 3; k < sum.size(); ++k)
-            out[k - static_cast<std::size_t>(prime) * 3] = static_cast<float>(sum[k] / spp * scale);
-        counts.add_to(stats);
-    };
-
-    if (!scene.footprint_methods.has(FootprintMethod::Cmam)) {
-        // Rows go in fixed blocks of 8, each row whole: the image is the same for any thread
-        // count.
-        constexpr int kBlockRows = 8;
-        const int blocks = (fb.height + kBlockRows - 1) / kBlockRows;
-        parallel_range(blocks, options.threads, [&](int begin, int end) {
-            CmamRowState cmam;
-            for (int b = begin; b < end; ++b)
-                for (int row = b * kBlockRows; row < std::min(fb.height, (b + 1) * kBlockRows);
-                     ++row) {
-                    render_span(row, 0, fb.width, 0, cmam);
-                    int done = ++rows_done;
-                    if (options.progress) options.progress(done, fb.height);
-                }
-        });
-        return fb;
-    }
-    // With the CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top to
-    // bottom with caches of its own, each row left to right: every row but the image's first has
-    // the row above in the caches (the 2-D CMAM's Jacobian column), and each strip row starts
-    // with the pixels to its left primed (the 1-D CMAM's neighbours; two at one sample per pixel,
-    // where the region needs the two previous samples). Samples reach the caches exactly as in a
-    // whole-row scan, and the image is the same for any thread count (algorithms.md §6.3.1).
-    const int strips = (fb.width + kCmamStripWidth - 1) / kCmamStripWidth;
-    const int prime_pixels = sub_rows ? (nx >= 2 ? 1 : 2) : 0;
-    std::atomic<int> spans_done{0};
-    parallel_range(strips, options.threads, [&](int begin, int end) {
-        for (int k = begin; k < end; ++k) {
-            CmamRowState cmam;
-            const int x0 = k * kCmamStripWidth, x1 = std::min(fb.width, x0 + kCmamStripWidth);
-            const int prime = std::min(x0, prime_pixels);
-            for (int row = 0; row < fb.height; ++row) {
-                render_span(row, x0, x1, prime, cmam);
-                int done = ++spans_done;
-                if (options.progress) options.progress(done, strips * fb.height);
-            }
-        }
-    });
+    const FilmTracer tracer(scene, options, stats, fb);
+    if (scene.footprint_methods.has(FootprintMethod::Cmam))
+        render_cmam_strips(tracer, options, fb.height, fb.width);
+    else
+        render_rows(tracer, options, fb.height, fb.width);
     return fb;
 }
 

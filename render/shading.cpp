@@ -65,18 +65,19 @@ texture::Vec2d mapped_st(const TextureNode& n, const Vec3& p) {
 // node's (node_footprint); for the others the images of dP/dx and dP/dy (exact for planar,
 // finite differences for the angular mappings, across their seam the short way), or none
 // without ray differentials.
-texture::Vec2d node_st(const TextureNode& n, const TexContext& ctx, texture::Footprint* fp) {
-    if (n.mapping == TextureNode::Mapping::Uv) {
-        if (fp) *fp = node_footprint(n, ctx);
-        return {double(n.su) * ctx.u + n.du, double(n.sv) * ctx.v + n.dv};
-    }
+struct MappedSt {
+    texture::Vec2d st;
+    texture::Footprint footprint;  // None unless asked for
+};
+MappedSt node_st(const TextureNode& n, const TexContext& ctx, bool with_footprint) {
+    if (n.mapping == TextureNode::Mapping::Uv)
+        return {{double(n.su) * ctx.u + n.du, double(n.sv) * ctx.v + n.dv},
+                with_footprint ? node_footprint(n, ctx) : texture::Footprint{}};
     const texture::Vec2d st = mapped_st(n, ctx.p);
-    if (!fp) return st;
-    *fp = {};
-    if (n.lod != FootprintMethod::Differentials ||
+    if (!with_footprint || n.lod != FootprintMethod::Differentials ||
         (dot(ctx.footprints.dpdx, ctx.footprints.dpdx) == 0 &&
          dot(ctx.footprints.dpdy, ctx.footprints.dpdy) == 0))
-        return st;
+        return {st, {}};
     texture::Vec2d axis[2];
     const Vec3 dp[2] = {ctx.footprints.dpdx, ctx.footprints.dpdy};
     for (int k = 0; k < 2; ++k) {
@@ -93,8 +94,7 @@ texture::Vec2d node_st(const TextureNode& n, const TexContext& ctx, texture::Foo
         if (angle < -period / 2) angle += period;
         axis[k] = {a[0], a[1]};
     }
-    *fp = texture::Footprint::axes(axis[0], axis[1]);
-    return st;
+    return {st, texture::Footprint::axes(axis[0], axis[1])};
 }
 
 float noise2(float x, float y) {
@@ -123,6 +123,107 @@ Rgb marble(const TextureNode& n, const TexContext& ctx) {
     return 1.5f * mix(s0, s1);
 }
 
+// The CMAM sits between the texture and the parameterization: the ray's tag and (s,t) in, the
+// filtered value out; it records what it filtered where the context asks.
+texture::Texel cmam_texel(const Scene& scene, const TextureNode& n, int node, double s, double t,
+                          const TexContext& ctx) {
+    texture::CmamOptions o = scene.cmam;
+    o.filter = n.filter.kind;
+    o.max_aniso = n.filter.max_aniso;
+    CmamRecord own;
+    CmamRecord* rec = ctx.cmam_record && ctx.cmam_record->node == node ? ctx.cmam_record : &own;
+    const bool want = ctx.counts || rec != &own;
+    texture::CmamCache& cache =
+        ctx.cmam->cache(ctx.object, static_cast<uint32_t>(node), ctx.footprints.path);
+    texture::Texel x;
+    if (want) {
+        const texture::CmamResult r =
+            texture::cmam_lookup_with_info(*n.image, cache, ctx.footprints.tag, s, t, o);
+        x = r.value;
+        rec->info = r.info;
+        rec->region = r.region;
+    } else {
+        x = texture::cmam_lookup(*n.image, cache, ctx.footprints.tag, s, t, o);
+    }
+    rec->filled = true;
+    if (ctx.counts) {
+        ++ctx.counts->by_filter[static_cast<int>(o.filter)];
+        ctx.counts->non_finite += rec->info.fallback;
+        ctx.counts->cmam_2d_without_above += o.two_d && !rec->region.used_above;
+    }
+    return x;
+}
+
+Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexContext& ctx) {
+    const MappedSt m = node_st(n, ctx, true);
+    double s = m.st.u, t = m.st.v;
+    texture::Texel x;
+    if (n.lod == FootprintMethod::Cmam && ctx.cmam) {
+        x = cmam_texel(scene, n, node, s, t, ctx);
+    } else {
+        if (n.filter.kind == texture::FilterKind::Area && n.lod == FootprintMethod::Differentials &&
+            n.mapping == TextureNode::Mapping::Uv &&
+            ctx.footprints.axes.kind == texture::Footprint::Kind::Axes) {
+            s += n.su * ctx.footprints.stratum_offset.u;
+            t += n.sv * ctx.footprints.stratum_offset.v;
+        }
+        x = lookup_image(*n.image, n.filter, s, t, m.footprint, ctx.counts);
+    }
+    if (n.image->image().channels() == 1) return Rgb(x[0]);
+    return Rgb(x[0], x[1], x[2]);
+}
+
+Rgb checkerboard(const Scene& scene, const TextureNode& n, const TexContext& ctx) {
+    const MappedSt m = node_st(n, ctx, n.closed_form);
+    const texture::Footprint& fp = m.footprint;
+    const double s = m.st.u, t = m.st.v;
+    if (fp.kind == texture::Footprint::Kind::Axes) {
+        // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.
+        double ds = std::max(std::abs(fp.axis_a.u), std::abs(fp.axis_b.u));
+        double dt = std::max(std::abs(fp.axis_a.v), std::abs(fp.axis_b.v));
+        double s0 = s - ds, s1 = s + ds, t0 = t - dt, t1 = t + dt;
+        if (std::floor(s0) != std::floor(s1) || std::floor(t0) != std::floor(t1)) {
+            auto bump = [](double x) {
+                return std::floor(x / 2) + 2 * std::max(x / 2 - std::floor(x / 2) - 0.5, 0.0);
+            };
+            double sint = (bump(s1) - bump(s0)) / (2 * ds), tint = (bump(t1) - bump(t0)) / (2 * dt);
+            double area2 = sint + tint - 2 * sint * tint;
+            if (ds > 1 || dt > 1) area2 = 0.5;
+            return float(1 - area2) * eval_texture(scene, n.tex1, ctx) +
+                   float(area2) * eval_texture(scene, n.tex2, ctx);
+        }
+    }
+    auto parity = static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
+    return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);
+}
+
+// A dot of radius 0.35 in about half the unit cells (centred on the integers), jittered inside
+// its cell by noise.
+Rgb dots(const Scene& scene, const TextureNode& n, const TexContext& ctx) {
+    const texture::Vec2d st = node_st(n, ctx, false).st;
+    const float s_cell = std::floor(float(st.u) + 0.5f), t_cell = std::floor(float(st.v) + 0.5f);
+    if (noise2(s_cell + 0.5f, t_cell + 0.5f) > 0) {
+        constexpr float kRadius = 0.35f, kShift = 0.5f - kRadius;
+        const float sc = s_cell + kShift * noise2(s_cell + 1.5f, t_cell + 2.8f);
+        const float tc = t_cell + kShift * noise2(s_cell + 4.5f, t_cell + 9.8f);
+        const float ds = float(st.u) - sc, dt = float(st.v) - tc;
+        if (ds * ds + dt * dt < kRadius * kRadius) return eval_texture(scene, n.tex1, ctx);
+    }
+    return eval_texture(scene, n.tex2, ctx);
+}
+
+// fbm, wrinkled and windy: noise whose octaves follow the footprint.
+Rgb noise_texture(const TextureNode& n, const TexContext& ctx) {
+    const Vec3 p = texture_point(n, ctx.p), dx = texture_vector(n, ctx.footprints.dpdx),
+               dy = texture_vector(n, ctx.footprints.dpdy);
+    if (n.kind == TextureNode::Kind::Fbm) return Rgb(fbm(p, dx, dy, n.omega, n.octaves));
+    if (n.kind == TextureNode::Kind::Wrinkled)
+        return Rgb(turbulence(p, dx, dy, n.omega, n.octaves));
+    // Windy: small waves whose height follows a slowly varying wind strength.
+    const float wind = fbm(0.1f * p, 0.1f * dx, 0.1f * dy, 0.5f, 3);
+    return Rgb(std::abs(wind) * fbm(p, dx, dy, 0.5f, 6));
+}
+
 }  // namespace
 
 Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
@@ -131,103 +232,23 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
     switch (n.kind) {
         case TextureNode::Kind::Constant:
             return n.constant;
-        case TextureNode::Kind::Image: {
-            texture::Footprint fp;
-            const texture::Vec2d st = node_st(n, ctx, &fp);
-            double s = st.u, t = st.v;
-            texture::Texel x;
-            if (n.lod == FootprintMethod::Cmam && ctx.cmam) {
-                // The CMAM sits between the texture and the parameterization: tag and (s,t) in.
-                texture::CmamOptions o = scene.cmam;
-                o.filter = n.filter.kind;
-                o.max_aniso = n.filter.max_aniso;
-                CmamRecord own;
-                CmamRecord* rec =
-                    ctx.cmam_record && ctx.cmam_record->node == in.node ? ctx.cmam_record : &own;
-                const bool want = ctx.counts || rec != &own;
-                texture::CmamCache& cache =
-                    ctx.cmam->cache(ctx.object, static_cast<uint32_t>(in.node),
-                                    ctx.footprints.path);
-                if (want) {
-                    const texture::CmamResult r =
-                        texture::cmam_lookup_with_info(*n.image, cache, ctx.footprints.tag, s, t, o);
-                    x = r.value;
-                    rec->info = r.info;
-                    rec->region = r.region;
-                } else {
-                    x = texture::cmam_lookup(*n.image, cache, ctx.footprints.tag, s, t, o);
-                }
-                rec->filled = true;
-                if (ctx.counts) {
-                    ++ctx.counts->by_filter[static_cast<int>(o.filter)];
-                    ctx.counts->non_finite += rec->info.fallback;
-                    ctx.counts->cmam_2d_without_above += o.two_d && !rec->region.used_above;
-                }
-            } else {
-                if (n.filter.kind == texture::FilterKind::Area &&
-                    n.lod == FootprintMethod::Differentials &&
-                    n.mapping == TextureNode::Mapping::Uv &&
-                    ctx.footprints.axes.kind == texture::Footprint::Kind::Axes) {
-                    s += n.su * ctx.footprints.stratum_offset.u;
-                    t += n.sv * ctx.footprints.stratum_offset.v;
-                }
-                x = lookup_image(*n.image, n.filter, s, t, fp, ctx.counts);
-            }
-            if (n.image->image().channels() == 1) return Rgb(x[0]);
-            return Rgb(x[0], x[1], x[2]);
-        }
-        case TextureNode::Kind::Checkerboard: {
-            texture::Footprint fp;
-            const texture::Vec2d st = node_st(n, ctx, n.closed_form ? &fp : nullptr);
-            const double s = st.u, t = st.v;
-            if (fp.kind == texture::Footprint::Kind::Axes) {
-                // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.
-                double ds = std::max(std::abs(fp.axis_a.u), std::abs(fp.axis_b.u));
-                double dt = std::max(std::abs(fp.axis_a.v), std::abs(fp.axis_b.v));
-                double s0 = s - ds, s1 = s + ds, t0 = t - dt, t1 = t + dt;
-                if (std::floor(s0) != std::floor(s1) || std::floor(t0) != std::floor(t1)) {
-                    auto bump = [](double x) {
-                        return std::floor(x / 2) +
-                               2 * std::max(x / 2 - std::floor(x / 2) - 0.5, 0.0);
-                    };
-                    double sint = (bump(s1) - bump(s0)) / (2 * ds),
-                           tint = (bump(t1) - bump(t0)) / (2 * dt);
-                    double area2 = sint + tint - 2 * sint * tint;
-                    if (ds > 1 || dt > 1) area2 = 0.5;
-                    return float(1 - area2) * eval_texture(scene, n.tex1, ctx) +
-                           float(area2) * eval_texture(scene, n.tex2, ctx);
-                }
-            }
-            auto parity =
-                static_cast<long long>(std::floor(s)) + static_cast<long long>(std::floor(t));
-            return eval_texture(scene, (parity & 1) == 0 ? n.tex1 : n.tex2, ctx);
-        }
+        case TextureNode::Kind::Image:
+            return image_texture(scene, n, in.node, ctx);
+        case TextureNode::Kind::Checkerboard:
+            return checkerboard(scene, n, ctx);
         case TextureNode::Kind::Bilerp: {
-            const texture::Vec2d st = node_st(n, ctx, nullptr);
+            const texture::Vec2d st = node_st(n, ctx, false).st;
             const float s = float(st.u), t = float(st.v);
             return (1 - s) * (1 - t) * n.corners[0] + (1 - s) * t * n.corners[1] +
                    s * (1 - t) * n.corners[2] + s * t * n.corners[3];
         }
         case TextureNode::Kind::Uv: {
-            const texture::Vec2d st = node_st(n, ctx, nullptr);
+            const texture::Vec2d st = node_st(n, ctx, false).st;
             const Rgb c(float(st.u - std::floor(st.u)), float(st.v - std::floor(st.v)), 0);
             return n.is_float ? Rgb(c.r) : c;
         }
-        case TextureNode::Kind::Dots: {
-            // A dot of radius 0.35 in about half the unit cells (centred on the integers),
-            // jittered inside its cell by noise.
-            const texture::Vec2d st = node_st(n, ctx, nullptr);
-            const float s_cell = std::floor(float(st.u) + 0.5f),
-                        t_cell = std::floor(float(st.v) + 0.5f);
-            if (noise2(s_cell + 0.5f, t_cell + 0.5f) > 0) {
-                constexpr float kRadius = 0.35f, kShift = 0.5f - kRadius;
-                const float sc = s_cell + kShift * noise2(s_cell + 1.5f, t_cell + 2.8f);
-                const float tc = t_cell + kShift * noise2(s_cell + 4.5f, t_cell + 9.8f);
-                const float ds = float(st.u) - sc, dt = float(st.v) - tc;
-                if (ds * ds + dt * dt < kRadius * kRadius) return eval_texture(scene, n.tex1, ctx);
-            }
-            return eval_texture(scene, n.tex2, ctx);
-        }
+        case TextureNode::Kind::Dots:
+            return dots(scene, n, ctx);
         case TextureNode::Kind::Checkerboard3D: {
             const Vec3 p = texture_point(n, ctx.p);
             const long long parity = static_cast<long long>(std::floor(p.x)) +
@@ -237,16 +258,8 @@ Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) 
         }
         case TextureNode::Kind::Fbm:
         case TextureNode::Kind::Wrinkled:
-        case TextureNode::Kind::Windy: {
-            const Vec3 p = texture_point(n, ctx.p), dx = texture_vector(n, ctx.footprints.dpdx),
-                       dy = texture_vector(n, ctx.footprints.dpdy);
-            if (n.kind == TextureNode::Kind::Fbm) return Rgb(fbm(p, dx, dy, n.omega, n.octaves));
-            if (n.kind == TextureNode::Kind::Wrinkled)
-                return Rgb(turbulence(p, dx, dy, n.omega, n.octaves));
-            // Windy: small waves whose height follows a slowly varying wind strength.
-            const float wind = fbm(0.1f * p, 0.1f * dx, 0.1f * dy, 0.5f, 3);
-            return Rgb(std::abs(wind) * fbm(p, dx, dy, 0.5f, 6));
-        }
+        case TextureNode::Kind::Windy:
+            return noise_texture(n, ctx);
         case TextureNode::Kind::Marble: {
             const Rgb c = marble(n, ctx);
             return n.is_float ? Rgb(c.luminance()) : c;
