@@ -270,14 +270,14 @@ struct Tracer {
             SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-            TexContext ctx;
-            ctx.u = h.u;
-            ctx.v = h.v;
-            ctx.p = h.p;
-            ctx.footprints = footprints.at_hit(ray.fp, ray.dir, h);
-            ctx.counts = counts ? &counts->lookups : nullptr;
-            ctx.object = h.object_id;
-            ctx.cmam = cmam;
+            TexContext ctx{h.u,
+                           h.v,
+                           h.p,
+                           footprints.at_hit(ray.fp, ray.dir, h),
+                           counts ? &counts->lookups : nullptr,
+                           h.object_id,
+                           cmam,
+                           nullptr};
             const HitFootprint& at = ctx.footprints;
             const HitDifferential& hd = at.diff;
             if (counts && at.dropped) ++counts->dropped_differentials;

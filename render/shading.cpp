@@ -411,8 +411,9 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
 
 std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit,
                               const TexContext& ctx) {
-    if (m.type == Material::Type::None) return std::nullopt;
-    Bsdf b;
+    std::optional<Bsdf> made;
+    if (m.type == Material::Type::None) return made;
+    Bsdf& b = made.emplace();
     b.frame = Frame::from_z(hit.ns);
     b.ng = hit.ng;
     switch (m.type) {
@@ -467,9 +468,10 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
         }
         case Material::Type::None:
         case Material::Type::Mix:  // the integrator picks one of its materials first
-            return std::nullopt;
+            made.reset();
+            break;
     }
-    return b;
+    return made;
 }
 
 }  // namespace cmam::render
