@@ -16,6 +16,7 @@
 #include "pbrt/scene_desc.h"
 #include "render/build_scene.h"
 #include "render/scene.h"
+#include "render/subdivide.h"
 #include "render/tessellate.h"
 
 namespace cmam::render::build_detail {
@@ -163,6 +164,8 @@ class Builder {
     bool tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
     bool ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
     bool triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
+                         const std::vector<int>& idx, Primitive& prim);
     void mesh_primitive(const pbrt::ShapeDesc& s, Primitive& prim);
     bool place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                     const std::vector<float>& N, const std::vector<float>& UV,

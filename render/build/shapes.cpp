@@ -81,21 +81,14 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     return place_mesh(s, mesh->positions, mesh->normals, mesh->uvs, mesh->indices, prim);
 }
 
-// pbrt-v3's "trianglemesh", and "loopsubdiv" as its control mesh.
+// pbrt-v3's "trianglemesh", and "loopsubdiv": its control mesh subdivided at load
+// (algorithms.md §16).
 bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
     mesh_primitive(s, prim);
     std::vector<float> P, N, UV;
     std::vector<int> idx;
     const std::string what = q(e.type);
-    if (e.type == "loopsubdiv") {
-        // The control mesh stands for the limit surface (close for fine meshes).
-        warn(e.loc,
-             "shape \"loopsubdiv\" is rendered as its control mesh, not "
-             "subdivided");
-        (void)e.params.get_int("levels", 3);
-        (void)e.params.get_int("nlevels", 3);  // pbrt-v3 reads either name
-    }
     auto p = e.params.get_point3s("P");
     if (!p) throw SceneError(e.loc, what + " needs a \"point3 P\" parameter");
     for (double x : finite_values(e, "P", *p)) P.push_back(float(x));
@@ -115,6 +108,7 @@ bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
             throw SceneError(e.params.find("indices")->loc, "index " + std::to_string(i) +
                                                                 " out of range (" +
                                                                 std::to_string(nv) + " vertices)");
+    if (e.type == "loopsubdiv") return subdivided_mesh(s, P, idx, prim);
     if (auto n = e.params.get_point3s("N")) {
         if (n->size() != P.size())
             throw SceneError(e.params.find("N")->loc, "N must have one normal per vertex of P");
@@ -129,6 +123,32 @@ bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     }
     e.params.check_unused("shape " + what, m_warn, {"alpha", "shadowalpha", "S", "faceIndices"});
     return place_mesh(s, P, N, UV, idx, prim);
+}
+
+// pbrt-v3's "loopsubdiv" after its control mesh is read: "levels" (or "nlevels") of Loop
+// subdivision, then the limit surface with its normals and no (u,v), as pbrt-v3 makes it.
+bool Builder::subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
+                              const std::vector<int>& idx, Primitive& prim) {
+    const Entity& e = s.entity;
+    const char* name = e.params.find("levels") || !e.params.find("nlevels") ? "levels" : "nlevels";
+    int levels = e.params.get_int(name, 3);
+    if (levels < 0)
+        throw SceneError(loc_of(e, name),
+                         "levels must be 0 or more, got " + std::to_string(levels));
+    const std::size_t triangles = idx.size() / 3;
+    const int fit = loop_levels_that_fit(triangles, levels);
+    if (fit < levels)
+        warn(loc_of(e, name),
+             "shape \"loopsubdiv\": " + std::to_string(levels) + " levels would make " +
+                 pbrt::number_text(loop_subdivided_triangles(triangles, levels), 3) +
+                 " triangles; " + std::to_string(fit) + " are used");
+    const std::string scheme = e.params.get_string("scheme", "loop");
+    if (scheme != "loop")
+        warn(loc_of(e, "scheme"), "shape \"loopsubdiv\": scheme " + q(scheme) +
+                                      " is not pbrt-v3's; Loop subdivision is used");
+    e.params.check_unused("shape \"loopsubdiv\"", m_warn, {"nlevels"});
+    const SubdividedMesh mesh = loop_subdivide(P, idx, fit);
+    return place_mesh(s, mesh.positions, mesh.normals, {}, mesh.indices, prim);
 }
 
 // Places an object-space mesh (3 floats per position and normal, 2 per (u,v), 3 indices per
