@@ -373,11 +373,8 @@ void remove_stale(const fs::path& dir, const std::set<std::string>& old,
     }
 }
 
-}  // namespace
-
-void write_reports(const EvalOptions& o, const EvalResult& r) {
-    const fs::path dir(o.out_dir);
-    const std::set<std::string> old = previous_files(dir);
+// The results table, one row per scene, method and sample count.
+std::string results_csv(const EvalResult& r) {
     // CSV (columns are only ever added at the end)
     std::ostringstream csv;
     csv << "scene,method,spp,rmse,psnr,ssim,rmse_masked,psnr_masked,ssim_masked,masked_fraction,"
@@ -394,8 +391,11 @@ void write_reports(const EvalOptions& o, const EvalResult& r) {
             << "," << x.heatmap << "," << fmt("%.6f", x.seconds_min) << ","
             << fmt("%.6f", x.seconds_max) << "," << x.timing_runs << "," << x.texture_heatmap
             << "\n";
-    write_atomic(dir / "results.csv", csv.str());
+    return csv.str();
+}
 
+// results.md: how the numbers were made, the table and the scenes that failed.
+std::string results_md(const EvalOptions& o, const EvalResult& r) {
     std::ostringstream md;
     md << "# cmam evaluation\n\nGround truth: " << o.reference_spp
        << " stratified jittered samples per pixel, point-sampled textures (bilinear at level 0). "
@@ -407,15 +407,11 @@ void write_reports(const EvalOptions& o, const EvalResult& r) {
        << results_markdown(r);
     for (const FailedScene& f : r.failed)
         md << "\nFailed, skipped: `" << f.path << "`: " << f.message << "\n";
-    write_atomic(dir / "results.md", md.str());
+    return md.str();
+}
 
-    std::vector<std::string> methods;
-    for (const Method& m : o.methods) methods.push_back(m.name);
-    const bool single = timing_note(r).rfind("Times are single", 0) == 0;
-    const std::string time_axis =
-        single ? "render time (s, log; single runs)" : "render time (s, log; median of runs)";
-    std::ostringstream h;
-    h << R"(<!doctype html>
+// The page's head, its style sheet and the introduction up to the note on timing.
+constexpr const char* kHtmlHead = R"(<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>cmam evaluation</title>
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <style>
@@ -447,125 +443,10 @@ th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
 </style></head>
 <body data-images-ok="" data-images-broken="" data-overlaps="" data-overflow-x="">
 <h1>cmam evaluation</h1>
-<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the mean of the ground truth (white; of its texture AOV for the texture error). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )"
-      << html_escape(timing_note(r))
-      << R"( Move the mouse over an image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
-)";
-    if (!r.failed.empty()) {
-        h << "<div class=\"failed\"><b>" << r.failed.size()
-          << (r.failed.size() == 1 ? " scene" : " scenes") << " failed and "
-          << (r.failed.size() == 1 ? "is" : "are") << " not in this report:</b><ul>\n";
-        for (const FailedScene& f : r.failed)
-            h << "<li><code>" << html_escape(f.path) << "</code>: <code>" << html_escape(f.message)
-              << "</code></li>\n";
-        h << "</ul></div>\n";
-    }
-    if (r.scenes.size() > 1) {
-        h << "<p class=\"facts\"><b>Scenes</b> ";
-        for (std::size_t k = 0; k < r.scenes.size(); ++k)
-            h << (k ? " &middot; " : "") << "<a href=\"#" << html_escape(r.scenes[k].name) << "\">"
-              << html_escape(r.scenes[k].name) << "</a>";
-        h << "</p>\n";
-    }
-    for (const SceneReport& sc : r.scenes) {
-        std::vector<const ResultRow*> rows;
-        std::set<int> spps;
-        for (const ResultRow& x : r.rows)
-            if (x.scene == sc.name) {
-                rows.push_back(&x);
-                spps.insert(x.spp);
-            }
-        // Every image of the scene at one width: up to 320 px for landscape images (less for
-        // portrait ones), and narrower in a narrow window, so that a row always fits.
-        const int img_w = sc.width >= sc.height ? 320 : std::max(140, 320 * sc.width / sc.height);
-        h << "<section class=\"scene\" id=\"" << html_escape(sc.name) << "\" style=\"--img-w:min("
-          << img_w << "px, calc((100vw - 300px) / 3))\">\n<h2>" << html_escape(sc.name)
-          << "</h2>\n";
-        h << "<div class=\"facts\"><b>File</b> <code>" << html_escape(sc.path)
-          << "</code> &middot; " << sc.width << "&times;" << sc.height
-          << " pixels &middot; <b>ground truth</b> " << sc.reference_spp << " spp"
-          << (sc.reference_cached ? " (from the cache)" : "")
-          << " &middot; <b>pixels off edges</b> ";
-        for (std::size_t k = 0; k < sc.off_edge_fraction.size(); ++k)
-            h << (k ? ", " : "") << fmt("%.1f%%", 100 * sc.off_edge_fraction[k].second) << " at "
-              << sc.off_edge_fraction[k].first << " spp";
-        h << "</div>\n";
-        if (!sc.warnings.empty()) {
-            h << "<details class=\"warnings\"><summary>" << sc.warnings.size()
-              << (sc.warnings.size() == 1 ? " warning" : " warnings")
-              << " about this scene</summary><ul>\n";
-            for (const std::string& w : sc.warnings) h << "<li>" << html_escape(w) << "</li>\n";
-            h << "</ul></details>\n";
-        }
-        h << "<div class=\"plots\">\n"
-          << svg_plot(rows, methods, &ResultRow::rmse, "image RMSE vs ground truth (log)",
-                      time_axis, "image error versus render time")
-          << svg_plot(rows, methods, &ResultRow::texture_rmse, "texture AOV RMSE (log)", time_axis,
-                      "texture error versus render time")
-          << "</div>\n";
-        h << "<details class=\"numbers\"><summary>All numbers (" << rows.size()
-          << (rows.size() == 1 ? " row" : " rows")
-          << "; also in results.csv)</summary><div "
-             "class=\"tablewrap\"><table><tr><th>method</th><th>spp</th><th>RMSE</th><th>"
-             "PSNR</th><th>SSIM</th><th>RMSE off edges</th>"
-             "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)"
-          << (single ? ", single run" : ", median [min&ndash;max]")
-          << "</th><th>Mrays/s</th></tr>\n";
-        for (const ResultRow* x : rows) {
-            std::string t = fmt("%.3f", x->seconds);
-            if (x->timing_runs > 1)
-                t += " [" + fmt("%.3f", x->seconds_min) + "&ndash;" + fmt("%.3f", x->seconds_max) +
-                     "]";
-            h << "<tr><td>" << html_escape(x->method) << "</td><td>" << x->spp << "</td><td>"
-              << fmt("%.5f", x->rmse) << "</td><td>" << fmt("%.2f", x->psnr) << "</td><td>"
-              << fmt("%.4f", x->ssim) << "</td><td>" << fmt("%.5f", x->rmse_masked) << "</td><td>"
-              << fmt("%.4f", x->ssim_masked) << "</td><td>" << fmt("%.5f", x->texture_rmse)
-              << "</td><td>" << t << "</td><td>" << fmt("%.2f", x->rays_per_second / 1e6)
-              << "</td></tr>\n";
-        }
-        h << "</table></div></details>\n";
-        if (spps.size() > 1) {
-            h << "<div class=\"chooser\">Samples per pixel: ";
-            bool first = true;
-            for (int spp : spps) {
-                h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
-                  << "\" value=\"" << spp << "\"" << (first ? " checked" : "") << "> " << spp
-                  << "</label>";
-                first = false;
-            }
-            h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
-              << "\" value=\"all\"> all</label></div>\n";
-        }
-        h << "<div class=\"rows\">\n<div class=\"head\"></div><div class=\"head\">image</div><div "
-             "class=\"head\">image error</div><div class=\"head\">texture AOV error</div>\n";
-        h << "<div class=\"cap\"><b>ground truth</b><br>" << sc.reference_spp
-          << " spp; right: its texture AOV</div><div class=\"zoom\"><img src=\""
-          << html_escape(sc.reference_image)
-          << "\" alt=\"ground truth\"></div><div class=\"empty\"></div><div class=\"zoom\"><img "
-             "src=\""
-          << html_escape(sc.reference_texture) << "\" alt=\"ground truth texture AOV\"></div>\n";
-        for (int spp : spps)
-            for (const std::string& m : methods)
-                for (const ResultRow* x : rows)
-                    if (x->method == m && x->spp == spp) {
-                        const std::string cls = " data-spp=\"" + std::to_string(spp) + "\"";
-                        h << "<div class=\"cap\"" << cls << "><b>" << html_escape(m) << "</b><br>"
-                          << spp << " spp<br><span class=\"num\">RMSE " << fmt("%.4f", x->rmse)
-                          << "<br>off edges " << fmt("%.4f", x->rmse_masked) << "<br>texture "
-                          << fmt("%.4f", x->texture_rmse) << "<br>" << fmt("%.3f", x->seconds)
-                          << " s" << (x->timing_runs > 1 ? " (median)" : " (single run)")
-                          << "</span></div>";
-                        h << "<div class=\"zoom\"" << cls << "><img src=\"" << html_escape(x->image)
-                          << "\" alt=\"" << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
-                          << "><img src=\"" << html_escape(x->heatmap) << "\" alt=\"image error of "
-                          << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
-                          << "><img src=\"" << html_escape(x->texture_heatmap)
-                          << "\" alt=\"texture error of " << html_escape(m) << "\"></div>\n";
-                    }
-        h << "</div>\n";
-        h << "</section>\n";
-    }
-    h << R"(<script>
+<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the mean of the ground truth (white; of its texture AOV for the texture error). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )";
+
+// The page's scripts (sample-count chooser, synchronized zoom, layout self-check) and its end.
+constexpr const char* kHtmlTail = R"(<script>
 // The sample-count chooser: shows the rows of one sample count (or all).
 document.querySelectorAll('section.scene').forEach(function (sec) {
   function show(v) {
@@ -627,7 +508,177 @@ window.addEventListener('load', function () {
 </script>
 </body></html>
 )";
-    write_atomic(dir / "index.html", h.str());
+
+// The scenes that failed, if any.
+void failed_html(std::ostream& h, const EvalResult& r) {
+    if (r.failed.empty()) return;
+    h << "<div class=\"failed\"><b>" << r.failed.size()
+      << (r.failed.size() == 1 ? " scene" : " scenes") << " failed and "
+      << (r.failed.size() == 1 ? "is" : "are") << " not in this report:</b><ul>\n";
+    for (const FailedScene& f : r.failed)
+        h << "<li><code>" << html_escape(f.path) << "</code>: <code>" << html_escape(f.message)
+          << "</code></li>\n";
+    h << "</ul></div>\n";
+}
+
+// Links to the scenes, when there is more than one.
+void scene_links_html(std::ostream& h, const EvalResult& r) {
+    if (r.scenes.size() <= 1) return;
+    h << "<p class=\"facts\"><b>Scenes</b> ";
+    for (std::size_t k = 0; k < r.scenes.size(); ++k)
+        h << (k ? " &middot; " : "") << "<a href=\"#" << html_escape(r.scenes[k].name) << "\">"
+          << html_escape(r.scenes[k].name) << "</a>";
+    h << "</p>\n";
+}
+
+// The scene's file, size, ground truth and pixels off edges, and its warnings.
+void scene_facts_html(std::ostream& h, const SceneReport& sc) {
+    h << "<div class=\"facts\"><b>File</b> <code>" << html_escape(sc.path) << "</code> &middot; "
+      << sc.width << "&times;" << sc.height << " pixels &middot; <b>ground truth</b> "
+      << sc.reference_spp << " spp" << (sc.reference_cached ? " (from the cache)" : "")
+      << " &middot; <b>pixels off edges</b> ";
+    for (std::size_t k = 0; k < sc.off_edge_fraction.size(); ++k)
+        h << (k ? ", " : "") << fmt("%.1f%%", 100 * sc.off_edge_fraction[k].second) << " at "
+          << sc.off_edge_fraction[k].first << " spp";
+    h << "</div>\n";
+    if (!sc.warnings.empty()) {
+        h << "<details class=\"warnings\"><summary>" << sc.warnings.size()
+          << (sc.warnings.size() == 1 ? " warning" : " warnings")
+          << " about this scene</summary><ul>\n";
+        for (const std::string& w : sc.warnings) h << "<li>" << html_escape(w) << "</li>\n";
+        h << "</ul></details>\n";
+    }
+}
+
+// The scene's two plots: image and texture error against render time.
+void scene_plots_html(std::ostream& h, const std::vector<const ResultRow*>& rows,
+                      const std::vector<std::string>& methods, bool single) {
+    const std::string time_axis =
+        single ? "render time (s, log; single runs)" : "render time (s, log; median of runs)";
+    h << "<div class=\"plots\">\n"
+      << svg_plot(rows, methods, &ResultRow::rmse, "image RMSE vs ground truth (log)", time_axis,
+                  "image error versus render time")
+      << svg_plot(rows, methods, &ResultRow::texture_rmse, "texture AOV RMSE (log)", time_axis,
+                  "texture error versus render time")
+      << "</div>\n";
+}
+
+// Every number of the scene's rows, in a folded table.
+void scene_numbers_html(std::ostream& h, const std::vector<const ResultRow*>& rows, bool single) {
+    h << "<details class=\"numbers\"><summary>All numbers (" << rows.size()
+      << (rows.size() == 1 ? " row" : " rows")
+      << "; also in results.csv)</summary><div "
+         "class=\"tablewrap\"><table><tr><th>method</th><th>spp</th><th>RMSE</th><th>"
+         "PSNR</th><th>SSIM</th><th>RMSE off edges</th>"
+         "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)"
+      << (single ? ", single run" : ", median [min&ndash;max]") << "</th><th>Mrays/s</th></tr>\n";
+    for (const ResultRow* x : rows) {
+        std::string t = fmt("%.3f", x->seconds);
+        if (x->timing_runs > 1)
+            t += " [" + fmt("%.3f", x->seconds_min) + "&ndash;" + fmt("%.3f", x->seconds_max) + "]";
+        h << "<tr><td>" << html_escape(x->method) << "</td><td>" << x->spp << "</td><td>"
+          << fmt("%.5f", x->rmse) << "</td><td>" << fmt("%.2f", x->psnr) << "</td><td>"
+          << fmt("%.4f", x->ssim) << "</td><td>" << fmt("%.5f", x->rmse_masked) << "</td><td>"
+          << fmt("%.4f", x->ssim_masked) << "</td><td>" << fmt("%.5f", x->texture_rmse)
+          << "</td><td>" << t << "</td><td>" << fmt("%.2f", x->rays_per_second / 1e6)
+          << "</td></tr>\n";
+    }
+    h << "</table></div></details>\n";
+}
+
+// The radio buttons that show one sample count (or all), when there is more than one.
+void spp_chooser_html(std::ostream& h, const SceneReport& sc, const std::set<int>& spps) {
+    if (spps.size() <= 1) return;
+    h << "<div class=\"chooser\">Samples per pixel: ";
+    bool first = true;
+    for (int spp : spps) {
+        h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name) << "\" value=\""
+          << spp << "\"" << (first ? " checked" : "") << "> " << spp << "</label>";
+        first = false;
+    }
+    h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
+      << "\" value=\"all\"> all</label></div>\n";
+}
+
+// The images side by side: the ground truth, then a row per sample count and method.
+void scene_images_html(std::ostream& h, const SceneReport& sc,
+                       const std::vector<const ResultRow*>& rows, const std::set<int>& spps,
+                       const std::vector<std::string>& methods) {
+    h << "<div class=\"rows\">\n<div class=\"head\"></div><div class=\"head\">image</div><div "
+         "class=\"head\">image error</div><div class=\"head\">texture AOV error</div>\n";
+    h << "<div class=\"cap\"><b>ground truth</b><br>" << sc.reference_spp
+      << " spp; right: its texture AOV</div><div class=\"zoom\"><img src=\""
+      << html_escape(sc.reference_image)
+      << "\" alt=\"ground truth\"></div><div class=\"empty\"></div><div class=\"zoom\"><img "
+         "src=\""
+      << html_escape(sc.reference_texture) << "\" alt=\"ground truth texture AOV\"></div>\n";
+    for (int spp : spps)
+        for (const std::string& m : methods)
+            for (const ResultRow* x : rows)
+                if (x->method == m && x->spp == spp) {
+                    const std::string cls = " data-spp=\"" + std::to_string(spp) + "\"";
+                    h << "<div class=\"cap\"" << cls << "><b>" << html_escape(m) << "</b><br>"
+                      << spp << " spp<br><span class=\"num\">RMSE " << fmt("%.4f", x->rmse)
+                      << "<br>off edges " << fmt("%.4f", x->rmse_masked) << "<br>texture "
+                      << fmt("%.4f", x->texture_rmse) << "<br>" << fmt("%.3f", x->seconds) << " s"
+                      << (x->timing_runs > 1 ? " (median)" : " (single run)") << "</span></div>";
+                    h << "<div class=\"zoom\"" << cls << "><img src=\"" << html_escape(x->image)
+                      << "\" alt=\"" << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
+                      << "><img src=\"" << html_escape(x->heatmap) << "\" alt=\"image error of "
+                      << html_escape(m) << "\"></div><div class=\"zoom\"" << cls << "><img src=\""
+                      << html_escape(x->texture_heatmap) << "\" alt=\"texture error of "
+                      << html_escape(m) << "\"></div>\n";
+                }
+    h << "</div>\n";
+}
+
+// One scene's section of the page.
+void scene_html(std::ostream& h, const SceneReport& sc, const EvalResult& r,
+                const std::vector<std::string>& methods, bool single) {
+    std::vector<const ResultRow*> rows;
+    std::set<int> spps;
+    for (const ResultRow& x : r.rows)
+        if (x.scene == sc.name) {
+            rows.push_back(&x);
+            spps.insert(x.spp);
+        }
+    // Every image of the scene at one width: up to 320 px for landscape images (less for
+    // portrait ones), and narrower in a narrow window, so that a row always fits.
+    const int img_w = sc.width >= sc.height ? 320 : std::max(140, 320 * sc.width / sc.height);
+    h << "<section class=\"scene\" id=\"" << html_escape(sc.name) << "\" style=\"--img-w:min("
+      << img_w << "px, calc((100vw - 300px) / 3))\">\n<h2>" << html_escape(sc.name) << "</h2>\n";
+    scene_facts_html(h, sc);
+    scene_plots_html(h, rows, methods, single);
+    scene_numbers_html(h, rows, single);
+    spp_chooser_html(h, sc, spps);
+    scene_images_html(h, sc, rows, spps, methods);
+    h << "</section>\n";
+}
+
+// index.html: the introduction, the failed scenes, a section per scene.
+std::string index_html(const EvalOptions& o, const EvalResult& r) {
+    std::vector<std::string> methods;
+    for (const Method& m : o.methods) methods.push_back(m.name);
+    const bool single = timing_note(r).rfind("Times are single", 0) == 0;
+    std::ostringstream h;
+    h << kHtmlHead << html_escape(timing_note(r))
+      << R"( Move the mouse over an image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
+)";
+    failed_html(h, r);
+    scene_links_html(h, r);
+    for (const SceneReport& sc : r.scenes) scene_html(h, sc, r, methods, single);
+    h << kHtmlTail;
+    return h.str();
+}
+
+}  // namespace
+
+void write_reports(const EvalOptions& o, const EvalResult& r) {
+    const fs::path dir(o.out_dir);
+    const std::set<std::string> old = previous_files(dir);
+    write_atomic(dir / "results.csv", results_csv(r));
+    write_atomic(dir / "results.md", results_md(o, r));
+    write_atomic(dir / "index.html", index_html(o, r));
 
     // What this report owns, so that the next one into the same folder replaces it cleanly.
     std::set<std::string> now(r.files.begin(), r.files.end());
