@@ -201,30 +201,45 @@ struct Series {
     int spp;
 };
 
-// One log-log plot: y (an error) against render time, one polyline per method across spp.
-std::string svg_plot(const std::vector<const ResultRow*>& rows,
-                     const std::vector<std::string>& methods, double ResultRow::*error,
-                     const std::string& ylabel, const std::string& xlabel,
-                     const std::string& aria) {
-    const int W = 600, L = 64, R = 210, T = 14, B = 46;
-    const int H = std::max(340, T + 18 * static_cast<int>(methods.size()) + 24);
+// One plot's geometry: its size and margins, the ranges of its axes (padded) and where a time
+// (x) and an error (y) fall in pixels.
+struct PlotFrame {
+    static constexpr int W = 600, L = 64, R = 210, T = 14, B = 46;
+    int H = 0;
+    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
+    bool zeros = false;  // an error of exactly 0 is plotted
+    int zero_band = 0;
+    double pw = 0, ph = 0, lt0 = 0, lt1 = 0, le0 = 0, le1 = 0;
+
+    double X(double t) const {
+        return L + (std::log10(std::max(t, 1e-4)) - lt0) / (lt1 - lt0) * pw;
+    }
+    double Y(double e) const {
+        if (!(e > 0)) return T + ph + zero_band * 0.6;
+        return T + ph - (std::log10(e) - le0) / (le1 - le0) * ph;
+    }
+};
+
+PlotFrame plot_frame(const std::vector<const ResultRow*>& rows, std::size_t method_count,
+                     double ResultRow::*error) {
+    PlotFrame f;
+    const int T = PlotFrame::T;
+    f.H = std::max(340, T + 18 * static_cast<int>(method_count) + 24);
     // Errors of exactly 0 (an image equal to the ground truth) have no place on a log axis: they
     // sit on a line of their own below it, labelled 0.
-    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
-    bool zeros = false;
     for (const ResultRow* r : rows) {
         const double t = std::max(r->seconds, 1e-4), e = r->*error;
-        tmin = std::min({tmin, t, std::max(r->seconds_min, 1e-4)});
-        tmax = std::max({tmax, t, r->seconds_max});
+        f.tmin = std::min({f.tmin, t, std::max(r->seconds_min, 1e-4)});
+        f.tmax = std::max({f.tmax, t, r->seconds_max});
         if (e > 0) {
-            emin = std::min(emin, e);
-            emax = std::max(emax, e);
+            f.emin = std::min(f.emin, e);
+            f.emax = std::max(f.emax, e);
         } else {
-            zeros = true;
+            f.zeros = true;
         }
     }
-    if (tmax == 0) tmin = 0.1, tmax = 1;
-    if (emax == 0) emin = 0.01, emax = 0.1;
+    if (f.tmax == 0) f.tmin = 0.1, f.tmax = 1;
+    if (f.emax == 0) f.emin = 0.01, f.emax = 0.1;
     // A margin of 8% of the span (at least a tenth of a decade) on each side.
     auto pad = [](double& lo, double& hi) {
         double a = std::log10(lo), b = std::log10(hi);
@@ -232,69 +247,90 @@ std::string svg_plot(const std::vector<const ResultRow*>& rows,
         lo = std::pow(10, a - m);
         hi = std::pow(10, b + m);
     };
-    pad(tmin, tmax);
-    pad(emin, emax);
-    const int zero_band = zeros ? 22 : 0;
-    const double pw = W - L - R, ph = H - T - B - zero_band;
-    const double lt0 = std::log10(tmin), lt1 = std::log10(tmax), le0 = std::log10(emin),
-                 le1 = std::log10(emax);
-    auto X = [&](double t) { return L + (std::log10(std::max(t, 1e-4)) - lt0) / (lt1 - lt0) * pw; };
-    auto Y = [&](double e) {
-        if (!(e > 0)) return T + ph + zero_band * 0.6;
-        return T + ph - (std::log10(e) - le0) / (le1 - le0) * ph;
-    };
-    std::ostringstream s;
-    s << "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\""
-      << H << "\" viewBox=\"0 0 " << W << " " << H << "\" role=\"img\" aria-label=\""
-      << html_escape(aria) << "\" font-family=\"system-ui,sans-serif\">\n";
+    pad(f.tmin, f.tmax);
+    pad(f.emin, f.emax);
+    f.zero_band = f.zeros ? 22 : 0;
+    f.pw = PlotFrame::W - PlotFrame::L - PlotFrame::R;
+    f.ph = f.H - T - PlotFrame::B - f.zero_band;
+    f.lt0 = std::log10(f.tmin);
+    f.lt1 = std::log10(f.tmax);
+    f.le0 = std::log10(f.emin);
+    f.le1 = std::log10(f.emax);
+    return f;
+}
+
+// The plot's frame, the line of zeros, the ticks and grid lines of both axes, and their labels.
+void plot_axes(std::ostream& s, const PlotFrame& f, const std::string& ylabel,
+               const std::string& xlabel) {
+    const int L = PlotFrame::L, T = PlotFrame::T;
+    const double pw = f.pw, ph = f.ph;
+    const int zero_band = f.zero_band;
     s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << pw << "\" height=\""
       << ph + zero_band << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
-    if (zeros)
+    if (f.zeros)
         s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << (T + ph) << "\" y2=\""
           << (T + ph) << "\" stroke=\"#999\" stroke-dasharray=\"3 3\"/><text x=\"" << (L - 5)
-          << "\" y=\"" << Y(0) + 4 << "\" font-size=\"11\" text-anchor=\"end\">0</text>\n";
-    for (double v : log_ticks(tmin, tmax, pw / (lt1 - lt0), 44))
-        s << "<line x1=\"" << X(v) << "\" x2=\"" << X(v) << "\" y1=\"" << T << "\" y2=\""
-          << (T + ph + zero_band) << "\" stroke=\"#e4e4e4\"/><text x=\"" << X(v) << "\" y=\""
+          << "\" y=\"" << f.Y(0) + 4 << "\" font-size=\"11\" text-anchor=\"end\">0</text>\n";
+    for (double v : log_ticks(f.tmin, f.tmax, pw / (f.lt1 - f.lt0), 44))
+        s << "<line x1=\"" << f.X(v) << "\" x2=\"" << f.X(v) << "\" y1=\"" << T << "\" y2=\""
+          << (T + ph + zero_band) << "\" stroke=\"#e4e4e4\"/><text x=\"" << f.X(v) << "\" y=\""
           << (T + ph + zero_band + 15) << "\" font-size=\"11\" text-anchor=\"middle\">"
           << tick_label(v) << "</text>\n";
-    for (double v : log_ticks(emin, emax, ph / (le1 - le0), 14))
-        s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << Y(v) << "\" y2=\""
-          << Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 5) << "\" y=\"" << Y(v) + 4
+    for (double v : log_ticks(f.emin, f.emax, ph / (f.le1 - f.le0), 14))
+        s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << f.Y(v) << "\" y2=\""
+          << f.Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 5) << "\" y=\"" << f.Y(v) + 4
           << "\" font-size=\"11\" text-anchor=\"end\">" << tick_label(v) << "</text>\n";
-    s << "<text x=\"" << (L + pw / 2) << "\" y=\"" << (H - 8)
+    s << "<text x=\"" << (L + pw / 2) << "\" y=\"" << (f.H - 8)
       << "\" font-size=\"12\" text-anchor=\"middle\">" << html_escape(xlabel) << "</text>\n";
     s << "<text x=\"13\" y=\"" << (T + ph / 2)
       << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 13 " << (T + ph / 2)
       << ")\">" << html_escape(ylabel) << "</text>\n";
-    for (std::size_t m = 0; m < methods.size(); ++m) {
-        const Style st = style_of(m);
-        std::vector<const ResultRow*> pts;
-        for (const ResultRow* r : rows)
-            if (r->method == methods[m]) pts.push_back(r);
-        std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->spp < b->spp; });
-        s << "<polyline fill=\"none\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
-        if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
-        s << " points=\"";
-        for (auto* p : pts) s << X(p->seconds) << "," << Y(p->*error) << " ";
-        s << "\"/>\n";
-        for (auto* p : pts) {
-            if (p->timing_runs > 1)  // the range of the timed runs
-                s << "<line x1=\"" << X(p->seconds_min) << "\" x2=\"" << X(p->seconds_max)
-                  << "\" y1=\"" << Y(p->*error) << "\" y2=\"" << Y(p->*error) << "\" stroke=\""
-                  << st.color << "\" stroke-width=\"1\"/>\n";
-            s << marker_svg(st, X(p->seconds), Y(p->*error),
-                            p->method + ", " + std::to_string(p->spp) + " spp: " +
-                                fmt("%.5f", p->*error) + ", " + fmt("%.3f", p->seconds) + " s");
-        }
-        const double ly = T + 9 + 18 * m, lx = L + pw + 12;
-        s << "<line x1=\"" << lx << "\" y1=\"" << ly << "\" x2=\"" << (lx + 26) << "\" y2=\"" << ly
-          << "\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
-        if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
-        s << "/>" << marker_svg(st, lx + 13, ly, methods[m]) << "<text x=\"" << (lx + 32)
-          << "\" y=\"" << (ly + 4) << "\" font-size=\"11\">" << html_escape(methods[m])
-          << "</text>\n";
+}
+
+// Method m's polyline across spp, its markers (with the range of the timed runs) and its entry in
+// the legend.
+void plot_method(std::ostream& s, const PlotFrame& f, const std::vector<const ResultRow*>& rows,
+                 const std::string& method, std::size_t m, double ResultRow::*error) {
+    const Style st = style_of(m);
+    std::vector<const ResultRow*> pts;
+    for (const ResultRow* r : rows)
+        if (r->method == method) pts.push_back(r);
+    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->spp < b->spp; });
+    s << "<polyline fill=\"none\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
+    if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
+    s << " points=\"";
+    for (auto* p : pts) s << f.X(p->seconds) << "," << f.Y(p->*error) << " ";
+    s << "\"/>\n";
+    for (auto* p : pts) {
+        if (p->timing_runs > 1)  // the range of the timed runs
+            s << "<line x1=\"" << f.X(p->seconds_min) << "\" x2=\"" << f.X(p->seconds_max)
+              << "\" y1=\"" << f.Y(p->*error) << "\" y2=\"" << f.Y(p->*error) << "\" stroke=\""
+              << st.color << "\" stroke-width=\"1\"/>\n";
+        s << marker_svg(st, f.X(p->seconds), f.Y(p->*error),
+                        p->method + ", " + std::to_string(p->spp) + " spp: " +
+                            fmt("%.5f", p->*error) + ", " + fmt("%.3f", p->seconds) + " s");
     }
+    const double ly = PlotFrame::T + 9 + 18 * m, lx = PlotFrame::L + f.pw + 12;
+    s << "<line x1=\"" << lx << "\" y1=\"" << ly << "\" x2=\"" << (lx + 26) << "\" y2=\"" << ly
+      << "\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
+    if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
+    s << "/>" << marker_svg(st, lx + 13, ly, method) << "<text x=\"" << (lx + 32) << "\" y=\""
+      << (ly + 4) << "\" font-size=\"11\">" << html_escape(method) << "</text>\n";
+}
+
+// One log-log plot: y (an error) against render time, one polyline per method across spp.
+std::string svg_plot(const std::vector<const ResultRow*>& rows,
+                     const std::vector<std::string>& methods, double ResultRow::*error,
+                     const std::string& ylabel, const std::string& xlabel,
+                     const std::string& aria) {
+    const PlotFrame f = plot_frame(rows, methods.size(), error);
+    std::ostringstream s;
+    s << "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << PlotFrame::W
+      << "\" height=\"" << f.H << "\" viewBox=\"0 0 " << PlotFrame::W << " " << f.H
+      << "\" role=\"img\" aria-label=\"" << html_escape(aria)
+      << "\" font-family=\"system-ui,sans-serif\">\n";
+    plot_axes(s, f, ylabel, xlabel);
+    for (std::size_t m = 0; m < methods.size(); ++m) plot_method(s, f, rows, methods[m], m, error);
     s << "</svg>\n";
     return s.str();
 }
