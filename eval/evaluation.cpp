@@ -224,102 +224,13 @@ class SceneEvaluation {
             sr.warnings.push_back(w);
             if (o.warn) o.warn(w);
         };
-        pbrt::SceneDesc desc = pbrt::parse_file(scene_path, warn);
+        const pbrt::SceneDesc desc = pbrt::parse_file(scene_path, warn);
         fs::path dir = fs::path(o.out_dir) / sr.name;
         fs::create_directories(dir);
-        // Ground truth: point-sampled textures (bilinear at level 0), jittered strata; cached.
-        const std::string key = reference_key(scene_path, o.reference_spp);
-        fs::path cache = fs::path(o.out_dir) / "cache";
-        fs::path gt_beauty = cache / (sr.name + "-" + key + "-beauty.exr");
-        fs::path gt_texture = cache / (sr.name + "-" + key + "-texture.exr");
-        fs::path gt_untextured = cache / (sr.name + "-" + key + "-untextured.exr");
-        render::BuildOptions gt_opts;
-        gt_opts.lod = render::FootprintMethod::None;
-        gt_opts.filter = texture::FilterKind::Bilinear;
-        sr.reference_spp = rendered_spp(o.reference_spp);
-        sr.reference_cached =
-            fs::exists(gt_beauty) && fs::exists(gt_texture) && fs::exists(gt_untextured);
-        if (!sr.reference_cached) {
-            Rendered b = render_with(desc, gt_opts, o.reference_spp, render::AovKind::None, warn);
-            render::write_image(gt_beauty.string(), b.image.width, b.image.height, b.image.rgb);
-            step(sr.name + ": ground truth");
-            Rendered t =
-                render_with(desc, gt_opts, o.reference_spp, render::AovKind::Texture, warn);
-            render::write_image(gt_texture.string(), t.image.width, t.image.height, t.image.rgb);
-            step(sr.name + ": ground truth texture");
-            render::BuildOptions un = gt_opts;
-            un.untextured = true;
-            Rendered u = render_with(desc, un, o.reference_spp, render::AovKind::None, warn);
-            render::write_image(gt_untextured.string(), u.image.width, u.image.height, u.image.rgb);
-            step(sr.name + ": untextured ground truth");
-        } else {
-            // The warnings of building, which a cached ground truth did not show.
-            render::build_scene(desc, gt_opts, warn);
-            for (int k = 0; k < 3; ++k) step(sr.name + ": ground truth (cached)");
-        }
-        const std::vector<float> ref = read_rgb(gt_beauty.string()),
-                                 ref_tex = read_rgb(gt_texture.string()),
-                                 ref_un = read_rgb(gt_untextured.string());
-        render::RawImage dims = render::read_image(gt_beauty.string());
-        sr.width = dims.width;
-        sr.height = dims.height;
-        sr.reference_image = sr.name + "/reference.png";
-        sr.reference_texture = sr.name + "/reference-texture.png";
-        write_png(sr.reference_image, sr.width, sr.height, to_srgb8(ref));
-        write_png(sr.reference_texture, sr.width, sr.height, to_srgb8(ref_tex));
-        const double heat_scale = std::max(1e-3, compare(ref, ref).reference_mean);
-        const double tex_heat_scale = std::max(1e-3, compare(ref_tex, ref_tex).reference_mean);
+        const GroundTruth gt = ground_truth(sr, desc, warn);
         for (int spp : o.spp) {
-            render::BuildOptions un = gt_opts;
-            un.untextured = true;
-            Rendered u = render_with(desc, un, spp, render::AovKind::None, warn);
-            step(sr.name + ": untextured at " + std::to_string(spp) + " spp");
-            std::vector<bool> mask = edge_mask(ref_un, u.image.rgb);
-            double kept = 0;
-            for (bool b : mask) kept += b;
-            sr.off_edge_fraction.emplace_back(spp, kept / mask.size());
-            for (const Method& m : o.methods) {
-                Rendered b;
-                std::vector<double> seconds;
-                for (int run = 0; run < std::max(1, o.timing_runs); ++run) {
-                    b = render_with(desc, m.build, spp, render::AovKind::None, warn);
-                    seconds.push_back(b.seconds);
-                    step(sr.name + ": " + m.name + " at " + std::to_string(spp) + " spp");
-                }
-                Rendered t = render_with(desc, m.build, spp, render::AovKind::Texture, warn);
-                step(sr.name + ": " + m.name + " texture at " + std::to_string(spp) + " spp");
-                ResultRow row;
-                row.scene = sr.name;
-                row.method = m.name;
-                row.spp = spp;
-                ErrorStats full = compare(ref, b.image.rgb),
-                           masked = compare(ref, b.image.rgb, &mask);
-                row.rmse = full.rmse;
-                row.psnr = full.psnr;
-                row.ssim = ssim(ref, b.image.rgb, sr.width, sr.height);
-                row.rmse_masked = masked.rmse;
-                row.psnr_masked = masked.psnr;
-                row.ssim_masked = ssim(ref, b.image.rgb, sr.width, sr.height, &mask);
-                row.masked_fraction = kept / mask.size();
-                ErrorStats tex = compare(ref_tex, t.image.rgb);
-                row.texture_rmse = tex.rmse;
-                row.texture_psnr = tex.psnr;
-                row.seconds = median(seconds);
-                row.seconds_min = *std::min_element(seconds.begin(), seconds.end());
-                row.seconds_max = *std::max_element(seconds.begin(), seconds.end());
-                row.timing_runs = static_cast<int>(seconds.size());
-                row.rays_per_second = row.seconds > 0 ? b.rays / row.seconds : 0;
-                std::string base = safe_name(m.name) + "-spp" + std::to_string(spp);
-                row.image = sr.name + "/" + base + ".png";
-                row.heatmap = sr.name + "/" + base + "-error.png";
-                row.texture_heatmap = sr.name + "/" + base + "-texture-error.png";
-                write_png(row.image, sr.width, sr.height, to_srgb8(b.image.rgb));
-                write_png(row.heatmap, sr.width, sr.height,
-                          error_heatmap(ref, b.image.rgb, heat_scale));
-                write_png(row.texture_heatmap, sr.width, sr.height,
-                          error_heatmap(ref_tex, t.image.rgb, tex_heat_scale));
-                rows.push_back(row);
-            }
+            const OffEdges off = off_edges(sr, desc, gt, spp, warn);
+            for (const Method& m : o.methods) evaluate(sr, desc, gt, off, m, spp, warn);
         }
         return sr;
     }
@@ -328,6 +239,144 @@ class SceneEvaluation {
     std::vector<std::string> files;  // written for this scene
 
   private:
+    // The ground truth's images (linear RGB) and the heat maps' scales.
+    struct GroundTruth {
+        render::BuildOptions options;
+        std::vector<float> beauty, texture, untextured;
+        double heat_scale = 0, texture_heat_scale = 0;
+    };
+
+    // The ground truth's files in the cache.
+    struct CacheFiles {
+        fs::path beauty, texture, untextured;
+    };
+
+    // The pixels off edges at one sample count, and their fraction of the image.
+    struct OffEdges {
+        std::vector<bool> mask;
+        double fraction = 0;
+    };
+
+    // Ground truth: point-sampled textures (bilinear at level 0), jittered strata; cached.
+    GroundTruth ground_truth(SceneReport& sr, const pbrt::SceneDesc& desc,
+                             const pbrt::WarningSink& warn) {
+        const std::string key = reference_key(sr.path, o.reference_spp);
+        const fs::path cache = fs::path(o.out_dir) / "cache";
+        const CacheFiles cached{cache / (sr.name + "-" + key + "-beauty.exr"),
+                                cache / (sr.name + "-" + key + "-texture.exr"),
+                                cache / (sr.name + "-" + key + "-untextured.exr")};
+        GroundTruth gt;
+        gt.options.lod = render::FootprintMethod::None;
+        gt.options.filter = texture::FilterKind::Bilinear;
+        sr.reference_spp = rendered_spp(o.reference_spp);
+        sr.reference_cached = fs::exists(cached.beauty) && fs::exists(cached.texture) &&
+                              fs::exists(cached.untextured);
+        if (!sr.reference_cached) {
+            render_ground_truth(sr.name, desc, gt.options, cached, warn);
+        } else {
+            // The warnings of building, which a cached ground truth did not show.
+            render::build_scene(desc, gt.options, warn);
+            for (int k = 0; k < 3; ++k) step(sr.name + ": ground truth (cached)");
+        }
+        gt.beauty = read_rgb(cached.beauty.string());
+        gt.texture = read_rgb(cached.texture.string());
+        gt.untextured = read_rgb(cached.untextured.string());
+        render::RawImage dims = render::read_image(cached.beauty.string());
+        sr.width = dims.width;
+        sr.height = dims.height;
+        sr.reference_image = sr.name + "/reference.png";
+        sr.reference_texture = sr.name + "/reference-texture.png";
+        write_png(sr.reference_image, sr.width, sr.height, to_srgb8(gt.beauty));
+        write_png(sr.reference_texture, sr.width, sr.height, to_srgb8(gt.texture));
+        gt.heat_scale = std::max(1e-3, compare(gt.beauty, gt.beauty).reference_mean);
+        gt.texture_heat_scale = std::max(1e-3, compare(gt.texture, gt.texture).reference_mean);
+        return gt;
+    }
+
+    // Renders the ground truth's image, texture AOV and untextured image into the cache.
+    void render_ground_truth(const std::string& name, const pbrt::SceneDesc& desc,
+                             const render::BuildOptions& gt_opts, const CacheFiles& cached,
+                             const pbrt::WarningSink& warn) {
+        Rendered b = render_with(desc, gt_opts, o.reference_spp, render::AovKind::None, warn);
+        render::write_image(cached.beauty.string(), b.image.width, b.image.height, b.image.rgb);
+        step(name + ": ground truth");
+        Rendered t = render_with(desc, gt_opts, o.reference_spp, render::AovKind::Texture, warn);
+        render::write_image(cached.texture.string(), t.image.width, t.image.height, t.image.rgb);
+        step(name + ": ground truth texture");
+        render::BuildOptions un = gt_opts;
+        un.untextured = true;
+        Rendered u = render_with(desc, un, o.reference_spp, render::AovKind::None, warn);
+        render::write_image(cached.untextured.string(), u.image.width, u.image.height, u.image.rgb);
+        step(name + ": untextured ground truth");
+    }
+
+    // The pixels where an untextured render at `spp` agrees with the untextured ground truth.
+    OffEdges off_edges(SceneReport& sr, const pbrt::SceneDesc& desc, const GroundTruth& gt, int spp,
+                       const pbrt::WarningSink& warn) {
+        render::BuildOptions un = gt.options;
+        un.untextured = true;
+        Rendered u = render_with(desc, un, spp, render::AovKind::None, warn);
+        step(sr.name + ": untextured at " + std::to_string(spp) + " spp");
+        OffEdges off;
+        off.mask = edge_mask(gt.untextured, u.image.rgb);
+        double kept = 0;
+        for (bool b : off.mask) kept += b;
+        off.fraction = kept / off.mask.size();
+        sr.off_edge_fraction.emplace_back(spp, off.fraction);
+        return off;
+    }
+
+    // One method at one sample count: its timed renders, texture AOV, metrics and images.
+    void evaluate(const SceneReport& sr, const pbrt::SceneDesc& desc, const GroundTruth& gt,
+                  const OffEdges& off, const Method& m, int spp, const pbrt::WarningSink& warn) {
+        Rendered b;
+        std::vector<double> seconds;
+        for (int run = 0; run < std::max(1, o.timing_runs); ++run) {
+            b = render_with(desc, m.build, spp, render::AovKind::None, warn);
+            seconds.push_back(b.seconds);
+            step(sr.name + ": " + m.name + " at " + std::to_string(spp) + " spp");
+        }
+        Rendered t = render_with(desc, m.build, spp, render::AovKind::Texture, warn);
+        step(sr.name + ": " + m.name + " texture at " + std::to_string(spp) + " spp");
+        ResultRow row = measure(sr, gt, off, b.image.rgb, t.image.rgb);
+        row.method = m.name;
+        row.spp = spp;
+        row.seconds = median(seconds);
+        row.seconds_min = *std::min_element(seconds.begin(), seconds.end());
+        row.seconds_max = *std::max_element(seconds.begin(), seconds.end());
+        row.timing_runs = static_cast<int>(seconds.size());
+        row.rays_per_second = row.seconds > 0 ? b.rays / row.seconds : 0;
+        std::string base = safe_name(m.name) + "-spp" + std::to_string(spp);
+        row.image = sr.name + "/" + base + ".png";
+        row.heatmap = sr.name + "/" + base + "-error.png";
+        row.texture_heatmap = sr.name + "/" + base + "-texture-error.png";
+        write_png(row.image, sr.width, sr.height, to_srgb8(b.image.rgb));
+        write_png(row.heatmap, sr.width, sr.height,
+                  error_heatmap(gt.beauty, b.image.rgb, gt.heat_scale));
+        write_png(row.texture_heatmap, sr.width, sr.height,
+                  error_heatmap(gt.texture, t.image.rgb, gt.texture_heat_scale));
+        rows.push_back(row);
+    }
+
+    // The error metrics of an image and its texture AOV against the ground truth.
+    static ResultRow measure(const SceneReport& sr, const GroundTruth& gt, const OffEdges& off,
+                             const std::vector<float>& image, const std::vector<float>& texture) {
+        ResultRow row;
+        row.scene = sr.name;
+        ErrorStats full = compare(gt.beauty, image), masked = compare(gt.beauty, image, &off.mask);
+        row.rmse = full.rmse;
+        row.psnr = full.psnr;
+        row.ssim = ssim(gt.beauty, image, sr.width, sr.height);
+        row.rmse_masked = masked.rmse;
+        row.psnr_masked = masked.psnr;
+        row.ssim_masked = ssim(gt.beauty, image, sr.width, sr.height, &off.mask);
+        row.masked_fraction = off.fraction;
+        ErrorStats tex = compare(gt.texture, texture);
+        row.texture_rmse = tex.rmse;
+        row.texture_psnr = tex.psnr;
+        return row;
+    }
+
     void write_png(const std::string& rel, int w, int h, const std::vector<unsigned char>& rgb) {
         render::write_png8((fs::path(o.out_dir) / rel).string(), w, h, rgb);
         files.push_back(rel);

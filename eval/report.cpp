@@ -201,30 +201,45 @@ struct Series {
     int spp;
 };
 
-// One log-log plot: y (an error) against render time, one polyline per method across spp.
-std::string svg_plot(const std::vector<const ResultRow*>& rows,
-                     const std::vector<std::string>& methods, double ResultRow::*error,
-                     const std::string& ylabel, const std::string& xlabel,
-                     const std::string& aria) {
-    const int W = 600, L = 64, R = 210, T = 14, B = 46;
-    const int H = std::max(340, T + 18 * static_cast<int>(methods.size()) + 24);
+// One plot's geometry: its size and margins, the ranges of its axes (padded) and where a time
+// (x) and an error (y) fall in pixels.
+struct PlotFrame {
+    static constexpr int W = 600, L = 64, R = 210, T = 14, B = 46;
+    int H = 0;
+    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
+    bool zeros = false;  // an error of exactly 0 is plotted
+    int zero_band = 0;
+    double pw = 0, ph = 0, lt0 = 0, lt1 = 0, le0 = 0, le1 = 0;
+
+    double X(double t) const {
+        return L + (std::log10(std::max(t, 1e-4)) - lt0) / (lt1 - lt0) * pw;
+    }
+    double Y(double e) const {
+        if (!(e > 0)) return T + ph + zero_band * 0.6;
+        return T + ph - (std::log10(e) - le0) / (le1 - le0) * ph;
+    }
+};
+
+PlotFrame plot_frame(const std::vector<const ResultRow*>& rows, std::size_t method_count,
+                     double ResultRow::*error) {
+    PlotFrame f;
+    const int T = PlotFrame::T;
+    f.H = std::max(340, T + 18 * static_cast<int>(method_count) + 24);
     // Errors of exactly 0 (an image equal to the ground truth) have no place on a log axis: they
     // sit on a line of their own below it, labelled 0.
-    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
-    bool zeros = false;
     for (const ResultRow* r : rows) {
         const double t = std::max(r->seconds, 1e-4), e = r->*error;
-        tmin = std::min({tmin, t, std::max(r->seconds_min, 1e-4)});
-        tmax = std::max({tmax, t, r->seconds_max});
+        f.tmin = std::min({f.tmin, t, std::max(r->seconds_min, 1e-4)});
+        f.tmax = std::max({f.tmax, t, r->seconds_max});
         if (e > 0) {
-            emin = std::min(emin, e);
-            emax = std::max(emax, e);
+            f.emin = std::min(f.emin, e);
+            f.emax = std::max(f.emax, e);
         } else {
-            zeros = true;
+            f.zeros = true;
         }
     }
-    if (tmax == 0) tmin = 0.1, tmax = 1;
-    if (emax == 0) emin = 0.01, emax = 0.1;
+    if (f.tmax == 0) f.tmin = 0.1, f.tmax = 1;
+    if (f.emax == 0) f.emin = 0.01, f.emax = 0.1;
     // A margin of 8% of the span (at least a tenth of a decade) on each side.
     auto pad = [](double& lo, double& hi) {
         double a = std::log10(lo), b = std::log10(hi);
@@ -232,69 +247,90 @@ std::string svg_plot(const std::vector<const ResultRow*>& rows,
         lo = std::pow(10, a - m);
         hi = std::pow(10, b + m);
     };
-    pad(tmin, tmax);
-    pad(emin, emax);
-    const int zero_band = zeros ? 22 : 0;
-    const double pw = W - L - R, ph = H - T - B - zero_band;
-    const double lt0 = std::log10(tmin), lt1 = std::log10(tmax), le0 = std::log10(emin),
-                 le1 = std::log10(emax);
-    auto X = [&](double t) { return L + (std::log10(std::max(t, 1e-4)) - lt0) / (lt1 - lt0) * pw; };
-    auto Y = [&](double e) {
-        if (!(e > 0)) return T + ph + zero_band * 0.6;
-        return T + ph - (std::log10(e) - le0) / (le1 - le0) * ph;
-    };
-    std::ostringstream s;
-    s << "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\""
-      << H << "\" viewBox=\"0 0 " << W << " " << H << "\" role=\"img\" aria-label=\""
-      << html_escape(aria) << "\" font-family=\"system-ui,sans-serif\">\n";
+    pad(f.tmin, f.tmax);
+    pad(f.emin, f.emax);
+    f.zero_band = f.zeros ? 22 : 0;
+    f.pw = PlotFrame::W - PlotFrame::L - PlotFrame::R;
+    f.ph = f.H - T - PlotFrame::B - f.zero_band;
+    f.lt0 = std::log10(f.tmin);
+    f.lt1 = std::log10(f.tmax);
+    f.le0 = std::log10(f.emin);
+    f.le1 = std::log10(f.emax);
+    return f;
+}
+
+// The plot's frame, the line of zeros, the ticks and grid lines of both axes, and their labels.
+void plot_axes(std::ostream& s, const PlotFrame& f, const std::string& ylabel,
+               const std::string& xlabel) {
+    const int L = PlotFrame::L, T = PlotFrame::T;
+    const double pw = f.pw, ph = f.ph;
+    const int zero_band = f.zero_band;
     s << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << pw << "\" height=\""
       << ph + zero_band << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
-    if (zeros)
+    if (f.zeros)
         s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << (T + ph) << "\" y2=\""
           << (T + ph) << "\" stroke=\"#999\" stroke-dasharray=\"3 3\"/><text x=\"" << (L - 5)
-          << "\" y=\"" << Y(0) + 4 << "\" font-size=\"11\" text-anchor=\"end\">0</text>\n";
-    for (double v : log_ticks(tmin, tmax, pw / (lt1 - lt0), 44))
-        s << "<line x1=\"" << X(v) << "\" x2=\"" << X(v) << "\" y1=\"" << T << "\" y2=\""
-          << (T + ph + zero_band) << "\" stroke=\"#e4e4e4\"/><text x=\"" << X(v) << "\" y=\""
+          << "\" y=\"" << f.Y(0) + 4 << "\" font-size=\"11\" text-anchor=\"end\">0</text>\n";
+    for (double v : log_ticks(f.tmin, f.tmax, pw / (f.lt1 - f.lt0), 44))
+        s << "<line x1=\"" << f.X(v) << "\" x2=\"" << f.X(v) << "\" y1=\"" << T << "\" y2=\""
+          << (T + ph + zero_band) << "\" stroke=\"#e4e4e4\"/><text x=\"" << f.X(v) << "\" y=\""
           << (T + ph + zero_band + 15) << "\" font-size=\"11\" text-anchor=\"middle\">"
           << tick_label(v) << "</text>\n";
-    for (double v : log_ticks(emin, emax, ph / (le1 - le0), 14))
-        s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << Y(v) << "\" y2=\""
-          << Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 5) << "\" y=\"" << Y(v) + 4
+    for (double v : log_ticks(f.emin, f.emax, ph / (f.le1 - f.le0), 14))
+        s << "<line x1=\"" << L << "\" x2=\"" << (L + pw) << "\" y1=\"" << f.Y(v) << "\" y2=\""
+          << f.Y(v) << "\" stroke=\"#e4e4e4\"/><text x=\"" << (L - 5) << "\" y=\"" << f.Y(v) + 4
           << "\" font-size=\"11\" text-anchor=\"end\">" << tick_label(v) << "</text>\n";
-    s << "<text x=\"" << (L + pw / 2) << "\" y=\"" << (H - 8)
+    s << "<text x=\"" << (L + pw / 2) << "\" y=\"" << (f.H - 8)
       << "\" font-size=\"12\" text-anchor=\"middle\">" << html_escape(xlabel) << "</text>\n";
     s << "<text x=\"13\" y=\"" << (T + ph / 2)
       << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 13 " << (T + ph / 2)
       << ")\">" << html_escape(ylabel) << "</text>\n";
-    for (std::size_t m = 0; m < methods.size(); ++m) {
-        const Style st = style_of(m);
-        std::vector<const ResultRow*> pts;
-        for (const ResultRow* r : rows)
-            if (r->method == methods[m]) pts.push_back(r);
-        std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->spp < b->spp; });
-        s << "<polyline fill=\"none\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
-        if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
-        s << " points=\"";
-        for (auto* p : pts) s << X(p->seconds) << "," << Y(p->*error) << " ";
-        s << "\"/>\n";
-        for (auto* p : pts) {
-            if (p->timing_runs > 1)  // the range of the timed runs
-                s << "<line x1=\"" << X(p->seconds_min) << "\" x2=\"" << X(p->seconds_max)
-                  << "\" y1=\"" << Y(p->*error) << "\" y2=\"" << Y(p->*error) << "\" stroke=\""
-                  << st.color << "\" stroke-width=\"1\"/>\n";
-            s << marker_svg(st, X(p->seconds), Y(p->*error),
-                            p->method + ", " + std::to_string(p->spp) + " spp: " +
-                                fmt("%.5f", p->*error) + ", " + fmt("%.3f", p->seconds) + " s");
-        }
-        const double ly = T + 9 + 18 * m, lx = L + pw + 12;
-        s << "<line x1=\"" << lx << "\" y1=\"" << ly << "\" x2=\"" << (lx + 26) << "\" y2=\"" << ly
-          << "\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
-        if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
-        s << "/>" << marker_svg(st, lx + 13, ly, methods[m]) << "<text x=\"" << (lx + 32)
-          << "\" y=\"" << (ly + 4) << "\" font-size=\"11\">" << html_escape(methods[m])
-          << "</text>\n";
+}
+
+// Method m's polyline across spp, its markers (with the range of the timed runs) and its entry in
+// the legend.
+void plot_method(std::ostream& s, const PlotFrame& f, const std::vector<const ResultRow*>& rows,
+                 const std::string& method, std::size_t m, double ResultRow::*error) {
+    const Style st = style_of(m);
+    std::vector<const ResultRow*> pts;
+    for (const ResultRow* r : rows)
+        if (r->method == method) pts.push_back(r);
+    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->spp < b->spp; });
+    s << "<polyline fill=\"none\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
+    if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
+    s << " points=\"";
+    for (auto* p : pts) s << f.X(p->seconds) << "," << f.Y(p->*error) << " ";
+    s << "\"/>\n";
+    for (auto* p : pts) {
+        if (p->timing_runs > 1)  // the range of the timed runs
+            s << "<line x1=\"" << f.X(p->seconds_min) << "\" x2=\"" << f.X(p->seconds_max)
+              << "\" y1=\"" << f.Y(p->*error) << "\" y2=\"" << f.Y(p->*error) << "\" stroke=\""
+              << st.color << "\" stroke-width=\"1\"/>\n";
+        s << marker_svg(st, f.X(p->seconds), f.Y(p->*error),
+                        p->method + ", " + std::to_string(p->spp) + " spp: " +
+                            fmt("%.5f", p->*error) + ", " + fmt("%.3f", p->seconds) + " s");
     }
+    const double ly = PlotFrame::T + 9 + 18 * m, lx = PlotFrame::L + f.pw + 12;
+    s << "<line x1=\"" << lx << "\" y1=\"" << ly << "\" x2=\"" << (lx + 26) << "\" y2=\"" << ly
+      << "\" stroke=\"" << st.color << "\" stroke-width=\"1.6\"";
+    if (*st.dash) s << " stroke-dasharray=\"" << st.dash << "\"";
+    s << "/>" << marker_svg(st, lx + 13, ly, method) << "<text x=\"" << (lx + 32) << "\" y=\""
+      << (ly + 4) << "\" font-size=\"11\">" << html_escape(method) << "</text>\n";
+}
+
+// One log-log plot: y (an error) against render time, one polyline per method across spp.
+std::string svg_plot(const std::vector<const ResultRow*>& rows,
+                     const std::vector<std::string>& methods, double ResultRow::*error,
+                     const std::string& ylabel, const std::string& xlabel,
+                     const std::string& aria) {
+    const PlotFrame f = plot_frame(rows, methods.size(), error);
+    std::ostringstream s;
+    s << "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << PlotFrame::W
+      << "\" height=\"" << f.H << "\" viewBox=\"0 0 " << PlotFrame::W << " " << f.H
+      << "\" role=\"img\" aria-label=\"" << html_escape(aria)
+      << "\" font-family=\"system-ui,sans-serif\">\n";
+    plot_axes(s, f, ylabel, xlabel);
+    for (std::size_t m = 0; m < methods.size(); ++m) plot_method(s, f, rows, methods[m], m, error);
     s << "</svg>\n";
     return s.str();
 }
@@ -373,11 +409,8 @@ void remove_stale(const fs::path& dir, const std::set<std::string>& old,
     }
 }
 
-}  // namespace
-
-void write_reports(const EvalOptions& o, const EvalResult& r) {
-    const fs::path dir(o.out_dir);
-    const std::set<std::string> old = previous_files(dir);
+// The results table, one row per scene, method and sample count.
+std::string results_csv(const EvalResult& r) {
     // CSV (columns are only ever added at the end)
     std::ostringstream csv;
     csv << "scene,method,spp,rmse,psnr,ssim,rmse_masked,psnr_masked,ssim_masked,masked_fraction,"
@@ -394,8 +427,11 @@ void write_reports(const EvalOptions& o, const EvalResult& r) {
             << "," << x.heatmap << "," << fmt("%.6f", x.seconds_min) << ","
             << fmt("%.6f", x.seconds_max) << "," << x.timing_runs << "," << x.texture_heatmap
             << "\n";
-    write_atomic(dir / "results.csv", csv.str());
+    return csv.str();
+}
 
+// results.md: how the numbers were made, the table and the scenes that failed.
+std::string results_md(const EvalOptions& o, const EvalResult& r) {
     std::ostringstream md;
     md << "# cmam evaluation\n\nGround truth: " << o.reference_spp
        << " stratified jittered samples per pixel, point-sampled textures (bilinear at level 0). "
@@ -407,15 +443,11 @@ void write_reports(const EvalOptions& o, const EvalResult& r) {
        << results_markdown(r);
     for (const FailedScene& f : r.failed)
         md << "\nFailed, skipped: `" << f.path << "`: " << f.message << "\n";
-    write_atomic(dir / "results.md", md.str());
+    return md.str();
+}
 
-    std::vector<std::string> methods;
-    for (const Method& m : o.methods) methods.push_back(m.name);
-    const bool single = timing_note(r).rfind("Times are single", 0) == 0;
-    const std::string time_axis =
-        single ? "render time (s, log; single runs)" : "render time (s, log; median of runs)";
-    std::ostringstream h;
-    h << R"(<!doctype html>
+// The page's head, its style sheet and the introduction up to the note on timing.
+constexpr const char* kHtmlHead = R"(<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>cmam evaluation</title>
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <style>
@@ -447,125 +479,10 @@ th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
 </style></head>
 <body data-images-ok="" data-images-broken="" data-overlaps="" data-overflow-x="">
 <h1>cmam evaluation</h1>
-<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the mean of the ground truth (white; of its texture AOV for the texture error). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )"
-      << html_escape(timing_note(r))
-      << R"( Move the mouse over an image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
-)";
-    if (!r.failed.empty()) {
-        h << "<div class=\"failed\"><b>" << r.failed.size()
-          << (r.failed.size() == 1 ? " scene" : " scenes") << " failed and "
-          << (r.failed.size() == 1 ? "is" : "are") << " not in this report:</b><ul>\n";
-        for (const FailedScene& f : r.failed)
-            h << "<li><code>" << html_escape(f.path) << "</code>: <code>" << html_escape(f.message)
-              << "</code></li>\n";
-        h << "</ul></div>\n";
-    }
-    if (r.scenes.size() > 1) {
-        h << "<p class=\"facts\"><b>Scenes</b> ";
-        for (std::size_t k = 0; k < r.scenes.size(); ++k)
-            h << (k ? " &middot; " : "") << "<a href=\"#" << html_escape(r.scenes[k].name) << "\">"
-              << html_escape(r.scenes[k].name) << "</a>";
-        h << "</p>\n";
-    }
-    for (const SceneReport& sc : r.scenes) {
-        std::vector<const ResultRow*> rows;
-        std::set<int> spps;
-        for (const ResultRow& x : r.rows)
-            if (x.scene == sc.name) {
-                rows.push_back(&x);
-                spps.insert(x.spp);
-            }
-        // Every image of the scene at one width: up to 320 px for landscape images (less for
-        // portrait ones), and narrower in a narrow window, so that a row always fits.
-        const int img_w = sc.width >= sc.height ? 320 : std::max(140, 320 * sc.width / sc.height);
-        h << "<section class=\"scene\" id=\"" << html_escape(sc.name) << "\" style=\"--img-w:min("
-          << img_w << "px, calc((100vw - 300px) / 3))\">\n<h2>" << html_escape(sc.name)
-          << "</h2>\n";
-        h << "<div class=\"facts\"><b>File</b> <code>" << html_escape(sc.path)
-          << "</code> &middot; " << sc.width << "&times;" << sc.height
-          << " pixels &middot; <b>ground truth</b> " << sc.reference_spp << " spp"
-          << (sc.reference_cached ? " (from the cache)" : "")
-          << " &middot; <b>pixels off edges</b> ";
-        for (std::size_t k = 0; k < sc.off_edge_fraction.size(); ++k)
-            h << (k ? ", " : "") << fmt("%.1f%%", 100 * sc.off_edge_fraction[k].second) << " at "
-              << sc.off_edge_fraction[k].first << " spp";
-        h << "</div>\n";
-        if (!sc.warnings.empty()) {
-            h << "<details class=\"warnings\"><summary>" << sc.warnings.size()
-              << (sc.warnings.size() == 1 ? " warning" : " warnings")
-              << " about this scene</summary><ul>\n";
-            for (const std::string& w : sc.warnings) h << "<li>" << html_escape(w) << "</li>\n";
-            h << "</ul></details>\n";
-        }
-        h << "<div class=\"plots\">\n"
-          << svg_plot(rows, methods, &ResultRow::rmse, "image RMSE vs ground truth (log)",
-                      time_axis, "image error versus render time")
-          << svg_plot(rows, methods, &ResultRow::texture_rmse, "texture AOV RMSE (log)", time_axis,
-                      "texture error versus render time")
-          << "</div>\n";
-        h << "<details class=\"numbers\"><summary>All numbers (" << rows.size()
-          << (rows.size() == 1 ? " row" : " rows")
-          << "; also in results.csv)</summary><div "
-             "class=\"tablewrap\"><table><tr><th>method</th><th>spp</th><th>RMSE</th><th>"
-             "PSNR</th><th>SSIM</th><th>RMSE off edges</th>"
-             "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)"
-          << (single ? ", single run" : ", median [min&ndash;max]")
-          << "</th><th>Mrays/s</th></tr>\n";
-        for (const ResultRow* x : rows) {
-            std::string t = fmt("%.3f", x->seconds);
-            if (x->timing_runs > 1)
-                t += " [" + fmt("%.3f", x->seconds_min) + "&ndash;" + fmt("%.3f", x->seconds_max) +
-                     "]";
-            h << "<tr><td>" << html_escape(x->method) << "</td><td>" << x->spp << "</td><td>"
-              << fmt("%.5f", x->rmse) << "</td><td>" << fmt("%.2f", x->psnr) << "</td><td>"
-              << fmt("%.4f", x->ssim) << "</td><td>" << fmt("%.5f", x->rmse_masked) << "</td><td>"
-              << fmt("%.4f", x->ssim_masked) << "</td><td>" << fmt("%.5f", x->texture_rmse)
-              << "</td><td>" << t << "</td><td>" << fmt("%.2f", x->rays_per_second / 1e6)
-              << "</td></tr>\n";
-        }
-        h << "</table></div></details>\n";
-        if (spps.size() > 1) {
-            h << "<div class=\"chooser\">Samples per pixel: ";
-            bool first = true;
-            for (int spp : spps) {
-                h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
-                  << "\" value=\"" << spp << "\"" << (first ? " checked" : "") << "> " << spp
-                  << "</label>";
-                first = false;
-            }
-            h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
-              << "\" value=\"all\"> all</label></div>\n";
-        }
-        h << "<div class=\"rows\">\n<div class=\"head\"></div><div class=\"head\">image</div><div "
-             "class=\"head\">image error</div><div class=\"head\">texture AOV error</div>\n";
-        h << "<div class=\"cap\"><b>ground truth</b><br>" << sc.reference_spp
-          << " spp; right: its texture AOV</div><div class=\"zoom\"><img src=\""
-          << html_escape(sc.reference_image)
-          << "\" alt=\"ground truth\"></div><div class=\"empty\"></div><div class=\"zoom\"><img "
-             "src=\""
-          << html_escape(sc.reference_texture) << "\" alt=\"ground truth texture AOV\"></div>\n";
-        for (int spp : spps)
-            for (const std::string& m : methods)
-                for (const ResultRow* x : rows)
-                    if (x->method == m && x->spp == spp) {
-                        const std::string cls = " data-spp=\"" + std::to_string(spp) + "\"";
-                        h << "<div class=\"cap\"" << cls << "><b>" << html_escape(m) << "</b><br>"
-                          << spp << " spp<br><span class=\"num\">RMSE " << fmt("%.4f", x->rmse)
-                          << "<br>off edges " << fmt("%.4f", x->rmse_masked) << "<br>texture "
-                          << fmt("%.4f", x->texture_rmse) << "<br>" << fmt("%.3f", x->seconds)
-                          << " s" << (x->timing_runs > 1 ? " (median)" : " (single run)")
-                          << "</span></div>";
-                        h << "<div class=\"zoom\"" << cls << "><img src=\"" << html_escape(x->image)
-                          << "\" alt=\"" << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
-                          << "><img src=\"" << html_escape(x->heatmap) << "\" alt=\"image error of "
-                          << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
-                          << "><img src=\"" << html_escape(x->texture_heatmap)
-                          << "\" alt=\"texture error of " << html_escape(m) << "\"></div>\n";
-                    }
-        h << "</div>\n";
-        h << "</section>\n";
-    }
-    h << R"(<script>
+<p class="note">Each scene shows its ground truth (stratified jittered samples, textures point-sampled), then one row per method: the image, the error of the image and the error of the texture AOV (the unlit filtered texture of the first diffuse hit, which is what texture filtering changes; lighting noise is not in it). Heat maps show |luminance difference|: <span class="ramp"></span> from 0 (black) to the mean of the ground truth (white; of its texture AOV for the texture error). "Off edges" metrics keep only the pixels where an untextured render at the same sample count matches the untextured ground truth, so that geometric aliasing does not mask texture error. )";
+
+// The page's scripts (sample-count chooser, synchronized zoom, layout self-check) and its end.
+constexpr const char* kHtmlTail = R"(<script>
 // The sample-count chooser: shows the rows of one sample count (or all).
 document.querySelectorAll('section.scene').forEach(function (sec) {
   function show(v) {
@@ -627,7 +544,177 @@ window.addEventListener('load', function () {
 </script>
 </body></html>
 )";
-    write_atomic(dir / "index.html", h.str());
+
+// The scenes that failed, if any.
+void failed_html(std::ostream& h, const EvalResult& r) {
+    if (r.failed.empty()) return;
+    h << "<div class=\"failed\"><b>" << r.failed.size()
+      << (r.failed.size() == 1 ? " scene" : " scenes") << " failed and "
+      << (r.failed.size() == 1 ? "is" : "are") << " not in this report:</b><ul>\n";
+    for (const FailedScene& f : r.failed)
+        h << "<li><code>" << html_escape(f.path) << "</code>: <code>" << html_escape(f.message)
+          << "</code></li>\n";
+    h << "</ul></div>\n";
+}
+
+// Links to the scenes, when there is more than one.
+void scene_links_html(std::ostream& h, const EvalResult& r) {
+    if (r.scenes.size() <= 1) return;
+    h << "<p class=\"facts\"><b>Scenes</b> ";
+    for (std::size_t k = 0; k < r.scenes.size(); ++k)
+        h << (k ? " &middot; " : "") << "<a href=\"#" << html_escape(r.scenes[k].name) << "\">"
+          << html_escape(r.scenes[k].name) << "</a>";
+    h << "</p>\n";
+}
+
+// The scene's file, size, ground truth and pixels off edges, and its warnings.
+void scene_facts_html(std::ostream& h, const SceneReport& sc) {
+    h << "<div class=\"facts\"><b>File</b> <code>" << html_escape(sc.path) << "</code> &middot; "
+      << sc.width << "&times;" << sc.height << " pixels &middot; <b>ground truth</b> "
+      << sc.reference_spp << " spp" << (sc.reference_cached ? " (from the cache)" : "")
+      << " &middot; <b>pixels off edges</b> ";
+    for (std::size_t k = 0; k < sc.off_edge_fraction.size(); ++k)
+        h << (k ? ", " : "") << fmt("%.1f%%", 100 * sc.off_edge_fraction[k].second) << " at "
+          << sc.off_edge_fraction[k].first << " spp";
+    h << "</div>\n";
+    if (!sc.warnings.empty()) {
+        h << "<details class=\"warnings\"><summary>" << sc.warnings.size()
+          << (sc.warnings.size() == 1 ? " warning" : " warnings")
+          << " about this scene</summary><ul>\n";
+        for (const std::string& w : sc.warnings) h << "<li>" << html_escape(w) << "</li>\n";
+        h << "</ul></details>\n";
+    }
+}
+
+// The scene's two plots: image and texture error against render time.
+void scene_plots_html(std::ostream& h, const std::vector<const ResultRow*>& rows,
+                      const std::vector<std::string>& methods, bool single) {
+    const std::string time_axis =
+        single ? "render time (s, log; single runs)" : "render time (s, log; median of runs)";
+    h << "<div class=\"plots\">\n"
+      << svg_plot(rows, methods, &ResultRow::rmse, "image RMSE vs ground truth (log)", time_axis,
+                  "image error versus render time")
+      << svg_plot(rows, methods, &ResultRow::texture_rmse, "texture AOV RMSE (log)", time_axis,
+                  "texture error versus render time")
+      << "</div>\n";
+}
+
+// Every number of the scene's rows, in a folded table.
+void scene_numbers_html(std::ostream& h, const std::vector<const ResultRow*>& rows, bool single) {
+    h << "<details class=\"numbers\"><summary>All numbers (" << rows.size()
+      << (rows.size() == 1 ? " row" : " rows")
+      << "; also in results.csv)</summary><div "
+         "class=\"tablewrap\"><table><tr><th>method</th><th>spp</th><th>RMSE</th><th>"
+         "PSNR</th><th>SSIM</th><th>RMSE off edges</th>"
+         "<th>SSIM off edges</th><th>texture RMSE</th><th>time (s)"
+      << (single ? ", single run" : ", median [min&ndash;max]") << "</th><th>Mrays/s</th></tr>\n";
+    for (const ResultRow* x : rows) {
+        std::string t = fmt("%.3f", x->seconds);
+        if (x->timing_runs > 1)
+            t += " [" + fmt("%.3f", x->seconds_min) + "&ndash;" + fmt("%.3f", x->seconds_max) + "]";
+        h << "<tr><td>" << html_escape(x->method) << "</td><td>" << x->spp << "</td><td>"
+          << fmt("%.5f", x->rmse) << "</td><td>" << fmt("%.2f", x->psnr) << "</td><td>"
+          << fmt("%.4f", x->ssim) << "</td><td>" << fmt("%.5f", x->rmse_masked) << "</td><td>"
+          << fmt("%.4f", x->ssim_masked) << "</td><td>" << fmt("%.5f", x->texture_rmse)
+          << "</td><td>" << t << "</td><td>" << fmt("%.2f", x->rays_per_second / 1e6)
+          << "</td></tr>\n";
+    }
+    h << "</table></div></details>\n";
+}
+
+// The radio buttons that show one sample count (or all), when there is more than one.
+void spp_chooser_html(std::ostream& h, const SceneReport& sc, const std::set<int>& spps) {
+    if (spps.size() <= 1) return;
+    h << "<div class=\"chooser\">Samples per pixel: ";
+    bool first = true;
+    for (int spp : spps) {
+        h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name) << "\" value=\""
+          << spp << "\"" << (first ? " checked" : "") << "> " << spp << "</label>";
+        first = false;
+    }
+    h << "<label><input type=\"radio\" name=\"spp-" << html_escape(sc.name)
+      << "\" value=\"all\"> all</label></div>\n";
+}
+
+// The images side by side: the ground truth, then a row per sample count and method.
+void scene_images_html(std::ostream& h, const SceneReport& sc,
+                       const std::vector<const ResultRow*>& rows, const std::set<int>& spps,
+                       const std::vector<std::string>& methods) {
+    h << "<div class=\"rows\">\n<div class=\"head\"></div><div class=\"head\">image</div><div "
+         "class=\"head\">image error</div><div class=\"head\">texture AOV error</div>\n";
+    h << "<div class=\"cap\"><b>ground truth</b><br>" << sc.reference_spp
+      << " spp; right: its texture AOV</div><div class=\"zoom\"><img src=\""
+      << html_escape(sc.reference_image)
+      << "\" alt=\"ground truth\"></div><div class=\"empty\"></div><div class=\"zoom\"><img "
+         "src=\""
+      << html_escape(sc.reference_texture) << "\" alt=\"ground truth texture AOV\"></div>\n";
+    for (int spp : spps)
+        for (const std::string& m : methods)
+            for (const ResultRow* x : rows)
+                if (x->method == m && x->spp == spp) {
+                    const std::string cls = " data-spp=\"" + std::to_string(spp) + "\"";
+                    h << "<div class=\"cap\"" << cls << "><b>" << html_escape(m) << "</b><br>"
+                      << spp << " spp<br><span class=\"num\">RMSE " << fmt("%.4f", x->rmse)
+                      << "<br>off edges " << fmt("%.4f", x->rmse_masked) << "<br>texture "
+                      << fmt("%.4f", x->texture_rmse) << "<br>" << fmt("%.3f", x->seconds) << " s"
+                      << (x->timing_runs > 1 ? " (median)" : " (single run)") << "</span></div>";
+                    h << "<div class=\"zoom\"" << cls << "><img src=\"" << html_escape(x->image)
+                      << "\" alt=\"" << html_escape(m) << "\"></div><div class=\"zoom\"" << cls
+                      << "><img src=\"" << html_escape(x->heatmap) << "\" alt=\"image error of "
+                      << html_escape(m) << "\"></div><div class=\"zoom\"" << cls << "><img src=\""
+                      << html_escape(x->texture_heatmap) << "\" alt=\"texture error of "
+                      << html_escape(m) << "\"></div>\n";
+                }
+    h << "</div>\n";
+}
+
+// One scene's section of the page.
+void scene_html(std::ostream& h, const SceneReport& sc, const EvalResult& r,
+                const std::vector<std::string>& methods, bool single) {
+    std::vector<const ResultRow*> rows;
+    std::set<int> spps;
+    for (const ResultRow& x : r.rows)
+        if (x.scene == sc.name) {
+            rows.push_back(&x);
+            spps.insert(x.spp);
+        }
+    // Every image of the scene at one width: up to 320 px for landscape images (less for
+    // portrait ones), and narrower in a narrow window, so that a row always fits.
+    const int img_w = sc.width >= sc.height ? 320 : std::max(140, 320 * sc.width / sc.height);
+    h << "<section class=\"scene\" id=\"" << html_escape(sc.name) << "\" style=\"--img-w:min("
+      << img_w << "px, calc((100vw - 300px) / 3))\">\n<h2>" << html_escape(sc.name) << "</h2>\n";
+    scene_facts_html(h, sc);
+    scene_plots_html(h, rows, methods, single);
+    scene_numbers_html(h, rows, single);
+    spp_chooser_html(h, sc, spps);
+    scene_images_html(h, sc, rows, spps, methods);
+    h << "</section>\n";
+}
+
+// index.html: the introduction, the failed scenes, a section per scene.
+std::string index_html(const EvalOptions& o, const EvalResult& r) {
+    std::vector<std::string> methods;
+    for (const Method& m : o.methods) methods.push_back(m.name);
+    const bool single = timing_note(r).rfind("Times are single", 0) == 0;
+    std::ostringstream h;
+    h << kHtmlHead << html_escape(timing_note(r))
+      << R"( Move the mouse over an image to zoom all images of the scene at the same place; the wheel changes the zoom.</p>
+)";
+    failed_html(h, r);
+    scene_links_html(h, r);
+    for (const SceneReport& sc : r.scenes) scene_html(h, sc, r, methods, single);
+    h << kHtmlTail;
+    return h.str();
+}
+
+}  // namespace
+
+void write_reports(const EvalOptions& o, const EvalResult& r) {
+    const fs::path dir(o.out_dir);
+    const std::set<std::string> old = previous_files(dir);
+    write_atomic(dir / "results.csv", results_csv(r));
+    write_atomic(dir / "results.md", results_md(o, r));
+    write_atomic(dir / "index.html", index_html(o, r));
 
     // What this report owns, so that the next one into the same folder replaces it cleanly.
     std::set<std::string> now(r.files.begin(), r.files.end());

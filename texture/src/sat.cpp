@@ -101,125 +101,158 @@ bool corners_in_range(double x0, double y0, double x1, double y1) {
     return std::abs(x0) < kMax && std::abs(y0) < kMax && std::abs(x1) < kMax && std::abs(y1) < kMax;
 }
 
+// The integral of a rectangle whose corners are out of range: the mean times the area (0 if
+// that is not finite).
+Texel mean_integral(const Texel& mean, int channels, double x0, double y0, double x1, double y1) {
+    const double area = std::abs((x1 - x0) * (y1 - y0));
+    Texel out{};
+    if (std::isfinite(area))
+        for (int c = 0; c < channels; ++c) out[c] = static_cast<float>(mean[c] * area);
+    return out;
+}
+
+// Moves [lo, hi] by whole periods of n so that lo falls in [0, n).
+inline void to_base_period(double& lo, double& hi, int n) {
+    double shift = std::floor(lo / n) * n;
+    lo -= shift;
+    hi -= shift;
+}
+
+// The table as integral()'s fast paths read it: (W+1)(H+1) entries of C channels, row by row.
+struct TableView {
+    using Storage = SummedAreaTable::Storage;
+    int w, h, c;
+    Storage storage;
+    const double* d;  // the entries, Storage::Double
+    const float* f;   // the entries of T - mean, Storage::MeanOffsetFloat
+    const Texel& mean;
+
+    // From an entry to the one above it: (W+1)C.
+    std::size_t row() const { return static_cast<std::size_t>(w + 1) * c; }
+    // Channel c's integral from the sum of its entries, `area` the rectangle's.
+    float value(double v, int c, double area) const {
+        if (storage == Storage::MeanOffsetFloat) v += mean[c] * area;
+        return static_cast<float>(v);
+    }
+};
+
+// A corner inside the table, signed as it enters the rectangle's sum.
+struct InsideCorner {
+    std::size_t k;  // entry index of the cell's lower corner (channel 0)
+    double w[4];    // weights of (i,j), (i+1,j), (i,j+1), (i+1,j+1)
+    double sign;
+};
+
+inline InsideCorner inside_corner(const TableView& t, double x, double y, double sign) {
+    int i = std::min(static_cast<int>(x), t.w - 1), j = std::min(static_cast<int>(y), t.h - 1);
+    double fx = x - i, fy = y - j;
+    return InsideCorner{(static_cast<std::size_t>(j) * (t.w + 1) + i) * t.c,
+                        {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy},
+                        sign};
+}
+
+// Inside the table (the common case after the repeat shift): the four corners' bilinear weights
+// are shared by all channels.
+inline Texel inside_integral(const TableView& t, double x0, double y0, double x1, double y1,
+                             double area) {
+    const InsideCorner cs[4] = {inside_corner(t, x1, y1, 1), inside_corner(t, x0, y1, -1),
+                                inside_corner(t, x1, y0, -1), inside_corner(t, x0, y0, 1)};
+    const std::size_t row = t.row();
+    Texel out{};
+    for (int c = 0; c < t.c; ++c) {
+        double v = 0;
+        for (const InsideCorner& k : cs) {
+            const std::size_t b = k.k + c;
+            double e00, e10, e01, e11;
+            if (t.storage == TableView::Storage::Double) {
+                e00 = t.d[b], e10 = t.d[b + t.c], e01 = t.d[b + row], e11 = t.d[b + row + t.c];
+            } else {
+                e00 = t.f[b], e10 = t.f[b + t.c], e01 = t.f[b + row], e11 = t.f[b + row + t.c];
+            }
+            v += k.sign * (k.w[0] * e00 + k.w[1] * e10 + k.w[2] * e01 + k.w[3] * e11);
+        }
+        out[c] = t.value(v, c, area);
+    }
+    return out;
+}
+
+// A corner of a rectangle repeated both ways: its quotients, remainders' fractions and entries.
+struct RepeatCorner {
+    double qx, qy, fx, fy, sign;
+    std::size_t k, kw, kh;  // entries (i,j), (W,j) and (i,H), channel 0
+};
+
+inline RepeatCorner repeat_corner(const TableView& t, double x, double y, double sign) {
+    const double qx = std::floor(x / t.w), rx = x - qx * t.w;
+    const double qy = std::floor(y / t.h), ry = y - qy * t.h;
+    const int i = std::clamp(static_cast<int>(std::floor(rx)), 0, t.w - 1);
+    const int j = std::clamp(static_cast<int>(std::floor(ry)), 0, t.h - 1);
+    const std::size_t ci = static_cast<std::size_t>(i) * t.c;
+    return RepeatCorner{qx,
+                        qy,
+                        rx - i,
+                        ry - j,
+                        sign,
+                        j * t.row() + ci,
+                        j * t.row() + static_cast<std::size_t>(t.w) * t.c,
+                        static_cast<std::size_t>(t.h) * t.row() + ci};
+}
+
+// Repeat both ways (rectangles across the texture's edge, as every rectangle wider than the
+// texture is): extended() with each corner's quotients, remainders and bilinear weights computed
+// once for all channels instead of once per channel, and the table's far column and row read
+// directly (table() reaches them with weights 0 and 1, which add exactly nothing): the same
+// values.
+//   S_p(x,y) = qy (qx S(W,H) + S(rx,H)) + (qx S(W,ry) + S(rx,ry))
+// `e` is t.d or t.f: each storage has a loop of its own.
+template <class Entry>
+inline Texel repeat_integral(const TableView& t, const Entry* e, double x0, double y0, double x1,
+                             double y1, double area) {
+    const RepeatCorner cs[4] = {repeat_corner(t, x1, y1, 1), repeat_corner(t, x0, y1, -1),
+                                repeat_corner(t, x1, y0, -1), repeat_corner(t, x0, y0, 1)};
+    const std::size_t row = t.row();
+    const std::size_t last =
+        static_cast<std::size_t>(t.h) * row + static_cast<std::size_t>(t.w) * t.c;
+    Texel out{};
+    for (int c = 0; c < t.c; ++c) {
+        const double total = e[last + c];  // S(W,H)
+        double v = 0;
+        for (const RepeatCorner& k : cs) {
+            const double fx = k.fx, fy = k.fy;
+            const std::size_t b = k.k + c;
+            const double col = (1 - fy) * e[k.kw + c] + fy * e[k.kw + row + c];
+            const double top = (1 - fx) * e[k.kh + c] + fx * e[k.kh + t.c + c];
+            const double in = (1 - fy) * ((1 - fx) * e[b] + fx * e[b + t.c]) +
+                              fy * ((1 - fx) * e[b + row] + fx * e[b + row + t.c]);
+            v += k.sign * (k.qy * (k.qx * total + top) + (k.qx * col + in));
+        }
+        out[c] = t.value(v, c, area);
+    }
+    return out;
+}
+
 }  // namespace
 
 Texel SummedAreaTable::integral(double x0, double y0, double x1, double y1) const {
-    if (!corners_in_range(x0, y0, x1, y1)) {
-        const double area = std::abs((x1 - x0) * (y1 - y0));
-        Texel out{};
-        if (std::isfinite(area))
-            for (int c = 0; c < m_c; ++c) out[c] = static_cast<float>(m_mean[c] * area);
-        return out;
-    }
+    if (!corners_in_range(x0, y0, x1, y1)) return mean_integral(m_mean, m_c, x0, y0, x1, y1);
     if (x0 > x1) std::swap(x0, x1);
     if (y0 > y1) std::swap(y0, y1);
     // Translate repeat-wrapped rectangles to the base period: small quotients, no cancellation.
-    if (m_wrap_s == WrapMode::Repeat) {
-        double shift = std::floor(x0 / m_w) * m_w;
-        x0 -= shift;
-        x1 -= shift;
-    }
-    if (m_wrap_t == WrapMode::Repeat) {
-        double shift = std::floor(y0 / m_h) * m_h;
-        y0 -= shift;
-        y1 -= shift;
-    }
+    if (m_wrap_s == WrapMode::Repeat) to_base_period(x0, x1, m_w);
+    if (m_wrap_t == WrapMode::Repeat) to_base_period(y0, y1, m_h);
+    const double area = (x1 - x0) * (y1 - y0);
+    const TableView t{m_w, m_h, m_c, m_storage, m_double.data(), m_float.data(), m_mean};
+    if (x0 >= 0 && y0 >= 0 && x1 <= m_w && y1 <= m_h)
+        return inside_integral(t, x0, y0, x1, y1, area);
+    if (m_wrap_s == WrapMode::Repeat && m_wrap_t == WrapMode::Repeat)
+        return m_storage == Storage::Double
+                   ? repeat_integral(t, m_double.data(), x0, y0, x1, y1, area)
+                   : repeat_integral(t, m_float.data(), x0, y0, x1, y1, area);
     Texel out{};
-    double area = (x1 - x0) * (y1 - y0);
-    if (x0 >= 0 && y0 >= 0 && x1 <= m_w && y1 <= m_h) {
-        // Inside the table (the common case after the repeat shift): the four corners'
-        // bilinear weights are shared by all channels.
-        struct Corner {
-            std::size_t k;  // entry index of the cell's lower corner (channel 0)
-            double w[4];    // weights of (i,j), (i+1,j), (i,j+1), (i+1,j+1)
-            double sign;
-        };
-        auto corner = [&](double x, double y, double sign) {
-            int i = std::min(static_cast<int>(x), m_w - 1),
-                j = std::min(static_cast<int>(y), m_h - 1);
-            double fx = x - i, fy = y - j;
-            return Corner{(static_cast<std::size_t>(j) * (m_w + 1) + i) * m_c,
-                          {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy},
-                          sign};
-        };
-        const Corner cs[4] = {corner(x1, y1, 1), corner(x0, y1, -1), corner(x1, y0, -1),
-                              corner(x0, y0, 1)};
-        const std::size_t row = static_cast<std::size_t>(m_w + 1) * m_c;
-        for (int c = 0; c < m_c; ++c) {
-            double v = 0;
-            for (const Corner& k : cs) {
-                const std::size_t b = k.k + c;
-                double e00, e10, e01, e11;
-                if (m_storage == Storage::Double) {
-                    e00 = m_double[b], e10 = m_double[b + m_c], e01 = m_double[b + row],
-                    e11 = m_double[b + row + m_c];
-                } else {
-                    e00 = m_float[b], e10 = m_float[b + m_c], e01 = m_float[b + row],
-                    e11 = m_float[b + row + m_c];
-                }
-                v += k.sign * (k.w[0] * e00 + k.w[1] * e10 + k.w[2] * e01 + k.w[3] * e11);
-            }
-            if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
-            out[c] = static_cast<float>(v);
-        }
-        return out;
-    }
-    if (m_wrap_s == WrapMode::Repeat && m_wrap_t == WrapMode::Repeat) {
-        // Repeat both ways (rectangles across the texture's edge, as every rectangle wider than
-        // the texture is): extended() with each corner's quotients, remainders and bilinear
-        // weights computed once for all channels instead of once per channel, and the table's
-        // far column and row read directly (table() reaches them with weights 0 and 1, which
-        // add exactly nothing): the same values.
-        //   S_p(x,y) = qy (qx S(W,H) + S(rx,H)) + (qx S(W,ry) + S(rx,ry))
-        struct Corner {
-            double qx, qy, fx, fy, sign;
-            std::size_t k, kw, kh;  // entries (i,j), (W,j) and (i,H), channel 0
-        };
-        const std::size_t row = static_cast<std::size_t>(m_w + 1) * m_c;
-        auto corner = [&](double x, double y, double sign) {
-            const double qx = std::floor(x / m_w), rx = x - qx * m_w;
-            const double qy = std::floor(y / m_h), ry = y - qy * m_h;
-            const int i = std::clamp(static_cast<int>(std::floor(rx)), 0, m_w - 1);
-            const int j = std::clamp(static_cast<int>(std::floor(ry)), 0, m_h - 1);
-            const std::size_t ci = static_cast<std::size_t>(i) * m_c;
-            return Corner{qx,
-                          qy,
-                          rx - i,
-                          ry - j,
-                          sign,
-                          j * row + ci,
-                          j * row + static_cast<std::size_t>(m_w) * m_c,
-                          static_cast<std::size_t>(m_h) * row + ci};
-        };
-        const Corner cs[4] = {corner(x1, y1, 1), corner(x0, y1, -1), corner(x1, y0, -1),
-                              corner(x0, y0, 1)};
-        auto e = [&](std::size_t k) {
-            return m_storage == Storage::Double ? m_double[k] : double(m_float[k]);
-        };
-        const std::size_t last =
-            static_cast<std::size_t>(m_h) * row + static_cast<std::size_t>(m_w) * m_c;
-        for (int c = 0; c < m_c; ++c) {
-            const double total = e(last + c);  // S(W,H)
-            double v = 0;
-            for (const Corner& k : cs) {
-                const double fx = k.fx, fy = k.fy;
-                const std::size_t b = k.k + c;
-                const double col = (1 - fy) * e(k.kw + c) + fy * e(k.kw + row + c);
-                const double top = (1 - fx) * e(k.kh + c) + fx * e(k.kh + m_c + c);
-                const double in = (1 - fy) * ((1 - fx) * e(b) + fx * e(b + m_c)) +
-                                  fy * ((1 - fx) * e(b + row) + fx * e(b + row + m_c));
-                v += k.sign * (k.qy * (k.qx * total + top) + (k.qx * col + in));
-            }
-            if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
-            out[c] = static_cast<float>(v);
-        }
-        return out;
-    }
     for (int c = 0; c < m_c; ++c) {
         double v =
             extended(x1, y1, c) - extended(x0, y1, c) - extended(x1, y0, c) + extended(x0, y0, c);
-        if (m_storage == Storage::MeanOffsetFloat) v += m_mean[c] * area;
-        out[c] = static_cast<float>(v);
+        out[c] = t.value(v, c, area);
     }
     // Black outside: the mean offset must not add texture outside the image.
     if (m_storage == Storage::MeanOffsetFloat &&
