@@ -1,7 +1,16 @@
 // Camera rays follow pbrt-v3's perspective camera: fov spans the shorter axis, raster y down.
+// Its realistic camera is that pinhole, of the fov its lens system gives.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "expect_throw.h"
+#include "render/lens.h"
 #include "scene_util.h"
+#include "temp_dir.h"
 
 using namespace cmam;
 using render::Vec3;
@@ -77,4 +86,206 @@ TEST(Camera, ScreenWindowAndCrop) {
     EXPECT_EQ(s->film.x1, 10);
     EXPECT_EQ(s->film.y0, 0);
     EXPECT_EQ(s->film.y1, 3);
+}
+
+// pbrt-v3's realistic camera is rendered as a pinhole whose fov is the paraxial one of its lens
+// system (algorithms.md §7.2). The lenses are written to lens files in a temporary folder.
+namespace {
+
+// A single glass element: front radius r1, back radius r2, thickness d and index n (mm), its
+// back 50 mm from the film (a distance focusing replaces).
+std::string element(double r1, double r2, double d, double n) {
+    return "# radius thickness eta aperture\n" + std::to_string(r1) + " " + std::to_string(d) +
+           " " + std::to_string(n) + " 20\n" + std::to_string(r2) + " 50 0 20\n";
+}
+
+struct LensScene {
+    test::TempDir dir{"cmam_lens_test"};
+    std::string scene = (dir.path / "scene.pbrt").string();
+
+    void write(const std::string& name, const std::string& text) const {
+        std::ofstream(dir.path / name) << text;
+    }
+    // The pbrt text of a realistic camera with `params` before a film of `film` parameters.
+    static std::string text(const std::string& params, const std::string& film) {
+        return "Camera \"realistic\" " + params + "\nFilm \"image\" " + film +
+               "\nWorldBegin WorldEnd\n";
+    }
+    std::unique_ptr<render::Scene> build(const std::string& params, const std::string& film,
+                                         std::vector<std::string>* warnings = nullptr) const {
+        auto sink = [&](const std::string& w) {
+            if (warnings) warnings->push_back(w);
+        };
+        return render::build_scene(pbrt::parse_string(text(params, film), scene), {}, sink);
+    }
+};
+
+// A 400x300 film 100 mm across its diagonal is 80 mm x 60 mm: 30 mm from its centre to its top
+// and bottom edges.
+const std::string kFilm100 =
+    "\"integer xresolution\" 400 \"integer yresolution\" 300 \"float diagonal\" 100";
+
+// Lensmaker's equation for a thin lens in air.
+double lensmaker(double r1, double r2, double n) {
+    return 1 / ((n - 1) * (1 / r1 - 1 / r2));
+}
+
+}  // namespace
+
+TEST(RealisticCamera, ThinLensFramesTheFilmFromItsImageDistance) {
+    LensScene s;
+    s.write("thin.dat", element(50, -50, 0, 1.5));
+    ASSERT_DOUBLE_EQ(lensmaker(50, -50, 1.5), 50);
+    // Focused 225 mm in front of the film, 1/s + 1/s' = 1/50 with s + s' = 225: s' = 75 mm.
+    auto sc = s.build(
+        "\"string lensfile\" \"thin.dat\" \"float focusdistance\" 0.225 \"float aperturediameter\" "
+        "2",
+        kFilm100);
+    const float t = 30.0f / 75;  // the half fov's tangent
+    EXPECT_NEAR(sc->camera.tan_half_fov, t, 1e-6);
+    expect_dir(sc->camera.generate_ray(200, 150).dir, Vec3(0, 0, 1));
+    expect_dir(sc->camera.generate_ray(200, 0).dir, Vec3(0, t, 1));  // the top row looks up
+    expect_dir(sc->camera.generate_ray(0, 150).dir, Vec3(-40.0f / 75, 0, 1));  // left: -x
+    expect_dir(sc->camera.generate_ray(400, 300).dir, Vec3(40.0f / 75, -t, 1));
+}
+
+TEST(RealisticCamera, FocusDistanceMovesTheFilmAsTheThinLensEquationSays) {
+    LensScene s;
+    s.write("thin.dat", element(50, -50, 0, 1.5));
+    const double f = 50;
+    for (double focus : {0.2001, 0.225, 0.5, 10.0, 1e4}) {
+        const double F = 1000 * focus;
+        const double image = (F - std::sqrt(F * F - 4 * f * F)) / 2;  // s + s' = F, s s' = f F
+        auto sc = s.build(
+            "\"string lensfile\" \"thin.dat\" \"float focusdistance\" " + std::to_string(focus),
+            kFilm100);
+        EXPECT_NEAR(sc->camera.tan_half_fov, 30 / image, 1e-6 * 30 / image) << focus;
+    }
+    // The default focus distance is 10 m.
+    auto sc = s.build("\"string lensfile\" \"thin.dat\"", kFilm100);
+    EXPECT_NEAR(sc->camera.tan_half_fov, 30 / ((1e4 - std::sqrt(1e8 - 4 * f * 1e4)) / 2), 1e-6);
+}
+
+// A thick biconvex lens (Hecht's formulas): 1/f = (n-1) (1/R1 - 1/R2 + (n-1) d / (n R1 R2)),
+// principal planes -f (n-1) d / (n R2) behind the front vertex and -f (n-1) d / (n R1) behind
+// the back one.
+TEST(RealisticCamera, ThickLensFocusesFromItsPrincipalPlanes) {
+    const double r1 = 60, r2 = -40, d = 12, n = 1.6;
+    const double f = 1 / ((n - 1) * (1 / r1 - 1 / r2 + (n - 1) * d / (n * r1 * r2)));
+    const double front = -f * (n - 1) * d / (n * r2), rear = d - f * (n - 1) * d / (n * r1);
+    const render::ParaxialLens lens =
+        render::paraxial_lens(render::parse_lens(element(r1, r2, d, n), "lens"));
+    EXPECT_NEAR(lens.focal_length, f, 1e-9);
+    EXPECT_NEAR(lens.front_principal, front, 1e-9);
+    EXPECT_NEAR(lens.rear_principal, rear, 1e-9);
+
+    // Focused 0.3 m in front of the film: object and image distances add up to 300 mm less the
+    // principal planes' separation.
+    LensScene s;
+    s.write("thick.dat", element(r1, r2, d, n));
+    const double sum = 300 - (rear - front);
+    const double image = (sum - std::sqrt(sum * sum - 4 * f * sum)) / 2;
+    auto sc = s.build("\"string lensfile\" \"thick.dat\" \"float focusdistance\" 0.3", kFilm100);
+    EXPECT_NEAR(sc->camera.tan_half_fov, 30 / image, 1e-6);
+}
+
+TEST(RealisticCamera, FramesTheSceneAsThePerspectiveCameraOfItsFov) {
+    LensScene s;
+    s.write("thin.dat", element(50, -50, 0, 1.5));
+    const std::string look = "LookAt 1 2 3  4 -2 -5  0 1 0\n";
+    auto real = render::build_scene(
+        pbrt::parse_string(
+            look + LensScene::text("\"string lensfile\" \"thin.dat\" \"float focusdistance\" "
+                                   "0.225",
+                                   kFilm100),
+            s.scene),
+        {}, {});
+    auto persp = test::scene_from(
+        look + "Camera \"perspective\" \"float fov\" " + std::to_string(2 * std::atan(0.4) / kDeg) +
+        " Film \"image\" \"integer xresolution\" 400 \"integer yresolution\" 300 WorldBegin "
+        "WorldEnd");
+    for (auto [x, y] : {std::pair{0.0f, 0.0f}, {400.0f, 0.0f}, {0.0f, 300.0f}, {123.0f, 45.0f}}) {
+        const auto [o, d] = real->camera.generate_ray(x, y);
+        EXPECT_NEAR(o.x, 1, 1e-6);
+        EXPECT_NEAR(o.y, 2, 1e-6);
+        EXPECT_NEAR(o.z, 3, 1e-6);
+        expect_dir(d, persp->camera.generate_ray(x, y).dir);
+    }
+}
+
+TEST(RealisticCamera, WarnsThatItIsRenderedAsAPinhole) {
+    LensScene s;
+    s.write("thin.dat", element(50, -50, 0, 1.5));
+    std::vector<std::string> warnings;
+    s.build("\"string lensfile\" \"thin.dat\" \"float focusdistance\" 0.225", kFilm100, &warnings);
+    // 2 atan(30 / 75) = 43.6028 degrees.
+    EXPECT_EQ(warnings,
+              std::vector<std::string>{
+                  s.scene + ":1:1: warning: Camera \"realistic\" is rendered as a pinhole of fov "
+                            "43.6 degrees; depth of field, lens distortion and vignetting are not "
+                            "simulated"});
+}
+
+// A 1 mm lens behind a 35 mm film's square: 2 atan(12.37 / 1.0001) = 170.8 degrees.
+TEST(RealisticCamera, AFieldWiderThan170DegreesIsClamped) {
+    LensScene s;
+    s.write("short.dat", element(1, -1, 0, 1.5));
+    std::vector<std::string> warnings;
+    auto sc = s.build("\"string lensfile\" \"short.dat\"",
+                      "\"integer xresolution\" 64 \"integer yresolution\" 64", &warnings);
+    EXPECT_NEAR(sc->camera.tan_half_fov, std::tan(85 * kDeg), 1e-3);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0],
+              s.scene +
+                  ":1:1: warning: Camera \"realistic\" is rendered as a pinhole of fov 170 "
+                  "degrees (the lens's 170.8 degrees, clamped: a fisheye cannot be rendered as a "
+                  "pinhole); depth of field, lens distortion and vignetting are not simulated");
+}
+
+TEST(RealisticCamera, AMissingLensFileIsALocatedError) {
+    LensScene s;
+    const std::string path = (s.dir.path / "lenses" / "missing.dat").string();
+    EXPECT_THROW_MSG(
+        s.build("\"string lensfile\" \"lenses/missing.dat\"", kFilm100), pbrt::SceneError,
+        s.scene + ":1:20: error: cannot read lens file \"" + path + "\": file not found");
+    EXPECT_THROW_MSG(s.build("\"float focusdistance\" 1", kFilm100), pbrt::SceneError,
+                     s.scene +
+                         ":1:1: error: Camera \"realistic\" needs a \"string lensfile\" "
+                         "parameter");
+}
+
+TEST(RealisticCamera, MalformedLensFilesAreLocatedErrorsWithTheReason) {
+    LensScene s;
+    const std::string at =
+        s.scene + ":1:20: error: lens file \"" + (s.dir.path / "bad.dat").string();
+    auto error_for = [&](const std::string& lens, const std::string& params = "") {
+        s.write("bad.dat", lens);
+        return test::thrown_text<pbrt::SceneError>(
+            [&] { s.build("\"string lensfile\" \"bad.dat\" " + params, kFilm100); });
+    };
+    EXPECT_EQ(error_for("50 0 1.5 20\n-50 50 0\n"),
+              at + "\" holds 7 numbers, not a multiple of 4 (each interface is a curvature "
+                   "radius, a thickness, an index of refraction and an aperture diameter)");
+    EXPECT_EQ(error_for("# comment\n50 0 1.5 20\n-50 fifty 0 20\n"),
+              at + "\", line 3: \"fifty\" is not a number");
+    EXPECT_EQ(error_for("50 0 1.5 20\n-50 50 0 1e999\n"),
+              at + "\", line 2: \"1e999\" is not a finite number");
+    EXPECT_EQ(error_for("50 0 1.5 20\n-50 50 0 nan\n"),
+              at + "\", line 2: \"nan\" is not a finite number");
+    EXPECT_EQ(error_for("# nothing\n"), at + "\" lists no lens interfaces");
+    // A meniscus of equal radii and no thickness bends no ray.
+    EXPECT_EQ(error_for(element(50, 50, 0, 1.5)),
+              at + "\": the lens system has no focusing power (its ray-transfer matrix's C is 0): "
+                   "an afocal system forms no image on the film");
+    EXPECT_EQ(error_for(element(-50, 50, 0, 1.5)),
+              at + "\": the lens system diverges (effective focal length -50 mm): it forms no "
+                   "image on the film");
+    EXPECT_EQ(error_for("50 0 1.5 20\n-50 50 1.5 20\n"),
+              at + "\": the last interface's index of refraction is 1.5: the film side of the "
+                   "lens system must be air (0 or 1)");
+    // The error about focusing is at focusdistance.
+    EXPECT_EQ(error_for(element(50, -50, 0, 1.5), "\"float focusdistance\" 0.1"),
+              s.scene + ":1:48: error: lens file \"" + (s.dir.path / "bad.dat").string() +
+                  "\": the lens system (effective focal length 50 mm) focuses no nearer than "
+                  "200 mm in front of the film, and focusdistance asks for 100 mm");
 }

@@ -81,6 +81,7 @@ class Builder {
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
     std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
     bool m_light_samples = false;      // lights' nsamples are used (directlighting, "all")
+    double m_film_diagonal = 35;       // Film "diagonal" (mm): a realistic camera's film size
 
     // --- shared checks (builder.cpp) ------------------------------------------------------
     int light_samples(const Entity& e) const;
@@ -113,6 +114,7 @@ class Builder {
     // --- film, camera, sampler, pixel filter, integrator (film_camera.cpp) -----------------
     void film();
     void camera();
+    float realistic_tan_half_fov(const Entity& e);
     static void check_camera_rays(const Camera& c, const pbrt::FileLoc& loc);
     void sampler();
     void filter();

@@ -5,9 +5,15 @@
 #include <limits>
 #include <numbers>
 
+#include "pbrt/parser.h"
 #include "render/build/builder.h"
+#include "render/error.h"
+#include "render/lens.h"
 
 namespace cmam::render::build_detail {
+
+// Widest pinhole a realistic camera is rendered as, in degrees.
+constexpr double kMaxRealisticFov = 170;
 
 void Builder::film() {
     const Entity& e = m_desc.film;
@@ -51,6 +57,8 @@ void Builder::film() {
         throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
     // pbrt-v3 multiplies every pixel by "scale" (radiance only, not AOVs).
     f.scale = static_cast<float>(finite_float(e, "scale", 1));
+    // The film's physical size matters to pbrt-v3's realistic camera only.
+    if (m_desc.camera.type == "realistic") m_film_diagonal = finite_float(e, "diagonal", 35, true);
     e.params.check_unused("Film \"image\"", m_warn,
                           {"diagonal", "maxsampleluminance", "pixelbounds"});
 }
@@ -58,16 +66,20 @@ void Builder::film() {
 void Builder::camera() {
     const Entity& e = m_desc.camera;
     if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
-    if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment")
+    if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment" &&
+        e.type != "realistic")
         throw SceneError(e.loc, "unsupported Camera " + q(e.type) +
                                     " (supported: \"perspective\", \"orthographic\", "
-                                    "\"environment\")");
+                                    "\"environment\", \"realistic\")");
     Camera& c = m_scene->camera;
     c.orthographic = e.type == "orthographic";
     c.environment = e.type == "environment";
+    const bool realistic = e.type == "realistic";
     c.xres = m_scene->film.xres;
     c.yres = m_scene->film.yres;
-    double frame = e.params.get_float("frameaspectratio", double(c.xres) / c.yres);
+    // A realistic camera's image is its whole film: it has no frame or screen window.
+    double frame = double(c.xres) / c.yres;
+    if (!realistic) frame = e.params.get_float("frameaspectratio", frame);
     if (!(frame > 0 && std::isfinite(frame)))
         throw SceneError(
             loc_of(e, "frameaspectratio"),
@@ -83,7 +95,7 @@ void Builder::camera() {
         c.screen[2] = float(-1 / frame);
         c.screen[3] = float(1 / frame);
     }
-    if (auto sw = e.params.get_floats("screenwindow")) {
+    if (auto sw = realistic ? std::nullopt : e.params.get_floats("screenwindow")) {
         if (sw->size() != 4)
             throw SceneError(e.params.find("screenwindow")->loc, "screenwindow needs 4 values");
         for (int i = 0; i < 4; ++i) {
@@ -94,14 +106,19 @@ void Builder::camera() {
             c.screen[i] = float((*sw)[i]);
         }
     }
-    double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
-    double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
-    if (halffov > 0) fov = 2 * halffov;
-    if (!(fov > 0 && fov < 180))
-        throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
-    c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
-    if (e.params.get_float("lensradius", 0) != 0)
-        warn(e.params.find("lensradius")->loc, "lensradius ignored: cmam renders a pinhole camera");
+    if (realistic) {
+        c.tan_half_fov = realistic_tan_half_fov(e);
+    } else {
+        double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
+        double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
+        if (halffov > 0) fov = 2 * halffov;
+        if (!(fov > 0 && fov < 180))
+            throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
+        c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
+        if (e.params.get_float("lensradius", 0) != 0)
+            warn(e.params.find("lensradius")->loc,
+                 "lensradius ignored: cmam renders a pinhole camera");
+    }
     const Mat4 wc =
         inverse_or_error(m_desc.camera_from_world, e.loc, "the camera transform is singular");
     auto m = to34(wc);
@@ -109,6 +126,47 @@ void Builder::camera() {
     check_camera_rays(c, e.loc);
     e.params.check_unused("Camera " + q(e.type), m_warn,
                           {"focaldistance", "shutteropen", "shutterclose"});
+}
+
+// pbrt-v3's realistic camera as a pinhole: its field of view spans the film's shorter side seen
+// from the rear principal plane of the lens system focused at "focusdistance" (paraxial optics,
+// algorithms.md §7.2). The image is the same way up as pbrt-v3's, which flips the lens's
+// inverted image back to the perspective camera's orientation.
+float Builder::realistic_tan_half_fov(const Entity& e) {
+    const pbrt::Param* file = e.params.find("lensfile");
+    const std::string name = e.params.get_string("lensfile", "");
+    if (name.empty())
+        throw SceneError(file ? file->loc : e.loc,
+                         "Camera \"realistic\" needs a \"string lensfile\" parameter");
+    const std::string path = pbrt::resolve_path(m_desc.base_dir, file->loc, name);
+    const double focus = finite_float(e, "focusdistance", 10, true);
+    finite_float(e, "aperturediameter", 1, true);
+    e.params.get_bool("simpleweighting", true);
+    // Each step's RenderError becomes a SceneError at `loc`, its message after `prefix`.
+    const auto at = [](const pbrt::FileLoc& loc, const std::string& prefix, auto step) {
+        try {
+            return step();
+        } catch (const RenderError& err) {
+            throw SceneError(loc, prefix + err.what());
+        }
+    };
+    const auto interfaces = at(file->loc, "", [&] { return read_lens_file(path); });
+    const std::string in_file = "lens file " + q(path) + ": ";
+    const ParaxialLens lens = at(file->loc, in_file, [&] { return paraxial_lens(interfaces); });
+    const double image =
+        at(loc_of(e, "focusdistance"), in_file, [&] { return image_distance(lens, 1000 * focus); });
+    const int shorter = std::min(m_scene->camera.xres, m_scene->camera.yres);
+    const double half_side =
+        m_film_diagonal / 2 * shorter / std::hypot(m_scene->camera.xres, m_scene->camera.yres);
+    const double fov = 360 / std::numbers::pi * std::atan(half_side / image);
+    std::string rendered = "a pinhole of fov " + pbrt::number_text(fov, 4) + " degrees";
+    if (fov > kMaxRealisticFov)
+        rendered = "a pinhole of fov " + pbrt::number_text(kMaxRealisticFov, 4) +
+                   " degrees (the lens's " + pbrt::number_text(fov, 4) +
+                   " degrees, clamped: a fisheye cannot be rendered as a pinhole)";
+    warn(e.loc, "Camera \"realistic\" is rendered as " + rendered +
+                    "; depth of field, lens distortion and vignetting are not simulated");
+    return float(std::tan(std::min(fov, kMaxRealisticFov) * std::numbers::pi / 360));
 }
 
 // Embree takes rays whose origin and direction are finite and within kMaxRayCoordinate.
