@@ -1,0 +1,254 @@
+// render — what the shading code asks of a surface: its partial derivatives, the (u,v) and
+// normal changes of an offset along it (through instance transforms), points sampled on it for
+// area lights, and alpha cut-outs.
+#include <algorithm>
+#include <cmath>
+
+#include "render/scene.h"
+#include "render/shading.h"
+#include "render/transform3x4.h"
+
+namespace cmam::render {
+
+using namespace xform;
+
+SurfaceSample Primitive::sample_area(float u1, float u2) const {
+    SurfaceSample out;
+    if (kind == Kind::Triangles) {
+        // A triangle by area (area_cdf), then a point uniform in it; u1 is reused within the
+        // chosen triangle's span.
+        const double total = area_cdf.empty() ? 0 : area_cdf.back();
+        if (!(total > 0)) return out;
+        const double x = double(u1) * total;
+        const auto it = std::upper_bound(area_cdf.begin(), area_cdf.end(), x);
+        const std::size_t ntri = area_cdf.size() - 1;
+        const std::size_t t = std::min(ntri - 1, static_cast<std::size_t>(std::max<std::ptrdiff_t>(
+                                                     0, (it - area_cdf.begin()) - 1)));
+        const double span = area_cdf[t + 1] - area_cdf[t];
+        const float r = span > 0 ? float(std::clamp((x - area_cdf[t]) / span, 0.0, 1.0)) : 0.5f;
+        const float su = std::sqrt(r), b0 = 1 - su, b1 = u2 * su, b2 = 1 - b0 - b1;
+        const uint32_t i0 = indices[3 * t], i1 = indices[3 * t + 1], i2 = indices[3 * t + 2];
+        const Vec3 &p0 = positions[i0], &p1 = positions[i1], &p2 = positions[i2];
+        out.p = b0 * p0 + b1 * p1 + b2 * p2;
+        Vec3 ng = normalize(cross(p0 - p2, p1 - p2));
+        if (flip) ng = -ng;
+        if (!normals.empty()) {  // oriented as intersect() orients hits
+            const Vec3 ns = b0 * normals[i0] + b1 * normals[i1] + b2 * normals[i2];
+            if (length(ns) > 0) ng = faceforward(ng, flip ? -ns : ns);
+        }
+        out.n = ng;
+        out.pdf = float(1 / total);
+        return out;
+    }
+    // Quadrics: (u1,u2) map to a point uniform by object-space area (Archimedes' z for the
+    // sphere, r^2 for the disk, phi for both). The world-space area element is |dP/du1 x
+    // dP/du2| after the transform, det(M) M^-T applied to the object-space one, so the density
+    // is exact under any transform.
+    const double phi = double(u2) * phi_max;
+    D3 po, cross_obj;
+    if (kind == Kind::Sphere) {
+        const double z = zmin + double(u1) * (zmax - zmin);
+        const double rho = std::sqrt(std::max(0.0, radius * radius - z * z));
+        po = {rho * std::cos(phi), rho * std::sin(phi), z};
+        const double k = (zmax - zmin) * phi_max;
+        cross_obj = {k * po[0], k * po[1], k * po[2]};  // outwards, |.| = k * radius
+    } else {
+        const double r2 = inner_radius * inner_radius +
+                          double(u1) * (radius * radius - inner_radius * inner_radius);
+        const double rho = std::sqrt(r2);
+        po = {rho * std::cos(phi), rho * std::sin(phi), height};
+        cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
+    }
+    const auto& m = world_from_object;
+    const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+                       m[2] * (m[4] * m[9] - m[5] * m[8]);
+    const D3 cw = xform_normal(object_from_world, cross_obj);
+    const double area_element =
+        std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
+    if (!(area_element > 0) || !std::isfinite(area_element)) return out;
+    out.p = to_vec(xform_point(world_from_object, po));
+    Vec3 nw = normalize(to_vec(cw));
+    out.n = flip ? -nw : nw;
+    out.pdf = float(1 / area_element);
+    return out;
+}
+
+bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
+    const uint32_t i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
+    const float b0 = 1 - b1 - b2;
+    TexContext ctx;  // a point lookup: no footprint
+    if (!uvs.empty()) {
+        ctx.u = b0 * uvs[i0][0] + b1 * uvs[i1][0] + b2 * uvs[i2][0];
+        ctx.v = b0 * uvs[i0][1] + b1 * uvs[i1][1] + b2 * uvs[i2][1];
+    } else {
+        ctx.u = b1 + b2;
+        ctx.v = b2;
+    }
+    ctx.p = b0 * positions[i0] + b1 * positions[i1] + b2 * positions[i2];
+    ctx.object = id;
+    if (eval_texture(*scene, alpha, ctx).r == 0) return true;
+    return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
+}
+
+std::optional<SurfaceSample> Primitive::sample_cone(const Vec3& ref, float u1, float u2) const {
+    const float R = sphere_radius;
+    if (!(R > 0)) return std::nullopt;
+    const Vec3 to_c = sphere_center - ref;
+    const float d2 = dot(to_c, to_c);
+    if (!(d2 > R * R * 1.0001f)) return std::nullopt;
+    const float dc = std::sqrt(d2);
+    // The cone's half-angle: sin^2 = R^2 / d^2; 1 - cos written as sin^2 / (1 + cos), which
+    // keeps its precision for small, distant spheres.
+    const float sin2_max = R * R / d2, cos_max = std::sqrt(std::max(0.0f, 1 - sin2_max));
+    const float one_minus_cos_max = sin2_max / (1 + cos_max);
+    const float cos_t = 1 - u1 * one_minus_cos_max;
+    const float sin2_t = std::max(0.0f, u1 * one_minus_cos_max * (1 + cos_t));
+    const float phi = 2 * kPi * u2;
+    const Frame f = Frame::from_z(to_c / dc);
+    const Vec3 wi = f.to_world(
+        Vec3(std::sqrt(sin2_t) * std::cos(phi), std::sqrt(sin2_t) * std::sin(phi), cos_t));
+    // The nearer intersection along wi: t = d cos - sqrt(R^2 - d^2 sin^2).
+    const float t = dc * cos_t - std::sqrt(std::max(0.0f, R * R - d2 * sin2_t));
+    SurfaceSample out;
+    out.p = ref + wi * t;
+    const Vec3 n = normalize(out.p - sphere_center);
+    out.n = flip ? -n : n;
+    out.pdf = 1 / (2 * kPi * one_minus_cos_max);
+    return out;
+}
+
+Partials SurfaceHit::local_partials() const {
+    const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles) {
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+        if (!pr.uvs.empty()) {
+            uv0 = pr.uvs[i0];
+            uv1 = pr.uvs[i1];
+            uv2 = pr.uvs[i2];
+        }
+        Vec3 dp02 = pr.positions[i0] - pr.positions[i2], dp12 = pr.positions[i1] - pr.positions[i2];
+        float du02 = uv0[0] - uv2[0], dv02 = uv0[1] - uv2[1], du12 = uv1[0] - uv2[0],
+              dv12 = uv1[1] - uv2[1];
+        float det = du02 * dv12 - dv02 * du12;
+        if (std::abs(det) < 1e-12f) {  // degenerate uv: any frame of the plane
+            Frame f = Frame::from_z(normalize(cross(dp02, dp12)));
+            return {f.s, f.t};
+        }
+        float inv = 1 / det;
+        return {(dv12 * dp02 - dv02 * dp12) * inv, (du02 * dp12 - du12 * dp02) * inv};
+    }
+    const D3& p = p_object;
+    D3 du, dv;
+    if (pr.kind == Primitive::Kind::Sphere) {
+        double r = pr.radius;
+        double zr = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        double cos_phi = zr > 0 ? p[0] / zr : 1, sin_phi = zr > 0 ? p[1] / zr : 0;
+        double theta = std::acos(std::clamp(p[2] / r, -1.0, 1.0));
+        double dtheta = pr.theta_zmax - pr.theta_zmin;
+        du = {-pr.phi_max * p[1], pr.phi_max * p[0], 0};
+        dv = {dtheta * p[2] * cos_phi, dtheta * p[2] * sin_phi, -dtheta * r * std::sin(theta)};
+    } else {
+        double r_hit = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        du = {-pr.phi_max * p[1], pr.phi_max * p[0], 0};
+        double k = r_hit > 0 ? (pr.inner_radius - pr.radius) / r_hit : 0;
+        dv = {p[0] * k, p[1] * k, 0};
+    }
+    return {to_vec(xform_vector(pr.world_from_object, du)),
+            to_vec(xform_vector(pr.world_from_object, dv))};
+}
+
+namespace {
+// Barycentric differentials of triangle `tri`: (db1, db2) for a world offset dp in its plane.
+std::pair<float, float> barycentric_offsets(const Primitive& pr, uint32_t tri, const Vec3& dp) {
+    const Vec3& p0 = pr.positions[pr.indices[3 * tri]];
+    Vec3 e1 = pr.positions[pr.indices[3 * tri + 1]] - p0,
+         e2 = pr.positions[pr.indices[3 * tri + 2]] - p0;
+    Vec3 n = cross(e1, e2);
+    Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
+    return {dot(l1, dp) / dot(l1, e1), dot(l2, dp) / dot(l2, e2)};
+}
+}  // namespace
+
+UvDelta SurfaceHit::local_uv_offset(const Vec3& dp) const {
+    const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles) {
+        // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        const auto [db1, db2] = barycentric_offsets(pr, triangle, dp);
+        std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+        if (!pr.uvs.empty()) {
+            uv0 = pr.uvs[i0];
+            uv1 = pr.uvs[i1];
+            uv2 = pr.uvs[i2];
+        }
+        return {db1 * (uv1[0] - uv0[0]) + db2 * (uv2[0] - uv0[0]),
+                db1 * (uv1[1] - uv0[1]) + db2 * (uv2[1] - uv0[1])};
+    }
+    // Least squares: [dpdu dpdv] (du dv)^T = dP.
+    const auto [a, b] = local_partials();
+    double aa = dot(a, a), ab = dot(a, b), bb = dot(b, b), ad = dot(a, dp), bd = dot(b, dp);
+    double det = aa * bb - ab * ab;
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) return {};
+    return {static_cast<float>((bb * ad - ab * bd) / det),
+            static_cast<float>((aa * bd - ab * ad) / det)};
+}
+
+Vec3 SurfaceHit::local_normal_offset(const Vec3& dp) const {
+    const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles) {
+        if (pr.normals.empty()) return Vec3(0, 0, 0);  // flat: the normal is constant
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        const auto [db1, db2] = barycentric_offsets(pr, triangle, dp);
+        float b0 = 1 - b1 - b2;
+        Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
+        Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];
+        Vec3 d = unit_derivative(ni, dn);
+        return pr.flip ? -d : d;
+    }
+    if (pr.kind == Primitive::Kind::Disk) return Vec3(0, 0, 0);
+    // Sphere: n_obj = p_obj, so dn_obj = dp_obj; normals map with (object_from_world)^T.
+    D3 dpo = xform_vector(pr.object_from_world, {dp.x, dp.y, dp.z});
+    Vec3 n = to_vec(xform_normal(pr.object_from_world, p_object));
+    Vec3 dn = to_vec(xform_normal(pr.object_from_world, dpo));
+    Vec3 d = unit_derivative(n, dn);
+    return pr.flip ? -d : d;
+}
+
+Partials SurfaceHit::partials() const {
+    const Partials local = local_partials();
+    if (!instance) return local;
+    return {instance->to_world_vector(local.dpdu), instance->to_world_vector(local.dpdv)};
+}
+
+UvDelta SurfaceHit::uv_offset(const Vec3& dp) const {
+    return local_uv_offset(instance ? instance->to_object_vector(dp) : dp);
+}
+
+Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {
+    if (!instance) return local_normal_offset(dp);
+    // The world normal is normalize(M^-T n_object): its change follows from the object one's.
+    const Vec3 dn = local_normal_offset(instance->to_object_vector(dp));
+    return unit_derivative(instance->to_world_normal(ns_object), instance->to_world_normal(dn));
+}
+
+Vec3 Instance::to_world_point(const Vec3& p) const {
+    return apply_point(world_from_object, p);
+}
+Vec3 Instance::to_world_vector(const Vec3& v) const {
+    return apply_vector(world_from_object, v);
+}
+Vec3 Instance::to_world_normal(const Vec3& n) const {
+    return apply_transpose(object_from_world, n);
+}
+Vec3 Instance::to_object_point(const Vec3& p) const {
+    return apply_point(object_from_world, p);
+}
+Vec3 Instance::to_object_vector(const Vec3& v) const {
+    return apply_vector(object_from_world, v);
+}
+
+}  // namespace cmam::render
