@@ -1,34 +1,12 @@
 #include "render/integrator.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-
-#include <memory>
-#include <thread>
-
 #include "render/footprint/footprint.h"
 #include "render/shading.h"
+#include "render/tracer.h"
 
 namespace cmam::render {
 
 namespace {
-
-/// Small counter-based generator (SplitMix64): reproducible streams per pixel sample.
-class Rng {
-  public:
-    explicit Rng(uint64_t seed) : m_state(seed) {}
-    uint64_t next_u64() {
-        uint64_t z = (m_state += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    float next_float() { return std::min(float(next_u64() >> 40) * 0x1.0p-24f, 0x1.fffffep-1f); }
-
-  private:
-    uint64_t m_state;
-};
 
 float ray_epsilon(const Vec3& p) {
     return 1e-4f * (1 + max_abs(p));
@@ -37,33 +15,6 @@ float ray_epsilon(const Vec3& p) {
 Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
     return h.p + faceforward(h.ng, w) * ray_epsilon(h.p);
 }
-
-/// Ray counts of one row, added to the shared totals once per row (no per-ray atomics).
-struct RayCounts {
-    uint64_t camera = 0, secondary = 0, shadow = 0;
-    LookupCounts lookups;
-    uint64_t dropped_differentials = 0;
-
-    void add_to(RenderStats* stats) const {
-        if (!stats) return;
-        stats->camera_rays += camera;
-        stats->secondary_rays += secondary;
-        stats->shadow_rays += shadow;
-        for (int k = 0; k < texture::kFilterKinds; ++k)
-            stats->lookups_by_filter[k] += lookups.by_filter[k];
-        stats->lookups_point_sampled += lookups.point_sampled;
-        stats->lookups_non_finite += lookups.non_finite;
-        stats->cmam_2d_without_above += lookups.cmam_2d_without_above;
-        stats->dropped_differentials += dropped_differentials;
-    }
-};
-
-/// The AOV sample of one camera ray: three values, recorded at the first non-specular hit.
-struct Aov {
-    AovKind kind = AovKind::None;
-    bool recorded = false;
-    float v[3] = {0, 0, 0};
-};
 
 struct Tracer {
     const Scene& scene;
@@ -424,16 +375,11 @@ CmamRecord* Tracer::record_cmam_of(const Material& m, CmamRecord* record) const 
     return record;
 }
 
-uint64_t mix_seed(uint64_t a, uint64_t b) {
-    uint64_t z = a * 0x9E3779B97F4A7C15ull + b + 0x632BE59BD9B4E019ull;
-    z = (z ^ (z >> 33)) * 0xff51afd7ed558ccdull;
-    z = (z ^ (z >> 33)) * 0xc4ceb9fe1a85ec53ull;
-    return z ^ (z >> 33);
-}
+}  // namespace
 
 Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
               const Vec3& dir, const RayFootprint& fp, uint64_t seed, RayCounts* counts,
-              CmamRowState* cmam = nullptr, Aov* aov = nullptr) {
+              CmamRowState* cmam, Aov* aov) {
     Rng rng(seed);
     Tracer t{scene, footprints, counts, rng, cmam};
     t.aov = aov;
@@ -441,230 +387,13 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
     return t.li({org, dir, fp}, 0);
 }
 
-}  // namespace
-
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,
                    RenderStats* stats) {
     RayCounts c;
     const FootprintProducers footprints(scene.footprint_methods, scene.camera, 1);
-    Rgb L = trace_one(scene, footprints, org, dir, {}, seed, &c);
+    Rgb L = trace_one(scene, footprints, org, dir, {}, seed, &c, nullptr, nullptr);
     c.add_to(stats);
     return L;
-}
-
-namespace {
-
-// body(begin, end) over [0, n) in parallel: with oneTBB, or, in a build for ThreadSanitizer
-// (CMAM_STD_THREADS), with std::thread workers taking one index at a time, whose hand-offs
-// ThreadSanitizer sees (it cannot see into an uninstrumented oneTBB). The image does not depend
-// on which is used.
-template <class Body>
-void parallel_range(int n, int threads, Body&& body) {
-#ifdef CMAM_STD_THREADS
-    const int workers =
-        std::max(1, threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
-    std::atomic<int> next{0};
-    std::vector<std::thread> pool;
-    for (int w = 0; w < workers; ++w)
-        pool.emplace_back([&] {
-            for (int i = next++; i < n; i = next++) body(i, i + 1);
-        });
-    for (std::thread& t : pool) t.join();
-#else
-    (void)threads;
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 1),
-                      [&](const tbb::blocked_range<int>& r) { body(r.begin(), r.end()); });
-#endif
-}
-
-}  // namespace
-
-namespace {
-
-// Traces the film's samples into a framebuffer, a span of one row at a time.
-//
-// Scanline tags with several samples per pixel: the paper's scanline is a row of sample
-// strata. Sub-row sy of pixel row py has ID py * ny + sy, its samples are numbered left to
-// right (col * nx + sx), and the row is traced sub-row by sub-row, so each sample's cached
-// neighbours are one stratum to the left and (2-D CMAM) one stratum above, as the pixels are
-// at one sample per pixel. Pixel tags trace pixel by pixel. Either way every sample has the
-// same position and seed and each pixel sums its samples in the same order, so only the CMAM
-// sees the difference.
-class FilmTracer {
-  public:
-    FilmTracer(const Scene& scene, const RenderOptions& options, RenderStats* stats,
-               Framebuffer& fb)
-        : m_scene(scene),
-          m_film(scene.film),
-          m_options(options),
-          m_stats(stats),
-          m_fb(fb),
-          m_nx(scene.sampler.xsamples),
-          m_ny(scene.sampler.ysamples),
-          m_spp(m_nx * m_ny),
-          m_sub_rows(scene.tags == TagPolicy::Scanline),
-          m_footprints(scene.footprint_methods, scene.camera, m_spp) {}
-
-    int samples_x() const { return m_nx; }
-    bool sub_rows() const { return m_sub_rows; }
-
-    // Traces pixels [x_begin, x_end) of one row, after `prime` pixels to their left whose
-    // samples only feed the CMAM's caches (their radiance is dropped): they are what a row
-    // traced whole would have put there.
-    void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam) const {
-        Span sp{row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {},
-                {}};
-        draw_jitter(sp);
-        sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
-        if (m_sub_rows) {
-            for (int sy = 0; sy < m_ny; ++sy)
-                for (int i = 0; i < sp.n; ++i)
-                    for (int sx = 0; sx < m_nx; ++sx) trace_sample(sp, i, sx, sy, cmam);
-        } else {
-            for (int i = 0; i < sp.n; ++i)
-                for (int sy = 0; sy < m_ny; ++sy)
-                    for (int sx = 0; sx < m_nx; ++sx) trace_sample(sp, i, sx, sy, cmam);
-        }
-        float* out = &m_fb.rgb[(static_cast<std::size_t>(row) * m_fb.width + x_begin) * 3];
-        const double scale = m_options.aov == AovKind::None ? double(m_film.scale) : 1.0;
-        const std::size_t skip = static_cast<std::size_t>(prime) * 3;
-        for (std::size_t k = skip; k < sp.sum.size(); ++k)
-            out[k - skip] = static_cast<float>(sp.sum[k] / m_spp * scale);
-        sp.counts.add_to(m_stats);
-    }
-
-  private:
-    struct Span {
-        int row, py;
-        int c0, n;  // first column (primed pixels included) and pixel count
-        int prime;
-        std::vector<float> jitter;  // per pixel, 2 per sample
-        std::vector<uint64_t> seeds;
-        std::vector<double> sum;  // 3 per pixel
-        RayCounts counts;
-    };
-
-    // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
-    void draw_jitter(Span& sp) const {
-        sp.jitter.assign(static_cast<std::size_t>(sp.n) * m_spp * 2, 0.5f);
-        sp.seeds.resize(static_cast<std::size_t>(sp.n));
-        for (int i = 0; i < sp.n; ++i) {
-            const int px = m_film.x0 + sp.c0 + i;
-            sp.seeds[i] = mix_seed(uint64_t(sp.py) * uint64_t(m_film.xres) + uint64_t(px), 0x5eed);
-            if (!m_scene.sampler.jitter) continue;
-            Rng rng(sp.seeds[i]);
-            for (int k = 0; k < 2 * m_spp; ++k)
-                sp.jitter[static_cast<std::size_t>(i) * m_spp * 2 + k] = rng.next_float();
-        }
-    }
-
-    texture::RayTag tag_of(const Span& sp, int col, int sx, int sy, const float* j) const {
-        texture::RayTag tag;
-        if (m_sub_rows) {
-            tag.id = static_cast<uint32_t>(sp.py * m_ny + sy);
-            tag.seq = static_cast<uint32_t>(col * m_nx + sx);
-            tag.positioned = true;  // in strata: the 2-D CMAM's Jacobian and centre
-            tag.x = double(col) * m_nx + sx + j[0];
-            tag.y = double(sp.py) * m_ny + sy + j[1];
-        } else {
-            tag.id = static_cast<uint32_t>(sp.py * m_film.xres + m_film.x0 + col);
-            tag.seq = static_cast<uint32_t>(sy * m_nx + sx);
-        }
-        return tag;
-    }
-
-    void trace_sample(Span& sp, int i, int sx, int sy, CmamRowState& cmam) const {
-        const int col = sp.c0 + i, px = m_film.x0 + col, sample = sy * m_nx + sx;
-        const float* j = &sp.jitter[(static_cast<std::size_t>(i) * m_spp + sample) * 2];
-        const float fx = px + (sx + j[0]) / m_nx, fy = sp.py + (sy + j[1]) / m_ny;
-        const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
-        const texture::RayTag tag = tag_of(sp, col, sx, sy, j);
-        Aov aov{m_options.aov};
-        const RayFootprint fp =
-            m_footprints.camera_ray(fx, fy, ray.dir, tag, 0.5f - j[0], 0.5f - j[1]);
-        Rgb L = trace_one(m_scene, m_footprints, ray.org, ray.dir, fp,
-                          mix_seed(sp.seeds[i], uint64_t(sample) + 1),
-                          i < sp.prime ? nullptr : &sp.counts, &cmam,
-                          m_options.aov == AovKind::None ? nullptr : &aov);
-        if (m_options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
-        if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
-        double* acc = &sp.sum[static_cast<std::size_t>(i) * 3];
-        acc[0] += L.r;
-        acc[1] += L.g;
-        acc[2] += L.b;
-    }
-
-    const Scene& m_scene;
-    const FilmSettings& m_film;
-    const RenderOptions& m_options;
-    RenderStats* m_stats;
-    Framebuffer& m_fb;
-    const int m_nx, m_ny, m_spp;
-    const bool m_sub_rows;
-    const FootprintProducers m_footprints;
-};
-
-// Without the CMAM: rows in fixed blocks of 8, each row whole, so the image is the same for any
-// thread count.
-void render_rows(const FilmTracer& tracer, const RenderOptions& options, int height, int width) {
-    constexpr int kBlockRows = 8;
-    const int blocks = (height + kBlockRows - 1) / kBlockRows;
-    std::atomic<int> rows_done{0};
-    parallel_range(blocks, options.threads, [&](int begin, int end) {
-        CmamRowState cmam;
-        for (int b = begin; b < end; ++b)
-            for (int row = b * kBlockRows; row < std::min(height, (b + 1) * kBlockRows); ++row) {
-                tracer.span(row, 0, width, 0, cmam);
-                int done = ++rows_done;
-                if (options.progress) options.progress(done, height);
-            }
-    });
-}
-
-// With the CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top to
-// bottom with caches of its own, each row left to right: every row but the image's first has
-// the row above in the caches (the 2-D CMAM's Jacobian column), and each strip row starts with
-// the pixels to its left primed (the 1-D CMAM's neighbours; two at one sample per pixel, where
-// the region needs the two previous samples). Samples reach the caches exactly as in a
-// whole-row scan, and the image is the same for any thread count (algorithms.md §6.3.1).
-void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, int height,
-                        int width) {
-    const int strips = (width + kCmamStripWidth - 1) / kCmamStripWidth;
-    const int prime_pixels = tracer.sub_rows() ? (tracer.samples_x() >= 2 ? 1 : 2) : 0;
-    std::atomic<int> spans_done{0};
-    parallel_range(strips, options.threads, [&](int begin, int end) {
-        for (int k = begin; k < end; ++k) {
-            CmamRowState cmam;
-            const int x0 = k * kCmamStripWidth, x1 = std::min(width, x0 + kCmamStripWidth);
-            const int prime = std::min(x0, prime_pixels);
-            for (int row = 0; row < height; ++row) {
-                tracer.span(row, x0, x1, prime, cmam);
-                int done = ++spans_done;
-                if (options.progress) options.progress(done, strips * height);
-            }
-        }
-    });
-}
-
-}  // namespace
-
-Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
-    Framebuffer fb;
-    fb.width = scene.film.width();
-    fb.height = scene.film.height();
-    fb.rgb.assign(static_cast<std::size_t>(fb.width) * fb.height * 3, 0.0f);
-    if (options.aov == AovKind::Footprint) fb.channel_names = {"major", "minor", "lambda"};
-
-    std::unique_ptr<tbb::global_control> limit;
-    if (options.threads > 0)
-        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                      options.threads);
-    const FilmTracer tracer(scene, options, stats, fb);
-    if (scene.footprint_methods.has(FootprintMethod::Cmam))
-        render_cmam_strips(tracer, options, fb.height, fb.width);
-    else
-        render_rows(tracer, options, fb.height, fb.width);
-    return fb;
 }
 
 }  // namespace cmam::render

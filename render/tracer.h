@@ -1,0 +1,71 @@
+// render — what the integrator (integrator.cpp) and the film's render loop (film.cpp) share:
+// the per-sample random numbers, the per-row counts, the AOV sample, and tracing one camera
+// ray. Private to the tracer.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+
+#include "render/footprint/footprint.h"
+#include "render/integrator.h"
+#include "render/shading.h"
+
+namespace cmam::render {
+
+/// Small counter-based generator (SplitMix64): reproducible streams per pixel sample.
+class Rng {
+  public:
+    explicit Rng(uint64_t seed) : m_state(seed) {}
+    uint64_t next_u64() {
+        uint64_t z = (m_state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    float next_float() { return std::min(float(next_u64() >> 40) * 0x1.0p-24f, 0x1.fffffep-1f); }
+
+  private:
+    uint64_t m_state;
+};
+
+/// Ray counts of one row, added to the shared totals once per row (no per-ray atomics).
+struct RayCounts {
+    uint64_t camera = 0, secondary = 0, shadow = 0;
+    LookupCounts lookups;
+    uint64_t dropped_differentials = 0;
+
+    void add_to(RenderStats* stats) const {
+        if (!stats) return;
+        stats->camera_rays += camera;
+        stats->secondary_rays += secondary;
+        stats->shadow_rays += shadow;
+        for (int k = 0; k < texture::kFilterKinds; ++k)
+            stats->lookups_by_filter[k] += lookups.by_filter[k];
+        stats->lookups_point_sampled += lookups.point_sampled;
+        stats->lookups_non_finite += lookups.non_finite;
+        stats->cmam_2d_without_above += lookups.cmam_2d_without_above;
+        stats->dropped_differentials += dropped_differentials;
+    }
+};
+
+/// The AOV sample of one camera ray: three values, recorded at the first non-specular hit.
+struct Aov {
+    AovKind kind = AovKind::None;
+    bool recorded = false;
+    float v[3] = {0, 0, 0};
+};
+
+inline uint64_t mix_seed(uint64_t a, uint64_t b) {
+    uint64_t z = a * 0x9E3779B97F4A7C15ull + b + 0x632BE59BD9B4E019ull;
+    z = (z ^ (z >> 33)) * 0xff51afd7ed558ccdull;
+    z = (z ^ (z >> 33)) * 0xc4ceb9fe1a85ec53ull;
+    return z ^ (z >> 33);
+}
+
+/// Radiance (or, with `aov`, the AOV sample) along one camera ray with footprint state `fp`;
+/// `counts` and `cmam` may be null.
+Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
+              const Vec3& dir, const RayFootprint& fp, uint64_t seed, RayCounts* counts,
+              CmamRowState* cmam, Aov* aov);
+
+}  // namespace cmam::render
