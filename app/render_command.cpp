@@ -234,6 +234,7 @@ int run_render(const RenderArgs& a) {
     render::RenderOptions ro;
     ro.threads = a.threads;
     ro.aov = a.aov.value_or(render::AovKind::None);
+    ro.count_lookups = a.stats;  // printed with --stats only
     if (ro.aov == render::AovKind::Footprint) check_footprint_aov(*scene, out);
     ro.progress = [&](int done, int total) { bar.update(done, total); };
     render::RenderStats stats;

@@ -77,6 +77,7 @@ class FilmTracer {
     void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam) const {
         Span sp{row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {},
                 {}};
+        sp.counts.count_lookups = m_options.count_lookups;
         draw_jitter(sp);
         sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
         if (m_sub_rows) {

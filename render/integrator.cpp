@@ -225,7 +225,7 @@ struct Tracer {
                            h.v,
                            h.p,
                            footprints.at_hit(ray.fp, ray.dir, h),
-                           counts ? &counts->lookups : nullptr,
+                           counts && counts->count_lookups ? &counts->lookups : nullptr,
                            h.object_id,
                            cmam,
                            nullptr};

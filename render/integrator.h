@@ -34,6 +34,9 @@ inline constexpr int kCmamStripWidth = 64;
 struct RenderOptions {
     int threads = 0;  // 0: all cores
     AovKind aov = AovKind::None;
+    /// Count texture lookups per filter (RenderStats::lookups_*, cmam_2d_without_above); off,
+    /// the filters skip the bookkeeping the counts need. Rays are counted either way.
+    bool count_lookups = true;
     /// Called after each finished row, or row of a strip with the CMAM, with (done, total); may
     /// be empty.
     std::function<void(int, int)> progress;

@@ -33,6 +33,7 @@ struct RayCounts {
     uint64_t camera = 0, secondary = 0, shadow = 0;
     LookupCounts lookups;
     uint64_t dropped_differentials = 0;
+    bool count_lookups = true;  // whether texture lookups are counted (RenderOptions)
 
     void add_to(RenderStats* stats) const {
         if (!stats) return;

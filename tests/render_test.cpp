@@ -347,6 +347,30 @@ TEST(Scenes, NonFiniteTextureCoordinatesGiveTheMeanAndAreCounted) {
     }
 }
 
+// Without lookup counting (RenderOptions::count_lookups off, what `cmam render` does without
+// --stats) the image is the same and only the rays are counted.
+TEST(Render, LookupCountingChangesNothingButTheCounts) {
+    const std::string scene = std::string(CMAM_SCENES_DIR) + "/demo.pbrt";
+    for (const char* lod : {"differentials", "cmam"}) {
+        render::BuildOptions bo;
+        bo.spp_override = 1;
+        bo.lod = render::parse_footprint_method(lod);
+        auto s = build_scene(pbrt::parse_file(scene), bo, {});
+        RenderOptions counted, uncounted;
+        uncounted.count_lookups = false;
+        RenderStats st_counted, st_uncounted;
+        const Framebuffer a = render::render(*s, counted, &st_counted);
+        const Framebuffer b = render::render(*s, uncounted, &st_uncounted);
+        EXPECT_EQ(a.rgb, b.rgb) << lod;
+        EXPECT_EQ(st_counted.total_rays(), st_uncounted.total_rays()) << lod;
+        uint64_t counted_lookups = 0, uncounted_lookups = 0;
+        for (auto& n : st_counted.lookups_by_filter) counted_lookups += n;
+        for (auto& n : st_uncounted.lookups_by_filter) uncounted_lookups += n;
+        EXPECT_GT(counted_lookups, 0u) << lod;
+        EXPECT_EQ(uncounted_lookups, 0u) << lod;
+    }
+}
+
 TEST(Cmam, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
     // A textured plane fills the frame: with the image traced in strips, top to bottom, every
     // 2-D CMAM lookup has its sample above except those of the image's first row of strata,
