@@ -123,7 +123,7 @@ void Parser::coord_sys_transform(const Token& dir) {
     std::string name = expect_string(dir, "a quoted name");
     auto it = m_coord_systems.find(name);
     if (it == m_coord_systems.end())
-        throw SceneError(dir.loc, "coordinate system " + q(name) + " is not defined");
+        throw SceneError(dir.loc, "coordinate system " + in_quotes(name) + " is not defined");
     m_gs.ctm = it->second;
 }
 
@@ -195,14 +195,14 @@ void Parser::make_named_material(const Token& dir) {
     m.entity.params = param_list();
     m.entity.given = true;
     if (!m.entity.params.find("type"))
-        throw SceneError(dir.loc,
-                         "MakeNamedMaterial " + q(m.name) + " needs a \"string type\" parameter");
+        throw SceneError(dir.loc, "MakeNamedMaterial " + in_quotes(m.name) +
+                                      " needs a \"string type\" parameter");
     m.entity.type = m.entity.params.get_string("type", "");
     m.scope = m_names.scope_for(m.entity.params);
     resolve_mix(m);
     if (m_names.bind(m_names.materials, m.name, static_cast<int>(m_desc.materials.size()),
                      !m_stack.empty()))
-        warn(dir.loc, "named material " + q(m.name) + " redefined");
+        warn(dir.loc, "named material " + in_quotes(m.name) + " redefined");
     m_desc.materials.push_back(std::move(m));
 }
 
@@ -210,7 +210,7 @@ void Parser::named_material(const Token& dir) {
     std::string name = expect_string(dir, "a quoted material name");
     auto it = m_names.materials.find(name);
     if (it == m_names.materials.end())
-        warn(dir.loc, "named material " + q(name) +
+        warn(dir.loc, "named material " + in_quotes(name) +
                           " is not defined; the current material is kept (as pbrt-v3 does)");
     else
         m_gs.material = it->second;
@@ -246,13 +246,14 @@ void Parser::texture(const Token& dir) {
     else if (kind == "spectrum" || kind == "color" || kind == "rgb")
         t.is_float = false;
     else
-        throw SceneError(dir.loc, "texture type must be \"float\" or \"spectrum\", got " + q(kind));
+        throw SceneError(dir.loc,
+                         "texture type must be \"float\" or \"spectrum\", got " + in_quotes(kind));
     t.entity = entity(dir);
     t.world_from_texture = m_gs.ctm;
     t.scope = m_names.scope_for(t.entity.params);
     if (m_names.bind(t.is_float ? m_names.float_textures : m_names.spectrum_textures, t.name,
                      static_cast<int>(m_desc.textures.size()), !m_stack.empty()))
-        warn(dir.loc, "texture " + q(t.name) + " redefined");
+        warn(dir.loc, "texture " + in_quotes(t.name) + " redefined");
     m_desc.textures.push_back(std::move(t));
 }
 
@@ -327,10 +328,11 @@ void Parser::accelerator(const Token& dir) {
 void Parser::object_begin(const Token& dir) {
     if (m_in_object)
         throw SceneError(dir.loc,
-                         "ObjectBegin inside the definition of object " + q(m_object_name));
+                         "ObjectBegin inside the definition of object " + in_quotes(m_object_name));
     m_object_name = expect_string(dir, "a quoted object name");
     // A redefinition is a new object: instances before it keep the old one (pbrt-v3).
-    if (m_objects.count(m_object_name)) warn(dir.loc, "object " + q(m_object_name) + " redefined");
+    if (m_objects.count(m_object_name))
+        warn(dir.loc, "object " + in_quotes(m_object_name) + " redefined");
     m_objects[m_object_name] = static_cast<int>(m_desc.objects.size());
     m_desc.objects.push_back({m_object_name, {}, dir.loc});
     m_in_object = true;
@@ -343,9 +345,10 @@ void Parser::object_end(const Token& dir) {
     // Blocks opened inside the object are closed first (the object's own entry is the
     // innermost ObjectBegin: objects do not nest).
     if (m_stack.back().kind != StackEntry::Kind::Object)
-        throw SceneError(
-            dir.loc, "ObjectEnd does not match " + std::string(m_stack.back().begin()) + " at " +
-                         m_stack.back().loc.to_string() + " inside object " + q(m_object_name));
+        throw SceneError(dir.loc, "ObjectEnd does not match " +
+                                      std::string(m_stack.back().begin()) + " at " +
+                                      m_stack.back().loc.to_string() + " inside object " +
+                                      in_quotes(m_object_name));
     restore_attributes();
     m_stack.pop_back();
     m_in_object = false;
@@ -355,7 +358,8 @@ void Parser::object_instance(const Token& dir) {
     std::string name = expect_string(dir, "a quoted object name");
     if (m_in_object) throw SceneError(dir.loc, "ObjectInstance inside an object definition");
     auto it = m_objects.find(name);
-    if (it == m_objects.end()) throw SceneError(dir.loc, "object " + q(name) + " is not defined");
+    if (it == m_objects.end())
+        throw SceneError(dir.loc, "object " + in_quotes(name) + " is not defined");
     m_desc.instances.push_back({it->second, m_gs.ctm, dir.loc});
 }
 

@@ -49,6 +49,12 @@ using WarningSink = std::function<void(const std::string&)>;
 /// warnings are formatted through it.
 std::string printable(const std::string& s);
 
+/// `s` in double quotes, as messages show names and values: in_quotes("imagemap") is "imagemap"
+/// with its quotes.
+inline std::string in_quotes(const std::string& s) {
+    return "\"" + s + "\"";
+}
+
 /// Formats a warning the same way errors are formatted.
 std::string format_warning(const FileLoc& loc, const std::string& message);
 

@@ -79,9 +79,6 @@ std::size_t arity(ParamType t) {
             return 1;
     }
 }
-std::string q(const std::string& s) {
-    return "\"" + s + "\"";
-}
 
 // Sampled spectra are (wavelength, value) pairs with finite numbers and increasing wavelengths,
 // which is what spectrum_to_rgb interpolates.
@@ -89,16 +86,17 @@ void check_spectrum_samples(const Param& p) {
     const std::vector<double>& v = p.numbers;
     for (std::size_t i = 0; i + 1 < v.size(); i += 2) {
         if (!std::isfinite(v[i]))
-            throw SceneError(p.loc, "spectrum " + q(p.name) +
+            throw SceneError(p.loc, "spectrum " + in_quotes(p.name) +
                                         " wavelengths must be finite numbers, got " +
                                         number_text(v[i]));
         if (!std::isfinite(v[i + 1]))
-            throw SceneError(p.loc, "spectrum " + q(p.name) +
+            throw SceneError(p.loc, "spectrum " + in_quotes(p.name) +
                                         " values must be finite numbers, got " +
                                         number_text(v[i + 1]) + " at " + number_text(v[i]) + " nm");
         if (i > 0 && !(v[i] > v[i - 2]))
-            throw SceneError(p.loc, "spectrum " + q(p.name) + " wavelengths must increase, got " +
-                                        number_text(v[i]) + " after " + number_text(v[i - 2]));
+            throw SceneError(p.loc, "spectrum " + in_quotes(p.name) +
+                                        " wavelengths must increase, got " + number_text(v[i]) +
+                                        " after " + number_text(v[i - 2]));
     }
 }
 }  // namespace
@@ -131,22 +129,22 @@ std::optional<FileLoc> ParamSet::add(Param p) {
             break;
         }
     std::size_t n = p.numbers.size() + p.strings.size() + p.bools.size();
-    if (n == 0) throw SceneError(p.loc, "parameter " + q(p.name) + " has no values");
+    if (n == 0) throw SceneError(p.loc, "parameter " + in_quotes(p.name) + " has no values");
     if (p.type_name == "blackbody") {  // [temperature scale]: a sampled spectrum
         if (!p.strings.empty() || p.numbers.size() != 2)
-            throw SceneError(p.loc, "blackbody " + q(p.name) +
+            throw SceneError(p.loc, "blackbody " + in_quotes(p.name) +
                                         " needs two numbers, a temperature in kelvin and a "
                                         "scale, got " +
                                         std::to_string(p.numbers.size() + p.strings.size()) +
                                         " values");
         const double kelvin = p.numbers[0], scale = p.numbers[1];
         if (!(kelvin > 0 && std::isfinite(kelvin)))
-            throw SceneError(p.loc, "blackbody " + q(p.name) +
+            throw SceneError(p.loc, "blackbody " + in_quotes(p.name) +
                                         " temperature must be a positive finite number of "
                                         "kelvin, got " +
                                         number_text(kelvin));
         if (!std::isfinite(scale))
-            throw SceneError(p.loc, "blackbody " + q(p.name) +
+            throw SceneError(p.loc, "blackbody " + in_quotes(p.name) +
                                         " scale must be a finite number, got " +
                                         number_text(scale));
         p.numbers = blackbody_samples(kelvin, scale);
@@ -154,12 +152,12 @@ std::optional<FileLoc> ParamSet::add(Param p) {
     std::size_t k = arity(p.type);
     if (p.type == ParamType::Spectrum) {
         if (!p.numbers.empty() && p.numbers.size() % 2 != 0)
-            throw SceneError(p.loc, "spectrum " + q(p.name) +
+            throw SceneError(p.loc, "spectrum " + in_quotes(p.name) +
                                         " needs (wavelength, value) pairs, got " +
                                         std::to_string(p.numbers.size()) + " numbers");
         check_spectrum_samples(p);
     } else if (p.numbers.size() % k != 0) {
-        throw SceneError(p.loc, std::string(to_string(p.type)) + " parameter " + q(p.name) +
+        throw SceneError(p.loc, std::string(to_string(p.type)) + " parameter " + in_quotes(p.name) +
                                     " needs a multiple of " + std::to_string(k) + " values, got " +
                                     std::to_string(p.numbers.size()));
     }
@@ -169,7 +167,7 @@ std::optional<FileLoc> ParamSet::add(Param p) {
         for (double x : p.numbers)
             if (!(x >= std::numeric_limits<int>::min() && x <= std::numeric_limits<int>::max() &&
                   x == std::floor(x)))
-                throw SceneError(p.loc, "integer parameter " + q(p.name) +
+                throw SceneError(p.loc, "integer parameter " + in_quotes(p.name) +
                                             " must be a whole number in int's range, got " +
                                             number_text(x));
     m_params.push_back(std::move(p));
@@ -190,7 +188,7 @@ const Param* ParamSet::find_typed(const std::string& name,
         std::string expected;
         for (ParamType t : types)
             expected += (expected.empty() ? "" : " or ") + std::string(to_string(t));
-        throw SceneError(p->loc, "parameter " + q(name) + " has type " + p->type_name +
+        throw SceneError(p->loc, "parameter " + in_quotes(name) + " has type " + p->type_name +
                                      ", expected " + expected);
     }
     p->used = true;
@@ -200,9 +198,9 @@ const Param* ParamSet::find_typed(const std::string& name,
 namespace {
 void expect_single(const Param& p, std::size_t n, std::size_t expected = 1) {
     if (n != expected)
-        throw SceneError(p.loc, "parameter " + q(p.name) + " expects " + std::to_string(expected) +
-                                    " value" + (expected == 1 ? "" : "s") + ", got " +
-                                    std::to_string(n));
+        throw SceneError(p.loc, "parameter " + in_quotes(p.name) + " expects " +
+                                    std::to_string(expected) + " value" +
+                                    (expected == 1 ? "" : "s") + ", got " + std::to_string(n));
 }
 }  // namespace
 
@@ -252,9 +250,10 @@ std::optional<Rgb> ParamSet::get_rgb(const std::string& name) const {
                    static_cast<float>(p->numbers[2])};
     }
     if (!p->strings.empty())
-        throw SceneError(
-            p->loc, "spectrum " + q(name) + " from file or named spectrum " + q(p->strings[0]) +
-                        " is not supported; give rgb values or (wavelength, value) pairs");
+        throw SceneError(p->loc,
+                         "spectrum " + in_quotes(name) + " from file or named spectrum " +
+                             in_quotes(p->strings[0]) +
+                             " is not supported; give rgb values or (wavelength, value) pairs");
     return spectrum_to_rgb(p->numbers);
 }
 
@@ -291,7 +290,7 @@ std::optional<std::vector<double>> ParamSet::get_point2s(const std::string& name
     const Param* p = find_typed(name, {ParamType::Point2, ParamType::Vector2, ParamType::Float});
     if (!p) return std::nullopt;
     if (p->numbers.size() % 2 != 0)
-        throw SceneError(p->loc, "parameter " + q(name) + " needs pairs of values, got " +
+        throw SceneError(p->loc, "parameter " + in_quotes(name) + " needs pairs of values, got " +
                                      std::to_string(p->numbers.size()));
     return p->numbers;
 }
@@ -302,11 +301,11 @@ void ParamSet::check_unused(const std::string& what, const WarningSink& warn,
         if (p.used) continue;
         if (std::find(ignored.begin(), ignored.end(), p.name) != ignored.end()) {
             if (warn)
-                warn(format_warning(p.loc, "parameter " + q(p.name) + " of " + what +
+                warn(format_warning(p.loc, "parameter " + in_quotes(p.name) + " of " + what +
                                                " is not supported by cmam; ignored"));
             continue;
         }
-        throw SceneError(p.loc, "unknown parameter " + q(p.name) + " for " + what);
+        throw SceneError(p.loc, "unknown parameter " + in_quotes(p.name) + " for " + what);
     }
 }
 

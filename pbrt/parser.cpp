@@ -83,8 +83,8 @@ bool Parser::skip_to_directive(std::vector<SceneError>& errors) {
 
 void Parser::directive(const Token& dir) {
     if (dir.quoted || dir.text == "[" || dir.text == "]")
-        throw SceneError(dir.loc,
-                         "expected a directive, got " + (dir.quoted ? q(dir.text) : dir.text));
+        throw SceneError(
+            dir.loc, "expected a directive, got " + (dir.quoted ? in_quotes(dir.text) : dir.text));
     for (const Directive& d : directives()) {
         if (d.name != dir.text) continue;
         check_block(dir, d.block);
@@ -135,7 +135,8 @@ void Parser::include(const Token& dir) {
     std::string canon = std::filesystem::weakly_canonical(path, ec).string();
     for (const auto& f : m_files)
         if (f->canonical == canon)
-            throw SceneError(dir.loc, "Include cycle: " + q(name) + " is already being read");
+            throw SceneError(dir.loc,
+                             "Include cycle: " + in_quotes(name) + " is already being read");
     if (m_peeked) throw SceneError(dir.loc, "internal: lookahead across Include");
     push_file(Tokenizer::from_file(path, dir.loc));
 }
@@ -191,7 +192,8 @@ double Parser::to_number(const Token& t, const std::string& context) {
         auto r = std::from_chars(b, e, v);
         if (r.ec == std::errc() && r.ptr == e && b != e) return v;
     }
-    throw SceneError(t.loc, context + " expects a number, got " + (t.quoted ? q(t.text) : t.text));
+    throw SceneError(t.loc,
+                     context + " expects a number, got " + (t.quoted ? in_quotes(t.text) : t.text));
 }
 
 std::vector<double> Parser::numbers(const Token& dir, int n, bool allow_brackets) {
@@ -228,12 +230,12 @@ ParamSet Parser::param_list() {
             add_value(p, v);
         }
         if (p.type == ParamType::Spectrum && !p.strings.empty() && !p.numbers.empty())
-            throw SceneError(p.loc, "spectrum " + q(p.name) + " mixes numbers and strings");
+            throw SceneError(p.loc, "spectrum " + in_quotes(p.name) + " mixes numbers and strings");
         if (p.type == ParamType::Spectrum && !p.strings.empty()) read_spd(p);
         const FileLoc loc = p.loc;
         const std::string name = p.name;
         if (const auto first = ps.add(std::move(p)))
-            warn(loc, "parameter " + q(name) +
+            warn(loc, "parameter " + in_quotes(name) +
                           " given twice; the later value is used (the first is at " +
                           first->to_string() + ")");
     }
@@ -249,13 +251,13 @@ Param Parser::param_declaration(const Token& decl) {
     const std::size_t d = c == std::string::npos ? c : s.find_first_of(" \t", c);
     if (a == std::string::npos || b == std::string::npos || c == std::string::npos ||
         (d != std::string::npos && s.find_first_not_of(" \t", d) != std::string::npos))
-        throw SceneError(decl.loc,
-                         "expected a parameter declaration \"type name\", got " + q(decl.text));
+        throw SceneError(decl.loc, "expected a parameter declaration \"type name\", got " +
+                                       in_quotes(decl.text));
     const std::string type_name = s.substr(a, b - a);
     auto type = parse_param_type(type_name);
     if (!type)
-        throw SceneError(decl.loc, "unknown parameter type " + q(type_name) + " (expected " +
-                                       param_type_names() + ")");
+        throw SceneError(decl.loc, "unknown parameter type " + in_quotes(type_name) +
+                                       " (expected " + param_type_names() + ")");
     Param p;
     p.type = *type;
     p.type_name = type_name;
@@ -272,16 +274,17 @@ void Parser::add_value(Param& p, const Token& v) {
         else if (v.text == "false")
             p.bools.push_back(false);
         else
-            throw SceneError(v.loc, "bool parameter " + q(p.name) +
+            throw SceneError(v.loc, "bool parameter " + in_quotes(p.name) +
                                         " expects \"true\" or \"false\", got " + v.text);
     } else if (want_string || (p.type == ParamType::Spectrum && v.quoted)) {
         if (!v.quoted)
-            throw SceneError(v.loc, std::string(to_string(p.type)) + " parameter " + q(p.name) +
-                                        " expects a quoted string, got " + v.text);
+            throw SceneError(v.loc, std::string(to_string(p.type)) + " parameter " +
+                                        in_quotes(p.name) + " expects a quoted string, got " +
+                                        v.text);
         p.strings.push_back(v.text);
     } else {
         p.numbers.push_back(
-            to_number(v, std::string(to_string(p.type)) + " parameter " + q(p.name)));
+            to_number(v, std::string(to_string(p.type)) + " parameter " + in_quotes(p.name)));
     }
 }
 
@@ -289,19 +292,20 @@ void Parser::add_value(Param& p, const Token& v) {
 // comments, resolved as every path is; its samples replace the name.
 void Parser::read_spd(Param& p) {
     if (p.strings.size() != 1)
-        throw SceneError(p.loc, "spectrum " + q(p.name) + " names " +
+        throw SceneError(p.loc, "spectrum " + in_quotes(p.name) + " names " +
                                     std::to_string(p.strings.size()) +
                                     " files; give one .spd file");
     const std::string path = resolve_path(m_desc.base_dir, p.loc, p.strings[0]);
     if (std::string why = not_a_regular_file(path); !why.empty())
-        throw SceneError(p.loc, "cannot read spectrum file " + q(path) + ": " + why);
+        throw SceneError(p.loc, "cannot read spectrum file " + in_quotes(path) + ": " + why);
     if (std::error_code ec; !std::filesystem::exists(path, ec))
-        throw SceneError(p.loc, "cannot read spectrum file " + q(path) +
-                                    ": file not found (named by spectrum " + q(p.name) + ")");
+        throw SceneError(p.loc, "cannot read spectrum file " + in_quotes(path) +
+                                    ": file not found (named by spectrum " + in_quotes(p.name) +
+                                    ")");
     std::ifstream in(path);
     if (!in)
-        throw SceneError(p.loc, "cannot read spectrum file " + q(path) + " (named by spectrum " +
-                                    q(p.name) +
+        throw SceneError(p.loc, "cannot read spectrum file " + in_quotes(path) +
+                                    " (named by spectrum " + in_quotes(p.name) +
                                     "; pbrt-v3 reads .spd files of wavelength, value pairs)");
     std::vector<double> values;
     std::string line;
@@ -313,13 +317,13 @@ void Parser::read_spd(Param& p) {
             char* end = nullptr;
             const double v = std::strtod(w.c_str(), &end);
             if (end != w.c_str() + w.size())
-                throw SceneError(p.loc,
-                                 "spectrum file " + q(path) + ": " + q(w) + " is not a number");
+                throw SceneError(p.loc, "spectrum file " + in_quotes(path) + ": " + in_quotes(w) +
+                                            " is not a number");
             values.push_back(v);
         }
     }
     if (values.empty() || values.size() % 2 != 0)
-        throw SceneError(p.loc, "spectrum file " + q(path) +
+        throw SceneError(p.loc, "spectrum file " + in_quotes(path) +
                                     " must hold (wavelength, value) pairs, got " +
                                     std::to_string(values.size()) + " numbers");
     p.strings.clear();

@@ -17,10 +17,6 @@
 
 namespace cmam::pbrt::detail {
 
-inline std::string q(const std::string& s) {
-    return "\"" + s + "\"";
-}
-
 // The part of pbrt-v3's graphics state copied at each AttributeBegin. Named textures and
 // materials, also scoped by AttributeBegin/End, are kept in NamedTables instead.
 struct GraphicsState {

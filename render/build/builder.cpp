@@ -11,10 +11,6 @@
 
 namespace cmam::render::build_detail {
 
-std::string q(const std::string& s) {
-    return "\"" + s + "\"";
-}
-
 std::array<double, 12> to34(const Mat4& m) {
     std::array<double, 12> r{};
     for (int i = 0; i < 3; ++i)

@@ -22,12 +22,11 @@
 namespace cmam::render::build_detail {
 
 using pbrt::Entity;
+using pbrt::in_quotes;
 using pbrt::Mat4;
 using pbrt::SceneError;
 using pbrt::TextureScope;
 
-// `s` in double quotes, as messages name types and parameters.
-std::string q(const std::string& s);
 // The top three rows of `m`, row by row.
 std::array<double, 12> to34(const Mat4& m);
 
@@ -53,7 +52,7 @@ std::string quoted_names(const TypeBuilder<Build> (&table)[N]) {
     std::string out;
     for (const TypeBuilder<Build>& t : table) {
         if (!out.empty()) out += ", ";
-        out += q(std::string(t.name));
+        out += in_quotes(std::string(t.name));
     }
     return out;
 }
@@ -62,7 +61,7 @@ std::string quoted_names(const TypeBuilder<Build> (&table)[N]) {
 template <class Build, std::size_t N>
 Build builder_for(const TypeBuilder<Build> (&table)[N], const Entity& e, const char* what) {
     if (const Build build = find_builder(table, e.type)) return build;
-    throw SceneError(e.loc, std::string("unsupported ") + what + " " + q(e.type) +
+    throw SceneError(e.loc, std::string("unsupported ") + what + " " + in_quotes(e.type) +
                                 " (supported: " + quoted_names(table) + ")");
 }
 

@@ -19,7 +19,8 @@ void Builder::film() {
     const Entity& e = m_desc.film;
     FilmSettings& f = m_scene->film;
     if (e.given && e.type != "image")
-        throw SceneError(e.loc, "unsupported Film " + q(e.type) + " (supported: \"image\")");
+        throw SceneError(e.loc,
+                         "unsupported Film " + in_quotes(e.type) + " (supported: \"image\")");
     auto side = [&](const char* name, int def) {
         const int n = e.params.get_int(name, def);
         if (n < 1 || n > kMaxFilmSide)
@@ -68,7 +69,7 @@ void Builder::camera() {
     if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
     if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment" &&
         e.type != "realistic")
-        throw SceneError(e.loc, "unsupported Camera " + q(e.type) +
+        throw SceneError(e.loc, "unsupported Camera " + in_quotes(e.type) +
                                     " (supported: \"perspective\", \"orthographic\", "
                                     "\"environment\", \"realistic\")");
     Camera& c = m_scene->camera;
@@ -124,7 +125,7 @@ void Builder::camera() {
     auto m = to34(wc);
     for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
     check_camera_rays(c, e.loc);
-    e.params.check_unused("Camera " + q(e.type), m_warn,
+    e.params.check_unused("Camera " + in_quotes(e.type), m_warn,
                           {"focaldistance", "shutteropen", "shutterclose"});
 }
 
@@ -151,7 +152,7 @@ float Builder::realistic_tan_half_fov(const Entity& e) {
         }
     };
     const auto interfaces = at(file->loc, "", [&] { return read_lens_file(path); });
-    const std::string in_file = "lens file " + q(path) + ": ";
+    const std::string in_file = "lens file " + in_quotes(path) + ": ";
     const ParaxialLens lens = at(file->loc, in_file, [&] { return paraxial_lens(interfaces); });
     const double image =
         at(loc_of(e, "focusdistance"), in_file, [&] { return image_distance(lens, 1000 * focus); });
@@ -230,11 +231,11 @@ void Builder::sampler() {
             m_opts.spp_override > 0
                 ? std::string(", as many as --spp asks for")
                 : " with " + std::to_string(k) + "x" + std::to_string(k) + " per pixel";
-        warn(e.loc,
-             "Sampler " + q(e.type) + " is rendered as \"stratified\" jittered samples" + count);
-        e.params.check_unused("Sampler " + q(e.type), m_warn, names_of(e));
+        warn(e.loc, "Sampler " + in_quotes(e.type) +
+                        " is rendered as \"stratified\" jittered samples" + count);
+        e.params.check_unused("Sampler " + in_quotes(e.type), m_warn, names_of(e));
     } else {
-        throw SceneError(e.loc, "unknown Sampler " + q(e.type));
+        throw SceneError(e.loc, "unknown Sampler " + in_quotes(e.type));
     }
     if (m_opts.spp_override > kMaxSamplesPerPixel)
         throw SceneError("--spp " + std::to_string(m_opts.spp_override) +
@@ -269,10 +270,10 @@ void Builder::filter() {
         e.params.check_unused("PixelFilter \"box\"", m_warn);
     } else if (e.type == "gaussian" || e.type == "mitchell" || e.type == "sinc" ||
                e.type == "triangle") {
-        warn(e.loc, "PixelFilter " + q(e.type) + " is rendered as \"box\"");
+        warn(e.loc, "PixelFilter " + in_quotes(e.type) + " is rendered as \"box\"");
         e.params.check_unused("PixelFilter", m_warn, names_of(e));
     } else {
-        throw SceneError(e.loc, "unknown PixelFilter " + q(e.type));
+        throw SceneError(e.loc, "unknown PixelFilter " + in_quotes(e.type));
     }
 }
 
@@ -292,7 +293,7 @@ void Builder::integrator() {
     if (direct)
         m_light_samples = e.params.get_string("strategy", "all") == "all";
     else if (e.type != "whitted")
-        warn(e.loc, "Integrator " + q(e.type) + " is rendered as \"whitted\"");
+        warn(e.loc, "Integrator " + in_quotes(e.type) + " is rendered as \"whitted\"");
     if (const auto* p = e.params.find("maxdepth")) {
         const int depth = e.params.get_int("maxdepth", 5);
         m_scene->max_depth = std::min(depth, kMaxDepthLimit);
@@ -301,7 +302,7 @@ void Builder::integrator() {
                              std::to_string(kMaxDepthLimit) + ", which is used instead");
     }
     e.params.check_unused(
-        "Integrator " + q(e.type), m_warn,
+        "Integrator " + in_quotes(e.type), m_warn,
         e.type == "whitted" || direct ? std::vector<std::string>{"pixelbounds"} : names_of(e));
 }
 

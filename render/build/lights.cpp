@@ -158,7 +158,7 @@ void Builder::light(const pbrt::LightDesc& d) {
     // A delta light needs one shadow ray; the others take nsamples under directlighting.
     // (pbrt-v3's goniometric light has no fov, but scenes give it; pbrt-v3 warns too.)
     if (l.type == Light::Type::Infinite) l.samples = light_samples(e);
-    e.params.check_unused("light " + q(e.type), m_warn, {"nsamples", "conedelta", "fov"});
+    e.params.check_unused("light " + in_quotes(e.type), m_warn, {"nsamples", "conedelta", "fov"});
     m_scene->lights.push_back(l);
 }
 

@@ -91,7 +91,7 @@ void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
         (void)spectrum_input(e, s, "transmit", Rgb(0.5f));
     }
     warn(e.loc,
-         "material " + q(t) + " is rendered as \"plastic\" (" +
+         "material " + in_quotes(t) + " is rendered as \"plastic\" (" +
              (t == "substrate" ? "its Fresnel blend approximated" : "no diffuse transmission") +
              ")");
 }
@@ -123,7 +123,7 @@ void Builder::mix_material(const pbrt::MaterialDesc& d, Material& m) {
         const std::string name = e.params.get_string(param, "");
         m.mix[k] = d.mix[k];
         if (d.mix[k] < 0)
-            warn(p->loc, "named material " + q(name) +
+            warn(p->loc, "named material " + in_quotes(name) +
                              " is not defined here; the default matte is used in the mix");
     }
 }
@@ -135,7 +135,7 @@ Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     Material m;
     m.type = Material::Type::Matte;
     m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
-    warn(e.loc, "material " + q(e.type) + " is rendered as \"matte\"" +
+    warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
                     (e.params.find("Kd") ? " with its Kd" : "") +
                     " (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
                     "substrate and translucent as plastic)");
@@ -162,7 +162,7 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
     (this->*build)(d, m);
     if (e.params.find("type")) e.params.get_string("type", "");
     if (e.params.find("bumpmap")) m.bump = float_input(e, d.scope, "bumpmap", 0);
-    e.params.check_unused("material " + q(e.type), m_warn, {});
+    e.params.check_unused("material " + in_quotes(e.type), m_warn, {});
     return m;
 }
 

@@ -38,7 +38,7 @@ bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
             throw SceneError(e.params.find("innerradius")->loc,
                              "innerradius must be in [0, radius)");
     }
-    e.params.check_unused("shape " + q(e.type), m_warn, {"alpha", "shadowalpha"});
+    e.params.check_unused("shape " + in_quotes(e.type), m_warn, {"alpha", "shadowalpha"});
     return true;
 }
 
@@ -56,7 +56,7 @@ bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
     mesh_primitive(s, prim);
     const QuadricMesh mesh = tessellate(e.type, quadric_params(e));
-    e.params.check_unused("shape " + q(e.type), m_warn, {"alpha", "shadowalpha"});
+    e.params.check_unused("shape " + in_quotes(e.type), m_warn, {"alpha", "shadowalpha"});
     return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim);
 }
 
@@ -88,7 +88,7 @@ bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     mesh_primitive(s, prim);
     std::vector<float> P, N, UV;
     std::vector<int> idx;
-    const std::string what = q(e.type);
+    const std::string what = in_quotes(e.type);
     auto p = e.params.get_point3s("P");
     if (!p) throw SceneError(e.loc, what + " needs a \"point3 P\" parameter");
     for (double x : finite_values(e, "P", *p)) P.push_back(float(x));
@@ -144,7 +144,7 @@ bool Builder::subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>
                  " triangles; " + std::to_string(fit) + " are used");
     const std::string scheme = e.params.get_string("scheme", "loop");
     if (scheme != "loop")
-        warn(loc_of(e, "scheme"), "shape \"loopsubdiv\": scheme " + q(scheme) +
+        warn(loc_of(e, "scheme"), "shape \"loopsubdiv\": scheme " + in_quotes(scheme) +
                                       " is not pbrt-v3's; Loop subdivision is used");
     e.params.check_unused("shape \"loopsubdiv\"", m_warn, {"nlevels"});
     const SubdividedMesh mesh = loop_subdivide(P, idx, fit);
@@ -283,7 +283,7 @@ Light Builder::area_light(const Entity& e) {
     Light l;
     l.type = Light::Type::Area;
     if (e.type != "diffuse" && e.type != "area") {  // pbrt-v3 warns and goes on
-        warn(e.loc, "unknown AreaLightSource " + q(e.type) +
+        warn(e.loc, "unknown AreaLightSource " + in_quotes(e.type) +
                         " (pbrt-v3 has \"diffuse\", also named \"area\"): the shapes in "
                         "its scope do not emit");
         return l;  // black: no light is made

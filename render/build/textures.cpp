@@ -17,7 +17,8 @@ TexInput Builder::spectrum_input(const Entity& e, const TextureScope& scope,
     if (auto ref = e.params.get_texture(name)) {
         auto it = scope.spectrum_textures.find(ref->name);
         if (it == scope.spectrum_textures.end())
-            throw SceneError(ref->loc, "spectrum texture " + q(ref->name) + " is not defined");
+            throw SceneError(ref->loc,
+                             "spectrum texture " + in_quotes(ref->name) + " is not defined");
         return {it->second, {}};
     }
     if (auto c = e.params.get_rgb(name)) return {-1, to_rgb(finite_values(e, name, *c))};
@@ -29,7 +30,7 @@ TexInput Builder::float_input(const Entity& e, const TextureScope& scope, const 
     if (auto ref = e.params.get_texture(name)) {
         auto it = scope.float_textures.find(ref->name);
         if (it == scope.float_textures.end())
-            throw SceneError(ref->loc, "float texture " + q(ref->name) + " is not defined");
+            throw SceneError(ref->loc, "float texture " + in_quotes(ref->name) + " is not defined");
         return {it->second, {}};
     }
     return {-1, Rgb(float(finite_float(e, name, def, positive)))};
@@ -56,7 +57,7 @@ void Builder::uv_mapping(const Entity& e, const pbrt::TextureDesc& t, TextureNod
     } else {
         const auto* p = e.params.find("mapping");
         throw SceneError(p ? p->loc : e.loc,
-                         "unknown texture mapping " + q(mapping) +
+                         "unknown texture mapping " + in_quotes(mapping) +
                              " (expected \"uv\", \"spherical\", \"cylindrical\" or "
                              "\"planar\")");
     }
@@ -79,9 +80,9 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     std::string wrap_name = e.params.get_string("wrap", "repeat");
     auto wrap = texture::parse_wrap_mode(wrap_name);
     if (!wrap || *wrap == texture::WrapMode::Mirror)
-        throw SceneError(
-            e.params.find("wrap")->loc,
-            "unknown wrap mode " + q(wrap_name) + " (expected \"repeat\", \"black\" or \"clamp\")");
+        throw SceneError(e.params.find("wrap")->loc,
+                         "unknown wrap mode " + in_quotes(wrap_name) +
+                             " (expected \"repeat\", \"black\" or \"clamp\")");
     float scale = float(finite_float(e, "scale", 1));
     std::optional<bool> gamma;
     if (e.params.find("gamma")) gamma = e.params.get_bool("gamma", true);
@@ -130,7 +131,7 @@ void Builder::image_texture(const pbrt::TextureDesc& t, TextureNode& n) {
         std::string f = e.params.get_string("filter", "");
         auto k = texture::parse_filter(f);
         if (!k)
-            throw SceneError(fp->loc, "unknown filter " + q(f) + " (expected " +
+            throw SceneError(fp->loc, "unknown filter " + in_quotes(f) + " (expected " +
                                           texture::filter_names("\"") + ")");
         n.filter.kind = *k;
     }
@@ -138,7 +139,7 @@ void Builder::image_texture(const pbrt::TextureDesc& t, TextureNode& n) {
         std::string l = e.params.get_string("lod", "");
         auto k = parse_footprint_method(l);
         if (!k)
-            throw SceneError(lp->loc, "unknown lod " + q(l) + " (expected " +
+            throw SceneError(lp->loc, "unknown lod " + in_quotes(l) + " (expected " +
                                           kFootprintMethodNames.list("\"") + ")");
         n.lod = *k;
     }
@@ -191,8 +192,9 @@ void Builder::checkerboard_texture(const pbrt::TextureDesc& t, TextureNode& n) {
     }
     if (m_opts.lod) n.lod = *m_opts.lod;
     if (aa != "closedform" && aa != "none")
-        throw SceneError(e.params.find("aamode")->loc,
-                         "unknown aamode " + q(aa) + " (expected \"closedform\" or \"none\")");
+        throw SceneError(
+            e.params.find("aamode")->loc,
+            "unknown aamode " + in_quotes(aa) + " (expected \"closedform\" or \"none\")");
 }
 
 void Builder::scale_texture(const pbrt::TextureDesc& t, TextureNode& n) {
@@ -280,7 +282,7 @@ void Builder::texture(const pbrt::TextureDesc& t) {
     TextureNode n;
     n.is_float = t.is_float;
     const std::string what =
-        std::string(t.is_float ? "float" : "spectrum") + " texture " + q(e.type);
+        std::string(t.is_float ? "float" : "spectrum") + " texture " + in_quotes(e.type);
     (this->*builder_for(kClasses, e, "texture class"))(t, n);
     // Non-uv mappings take their footprints from dP/dx and dP/dy.
     if (n.mapping != TextureNode::Mapping::Uv &&
