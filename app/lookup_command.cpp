@@ -79,8 +79,8 @@ void print_json(const std::string& image_path, const texture::Image& img, const 
                       ", \"texels_read\": " + std::to_string(info.texels_read) +
                       ", \"fallback\": " + (info.fallback ? "true" : "false");
     if (r.region && r.kind == texture::FilterKind::Sat)
-        out += ", \"rectangle_texels\": [" + num(info.rect.lo.u) + ", " + num(info.rect.lo.v) + ", " +
-               num(info.rect.hi.u) + ", " + num(info.rect.hi.v) + "]";
+        out += ", \"rectangle_texels\": [" + num(info.rect.lo.u) + ", " + num(info.rect.lo.v) +
+               ", " + num(info.rect.hi.u) + ", " + num(info.rect.hi.v) + "]";
     if (r.region && r.kind == texture::FilterKind::Ewa)
         out += ", \"ellipse_texels\": {\"major\": " + num(info.major) +
                ", \"minor\": " + num(info.minor) + "}";

@@ -113,14 +113,13 @@ void check_render_memory(const Scene& scene, std::optional<std::size_t> limit) {
     const char* hint = need.film >= need.textures
                            ? "a smaller --resolution or --crop needs less"
                            : "the trilinear or EWA filter builds fewer tables than sat and area";
-    throw RenderError("the render needs about " + format_bytes(need.total()) +
-                             " more (film " + format_bytes(need.film) +
-                             ", texture pyramids and tables " + format_bytes(need.textures) +
-                             ") on top of the " + format_bytes(have) +
-                             " the scene takes, over the limit of " + format_bytes(max) +
-                             (limit ? " set by --max-memory"
-                                    : " (what this process may use; --max-memory sets another)") +
-                             "; " + hint);
+    throw RenderError("the render needs about " + format_bytes(need.total()) + " more (film " +
+                      format_bytes(need.film) + ", texture pyramids and tables " +
+                      format_bytes(need.textures) + ") on top of the " + format_bytes(have) +
+                      " the scene takes, over the limit of " + format_bytes(max) +
+                      (limit ? " set by --max-memory"
+                             : " (what this process may use; --max-memory sets another)") +
+                      "; " + hint);
 }
 
 std::string format_bytes(std::size_t bytes) {

@@ -43,8 +43,7 @@ TEST(NameTables, ParsingIsExactAndCaseSensitive) {
 }
 
 TEST(NameTables, EveryFilterKindHasAName) {
-    for (int k = 0; k < kFilterKinds; ++k)
-        EXPECT_NE(to_string(FilterKind(k)), "?") << k;
+    for (int k = 0; k < kFilterKinds; ++k) EXPECT_NE(to_string(FilterKind(k)), "?") << k;
     EXPECT_EQ(to_string(FilterKind(kFilterKinds)), "?");
 }
 

@@ -86,9 +86,9 @@ TEST(Srgb, DecodeReferenceValues) {
 TEST(Image, RejectsBadSizes) {
     EXPECT_THROW_CONTAINS(Image(0, 2, 1, {}), TextureError, "image size must be positive");
     EXPECT_THROW_CONTAINS(Image(2, 2, 1, {1, 2, 3}), TextureError,
-                             "texel count does not match width*height*channels");
+                          "texel count does not match width*height*channels");
     EXPECT_THROW_CONTAINS(Image(1, 1, 5, std::vector<float>(5)), TextureError,
-                             "image must have 1 to 4 channels");
+                          "image must have 1 to 4 channels");
 }
 
 // Texels are stored in 8x8 tiles; sizes that are not multiples of 8 pad the last tiles.
