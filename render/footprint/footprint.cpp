@@ -7,6 +7,9 @@ namespace cmam::render {
 
 namespace {
 
+// What point sampling and the CMAM (which builds its own region) are given at a hit.
+const texture::Footprint kNoFootprint{};
+
 // The environment camera's ray differential: the rays one pixel right and down, differenced
 // (pbrt-v3's default for cameras without a closed form), scaled by `scale`.
 RayDifferential environment_differential(const Camera& c, float px, float py, const Vec3& dir,
@@ -28,7 +31,6 @@ RayCone camera_ray_cone(const Camera& c, float scale) {
 }  // namespace
 
 const texture::Footprint& HitFootprint::of(FootprintMethod method) const {
-    static const texture::Footprint none{};
     switch (method) {
         case FootprintMethod::Differentials:
             return axes;
@@ -40,7 +42,7 @@ const texture::Footprint& HitFootprint::of(FootprintMethod method) const {
         case FootprintMethod::Cmam:
             break;
     }
-    return none;
+    return kNoFootprint;
 }
 
 FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp)
