@@ -7,6 +7,10 @@
 
 #include "kernels.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace cmam::texture {
 
 RowPrefixTable::RowPrefixTable(const Image& image)
@@ -32,6 +36,14 @@ RowPrefixTable::RowPrefixTable(const Image& image)
 }
 
 namespace {
+
+// Room for up to eight values, left uninitialised: an array of Vec2d (whose members have
+// initialisers) would be zeroed on every lookup, a measurable part of a small region's cost.
+template <class T>
+union Uninit8 {
+    T v[8];
+    Uninit8() {}
+};
 
 int64_t floor_div(int64_t a, int64_t b) {  // b > 0
     int64_t q = a / b;
@@ -199,15 +211,67 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
     for (int c = 0; c < NC; ++c) acc[c] += h_per_x * sum[c];
 }
 
+// An edge from p to q (p.v < q.v, `sign` its direction) that lies within the table: cut at every
+// row it crosses, each piece adds its height times the mean of R_j over its x-span (the midpoint
+// value within one texel; partial end texels and whole ones between otherwise, times
+// `h_per_x`).
+template <int NC>
+[[gnu::always_inline]] inline void RowPrefixTable::edge_inside(Vec2d p, Vec2d q, double sign,
+                                                               double dxdy, double h_per_x,
+                                                               double* acc) const {
+    const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
+    double y = p.v, x = p.u;
+    int64_t j = floor_to_int(y);
+    const float* row = m_d.data() + static_cast<std::size_t>(j) * stride;
+    while (y < q.v) {
+        const double ynext = std::min(double(j + 1), q.v);
+        const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
+        const double h = sign * (ynext - y);
+        const double x0 = std::min(x, xnext), x1 = std::max(x, xnext);
+        const int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
+        const float* d = row + k0 * NC;
+        if (x1 <= double(k0 + 2)) {
+            // Within texel k0, or into the next one by l1: the span's first part [x0, b0] has
+            // mean m0, the rest m1, so the piece is h_per_x ((b0 − x0) m0 + l1 m1) =
+            // h m0 + h_per_x l1 (m1 − m0), which is h m0 when l1 = 0 (no branch between the two).
+            // Knot k0 + 2 is read even then: at most one past the row, the next row's first
+            // entry or the buffer's slack, finite either way.
+            const double b0 = std::min(x1, double(k0 + 1)), l1 = x1 - b0;
+            const double f0 = 0.5 * (x0 + b0) - double(k0), f1 = 0.5 * l1, w = h_per_x * l1;
+            for (int c = 0; c < NC; ++c) {
+                const double m0 = d[c] + f0 * (d[NC + c] - d[c]);
+                const double m1 = d[NC + c] + f1 * (d[2 * NC + c] - d[NC + c]);
+                acc[c] += h * m0 + w * (m1 - m0);
+            }
+        } else {  // partial first and last texels, whole ones between
+            double sum[NC];
+            for (int c = 0; c < NC; ++c) sum[c] = 0;
+            integral_inside<NC>(row, x0, x1, sum);
+            for (int c = 0; c < NC; ++c) acc[c] += h_per_x * sum[c];
+        }
+        y = ynext;
+        x = xnext;
+        ++j;
+        row += stride;
+    }
+}
+
 // Green's theorem: the area integral of T is the boundary integral of R(x,y) dy, where R is the
 // row integral from 0 to x (algorithms.md §5.2). Each edge is cut where it crosses a texel row;
 // on a piece within row j, x is linear in y, so the piece's integral is its height times the
 // mean of R_j over the piece's x-span. Clamp and Black rows beyond the texture are one piece.
 template <int NC>
 void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
-    const bool far_rows = m_wrap_t == WrapMode::Clamp || m_wrap_t == WrapMode::Black;
+    // Every edge's slopes first: their divisions do not depend on each other and overlap.
+    struct Edge {
+        Vec2d p, q;  // p.v < q.v
+        double sign, dxdy, h_per_x;
+    };
+    Uninit8<Edge> buf;
+    Edge* edges = buf.v;
+    int m = 0;
     for (int e = 0; e < n; ++e) {
-        Vec2d p = v[e], q = v[(e + 1) % n];
+        Vec2d p = v[e], q = v[e + 1 < n ? e + 1 : 0];
         if (p.v == q.v) continue;  // no dy: no contribution
         double sign = 1;
         if (p.v > q.v) {
@@ -216,35 +280,18 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         }
         const double dxdy = (q.u - p.u) / (q.v - p.v);
         const double h_per_x = q.u != p.u ? sign * std::abs((q.v - p.v) / (q.u - p.u)) : 0;
-        double y = p.v, x = p.u;
+        edges[m++] = {p, q, sign, dxdy, h_per_x};
+    }
+    const bool far_rows = m_wrap_t == WrapMode::Clamp || m_wrap_t == WrapMode::Black;
+    for (int e = 0; e < m; ++e) {
+        const Edge& E = edges[e];
+        const Vec2d p = E.p, q = E.q;
         if (p.v >= 0 && q.v <= m_h && std::min(p.u, q.u) >= 0 && std::max(p.u, q.u) < m_w) {
             // The common case, the edge within the table: rows and knots read directly.
-            const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
-            int64_t j = floor_to_int(y);
-            const float* row = m_d.data() + static_cast<std::size_t>(j) * stride;
-            while (y < q.v) {
-                const double ynext = std::min(double(j + 1), q.v);
-                const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
-                const double h = sign * (ynext - y);
-                const double x0 = std::min(x, xnext), x1 = std::max(x, xnext);
-                const int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
-                const float* d = row + k0 * NC;
-                if (x1 <= double(k0 + 1)) {  // within one texel: the midpoint value
-                    const double f = 0.5 * (x0 + x1) - double(k0);
-                    for (int c = 0; c < NC; ++c) acc[c] += h * (d[c] + f * (d[NC + c] - d[c]));
-                } else {  // partial first and last texels, whole ones between
-                    double sum[NC];
-                    for (int c = 0; c < NC; ++c) sum[c] = 0;
-                    integral_inside<NC>(row, x0, x1, sum);
-                    for (int c = 0; c < NC; ++c) acc[c] += h_per_x * sum[c];
-                }
-                y = ynext;
-                x = xnext;
-                ++j;
-                row += stride;
-            }
+            edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
             continue;
         }
+        double y = p.v, x = p.u;
         while (y < q.v) {
             const int64_t j = floor_to_int(y);
             double ynext;
@@ -254,8 +301,8 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
                 ynext = q.v;
             else
                 ynext = std::min(double(j + 1), q.v);
-            const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
-            row_piece<NC>(j, x, xnext, sign * (ynext - y), h_per_x, acc);
+            const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * E.dxdy;
+            row_piece<NC>(j, x, xnext, E.sign * (ynext - y), E.h_per_x, acc);
             y = ynext;
             x = xnext;
         }
@@ -283,7 +330,8 @@ Texel RowPrefixTable::integral(const Vec2d* v0, int n) const {
 
 Texel RowPrefixTable::integral_in_range(const Vec2d* v0, int n, double area2) const {
     Texel out{};
-    Vec2d v[8];
+    Uninit8<Vec2d> buf;
+    Vec2d* v = buf.v;
     n = std::min(n, 8);
     const double area = std::abs(area2) / 2;
     // Periodic modes: move the polygon to the base period (small knots, no cancellation).
@@ -333,6 +381,7 @@ int area_level(const FilteredTexture& tex, double width, double perimeter) {
     const int top = pyr.levels() - 1;
     int l = 0;
     if (width > 2 * kAreaMinWidth) l = std::min(top, detail::floor_log2(width / kAreaMinWidth));
+    if (perimeter <= kAreaMaxPerimeter) return l;  // no level is larger than level 0
     const double W = tex.image().width(), H = tex.image().height();
     while (l < top && perimeter * level_scale(pyr, l, W, H) > kAreaMaxPerimeter) ++l;
     return l;
@@ -370,7 +419,8 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
             return r;
         }
     }
-    Vec2d q[8];
+    Uninit8<Vec2d> buf;
+    Vec2d* q = buf.v;
     for (int i = 0; i < n; ++i) q[i] = {p[i].u * kx, p[i].v * ky};
     const Texel t = tex.row_prefix(l).integral_in_range(q, n, area2 * kx * ky);
     const double inv = 1 / (r.area * kx * ky);
@@ -379,47 +429,160 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     return r;
 }
 
+// The multiple of an axis's period (n texels for repeat, 2n for mirror; none for clamp and black)
+// that moves x (|x| < 2^30) into the base period.
+double period_shift(double x, int n, WrapMode mode) {
+    if (mode != WrapMode::Repeat && mode != WrapMode::Mirror) return 0;
+    const double period = mode == WrapMode::Repeat ? n : 2.0 * n;
+    return double(floor_to_int(x / period)) * period;
+}
+
+// The mean of the bilinear reconstruction over the parallelogram c ± a/2 ± b/2 (uv units). When
+// the parallelogram lies within one bilinear patch it is exact in closed form: B there is B(c)
+// plus the twist d = t00 − t10 − t01 + t11 times the product of the offsets from c, whose mean
+// over the parallelogram is (a_s a_t + b_s b_t) / 12, so one patch read does. Otherwise the 3x3
+// Gauss–Legendre product rule in the parallelogram's coordinates (points 0 and ±√(3/5)/2 of a
+// side, weights 8/18 and 5/18), which is exact within one patch too, so the two agree where the
+// choice changes. `texels` receives the number of texels read.
+Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, int* texels) {
+    const double W = img.width(), H = img.height();
+    double s = u * W - 0.5, t = v * H - 0.5;
+    const double as = a.u * W, at = a.v * H, bs = b.u * W, bt = b.v * H;
+    const double ds = 0.5 * (std::abs(as) + std::abs(bs)), dt = 0.5 * (std::abs(at) + std::abs(bt));
+    constexpr double kMax = detail::kMaxTexelCoord;
+    *texels = 1;
+    if (!(std::abs(s) + ds < kMax && std::abs(t) + dt < kMax)) return img.mean();  // as bilinear()
+    // A periodic axis: move the centre to the base period (exactly: an integer multiple of the
+    // period is subtracted), so the texels' indices need no division to wrap.
+    s -= period_shift(s, img.width(), img.wrap_s());
+    t -= period_shift(t, img.height(), img.wrap_t());
+    const int64_t k = floor_to_int(s - ds), j = floor_to_int(t - dt);
+    if (floor_to_int(s + ds) == k && floor_to_int(t + dt) == j) {
+        *texels = 4;
+        const detail::BilinearPatch p = detail::bilinear_patch(img, s, t);
+        Texel out = p.value(img.channels());
+        const float twist = static_cast<float>((as * at + bs * bt) / 12);
+        for (int c = 0; c < img.channels(); ++c)
+            out[c] += twist * (p.t00[c] - p.t10[c] - p.t01[c] + p.t11[c]);
+        return out;
+    }
+    constexpr double x = 0.38729833462074170;  // sqrt(3/5) / 2
+    constexpr float w[3] = {5.0f / 18, 8.0f / 18, 5.0f / 18};
+#if defined(__SSE2__)
+    // The nine points lie within a block of at most 7x7 texels (per axis they span 2x = 0.77 of
+    // the two sides' extents, under 4.7 texels while the longer side is under kAreaBlendHi = 3):
+    // read it once, wrapped per row and column, as four lanes a texel (a 3-channel texel's
+    // fourth lane is the next float, unused), and blend each point's 2x2. Every channel count
+    // takes this path, so each lane's arithmetic is the same whatever the number of channels.
+    static_assert(kAreaBlendHi <= 3);
+    const int nc = img.channels();
+    {
+        const double es = x * (std::abs(as) + std::abs(bs)), et = x * (std::abs(at) + std::abs(bt));
+        const int64_t k0 = floor_to_int(s - es), j0 = floor_to_int(t - et);
+        const int nx = static_cast<int>(floor_to_int(s + es) - k0) + 2,
+                  ny = static_cast<int>(floor_to_int(t + et) - j0) + 2;
+        if (nx <= 7 && ny <= 7) {
+            __m128 block[7][7];
+            std::ptrdiff_t col[7];
+            const float* base = img.row(0);
+            const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
+            for (int i = 0; i < nx; ++i) {
+                const int64_t c = wrap_index(k0 + i, img.width(), img.wrap_s());
+                col[i] = c < 0 ? -1 : cols[c];
+            }
+            for (int jj = 0; jj < ny; ++jj) {
+                const int64_t r = wrap_index(j0 + jj, img.height(), img.wrap_t());
+                for (int i = 0; i < nx; ++i) {
+                    if (r < 0 || col[i] < 0) {
+                        block[jj][i] = _mm_setzero_ps();
+                    } else if (nc >= 3) {
+                        block[jj][i] = _mm_loadu_ps(base + rows[r] + col[i]);
+                    } else {  // one or two channels: the others' lanes zero
+                        const float* p = base + rows[r] + col[i];
+                        block[jj][i] = _mm_setr_ps(p[0], nc > 1 ? p[1] : 0.0f, 0.0f, 0.0f);
+                    }
+                }
+            }
+            // Points c + fa·a + fb·b for fa, fb in {−x, 0, x}; three independent sums (per fb).
+            const double os[3] = {-x * as, 0, x * as}, ot[3] = {-x * at, 0, x * at};
+            __m128 sums[3];
+            for (int ib = 0; ib < 3; ++ib) {
+                const double cs = s + (ib - 1) * x * bs, ct = t + (ib - 1) * x * bt;
+                __m128 sum = _mm_setzero_ps();
+                for (int ia = 0; ia < 3; ++ia) {
+                    const double ps = cs + os[ia], pt = ct + ot[ia];
+                    const int64_t i = floor_to_int(ps), j = floor_to_int(pt);
+                    const float fs = static_cast<float>(ps - double(i)),
+                                ft = static_cast<float>(pt - double(j));
+                    const __m128* r0 = block[j - j0] + (i - k0);
+                    const __m128* r1 = block[j - j0 + 1] + (i - k0);
+                    const __m128 lo = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r0[0]),
+                                                 _mm_mul_ps(_mm_set1_ps(fs), r0[1]));
+                    const __m128 hi = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r1[0]),
+                                                 _mm_mul_ps(_mm_set1_ps(fs), r1[1]));
+                    const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - ft), lo),
+                                                _mm_mul_ps(_mm_set1_ps(ft), hi));
+                    sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(w[ia]), v));
+                }
+                sums[ib] = _mm_mul_ps(_mm_set1_ps(w[ib]), sum);
+            }
+            const __m128 sum = _mm_add_ps(_mm_add_ps(sums[0], sums[2]), sums[1]);
+            *texels = nx * ny;
+            Texel out;
+            _mm_storeu_ps(out.data(), sum);
+            if (nc == 3) out[3] = 0;
+            return out;
+        }
+    }
+#endif
+    *texels = 36;
+    Texel out{};
+    for (int q = 0; q < 9; ++q) {
+        const int ia = q % 3, ib = q / 3;
+        const double fa = (ia - 1) * x, fb = (ib - 1) * x;
+        const Texel p = detail::bilinear_at(img, s + fa * as + fb * bs, t + fa * at + fb * bt);
+        const float wq = w[ia] * w[ib];
+        for (int c = 0; c < 4; ++c) out[c] += wq * p[c];
+    }
+    return out;
+}
+
 }  // namespace
 
 AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, Vec2d b) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
     Vec2d A{a.u * W, a.v * H}, B{b.u * W, b.v * H};  // level-0 texels
-    double la = length(A), lb = length(B);
-    if (la < lb) {
+    double la2 = dot(A, A), lb2 = dot(B, B);
+    if (la2 < lb2) {
         std::swap(A, B);
-        std::swap(la, lb);
+        std::swap(la2, lb2);
     }
     // Degenerate axes: zero sides become the axis-aligned unit square below; collinear ones
     // keep the major side, with the perpendicular side of the area they span (about 0).
-    if (la == 0) {
+    if (la2 == 0) {
         A = {0, 0};
         B = {0, 0};
     } else {
         const double ab = cross(A, B);
-        if (!(std::abs(ab) > 1e-6 * la * lb)) {
-            const double h = std::abs(ab) / la;
-            B = {-A.v / la * h, A.u / la * h};
-            lb = h;
+        if (!(ab * ab > 1e-12 * la2 * lb2)) {
+            const double k = std::abs(ab) / la2;  // the side |ab| / |A| along A's normal
+            B = {-A.v * k, A.u * k};
+            lb2 = dot(B, B);
         }
     }
-    // The bilinear reconstruction term: each side to sqrt(|side|^2 + 1) texels.
-    if (la > 0) {
-        const double grown = std::sqrt(la * la + 1);
-        A = {A.u * (grown / la), A.v * (grown / la)};
-        la = grown;
-    } else {
+    // The bilinear reconstruction term: each side to sqrt(|side|^2 + 1) texels. The four square
+    // roots do not depend on each other.
+    const double la = std::sqrt(la2), lb = std::sqrt(lb2);
+    const double ga = std::sqrt(la2 + 1), gb = std::sqrt(lb2 + 1);
+    if (la > 0)
+        A = (ga / la) * A;
+    else
         A = {1, 0};
-        la = 1;
-    }
-    if (lb > 0) {
-        const double grown = std::sqrt(lb * lb + 1);
-        B = {B.u * (grown / lb), B.v * (grown / lb)};
-        lb = grown;
-    } else {
-        B = {-A.v / la, A.u / la};
-        lb = 1;
-    }
+    if (lb > 0)
+        B = (gb / lb) * B;
+    else
+        B = {-A.v / ga, A.u / ga};
     AreaRegion r;
     r.area2 = 2 * cross(A, B);
     r.area = std::abs(r.area2) / 2;
@@ -428,9 +591,9 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
     r.corners[1] = {cs + 0.5 * (A.u - B.u), ct + 0.5 * (A.v - B.v)};
     r.corners[2] = {cs + 0.5 * (A.u + B.u), ct + 0.5 * (A.v + B.v)};
     r.corners[3] = {cs - 0.5 * (A.u - B.u), ct - 0.5 * (A.v - B.v)};
-    r.major = std::max(la, lb);
-    r.minor = std::min(la, lb);
-    r.perimeter = 2 * (la + lb);
+    r.major = std::max(ga, gb);
+    r.minor = std::min(ga, gb);
+    r.perimeter = 2 * (ga + gb);
     r.level = area_level(tex, r.area / r.major, r.perimeter);
     return r;
 }
@@ -443,8 +606,8 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
         r.knots = 1;
         return r;
     }
-    // Magnification: the mean of the bilinear reconstruction over the parallelogram by the
-    // 2x2-point Gauss rule (exact while it stays within one bilinear patch); from kAreaBlendLo to
+    // Small regions: the mean of the bilinear reconstruction over the parallelogram, exact
+    // within one bilinear patch, by the 3x3 Gauss rule otherwise; from kAreaBlendLo to
     // kAreaBlendHi texels (the longer side) it is blended into the region's integral, beyond it
     // is the integral alone. algorithms.md §5.2.
     const double W = tex.image().width(), H = tex.image().height();
@@ -453,19 +616,14 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
     const double major = std::sqrt(std::max(la2, lb2));
     Texel gauss{};
     double w_gauss = 0;
+    int gauss_texels = 0;
     if (major < kAreaBlendHi) {
-        constexpr double g = 0.28867513459481287;  // 1 / (2 sqrt 3)
-        const Image& img = tex.image();
-        for (int k = 0; k < 4; ++k) {
-            const double fa = (k & 1) ? g : -g, fb = (k & 2) ? g : -g;
-            const Texel x = bilinear(img, u + fa * a.u + fb * b.u, v + fa * a.v + fb * b.v);
-            for (int c = 0; c < 4; ++c) gauss[c] += 0.25f * x[c];
-        }
+        gauss = gauss_mean(tex.image(), u, v, a, b, &gauss_texels);
         w_gauss = std::clamp((kAreaBlendHi - major) / (kAreaBlendHi - kAreaBlendLo), 0.0, 1.0);
         if (w_gauss == 1) {
             AreaResult r;
             r.value = gauss;
-            r.knots = 16;
+            r.knots = gauss_texels;
             r.major = major;
             r.minor = std::sqrt(std::min(la2, lb2));
             r.area = std::abs(cross(a, b)) * W * H;
@@ -485,7 +643,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
     if (w_gauss > 0) {
         for (int c = 0; c < 4; ++c)
             r.value[c] = static_cast<float>(w_gauss * gauss[c] + (1 - w_gauss) * r.value[c]);
-        r.knots += 16;
+        r.knots += gauss_texels;
     }
     return r;
 }
@@ -494,7 +652,8 @@ AreaResult area_polygon(const FilteredTexture& tex, const Vec2d* uv, int n) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
     n = std::min(n, 8);
-    Vec2d p[8];
+    Uninit8<Vec2d> buf;
+    Vec2d* p = buf.v;
     for (int i = 0; i < n; ++i) p[i] = {uv[i].u * W, uv[i].v * H};
     double area2 = 0, longest = 0, perimeter = 0;
     for (int i = 0; i < n; ++i) {

@@ -110,6 +110,44 @@ inline Texel to_texel(__m128 v, int nc) {
 }
 #endif
 
+/// The four texels of the bilinear patch holding lattice coordinates (s, t) (finite, below 2^30
+/// in magnitude), with the wrap applied: t00, t10 (next column), t01 (next row), t11; a tap
+/// outside a Black edge is zero. `fs`, `ft` are the position within the patch.
+struct BilinearPatch {
+    Texel t00{}, t10{}, t01{}, t11{};
+    float fs = 0, ft = 0;
+    /// bilinear_at's value: the same weights, in the same order.
+    Texel value(int nc) const {
+        const float w00 = (1 - fs) * (1 - ft), w10 = fs * (1 - ft), w01 = (1 - fs) * ft,
+                    w11 = fs * ft;
+        Texel out{};
+        for (int k = 0; k < nc; ++k)
+            out[k] = w00 * t00[k] + w10 * t10[k] + w01 * t01[k] + w11 * t11[k];
+        return out;
+    }
+};
+
+inline BilinearPatch bilinear_patch(const Image& img, double s, double t) {
+    const AxisTaps x = axis_taps(s, img.width(), img.wrap_s());
+    const AxisTaps y = axis_taps(t, img.height(), img.wrap_t());
+    BilinearPatch p;
+    p.fs = x.f;
+    p.ft = y.f;
+    const int nc = img.channels();
+    const float* base = img.row(0);
+    const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
+    auto get = [&](int i, int j, Texel& out) {
+        if (i < 0 || j < 0) return;  // outside a Black edge
+        const float* texel = base + rows[j] + cols[i];
+        for (int k = 0; k < nc; ++k) out[k] = texel[k];
+    };
+    get(x.i0, y.i0, p.t00);
+    get(x.i1, y.i0, p.t10);
+    get(x.i0, y.i1, p.t01);
+    get(x.i1, y.i1, p.t11);
+    return p;
+}
+
 /// Bilinear interpolation at lattice coordinates (s, t) = (u*W - 1/2, v*H - 1/2), which the
 /// caller has checked to be finite and below 2^30 in magnitude.
 inline Texel bilinear_at(const Image& img, double s, double t) {

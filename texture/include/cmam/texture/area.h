@@ -51,6 +51,8 @@ class RowPrefixTable {
     template <int NC>
     void integrate(const Vec2d* v, int n, double* acc) const;
     template <int NC>
+    void edge_inside(Vec2d p, Vec2d q, double sign, double dxdy, double h_per_x, double* acc) const;
+    template <int NC>
     void row_piece(int64_t j, double x0, double x1, double h, double h_per_x, double* acc) const;
     template <int NC>
     void knot(const float* row, int64_t k, double* out) const;
@@ -65,11 +67,12 @@ inline constexpr double kAreaMinWidth = 2;
 /// first coarser level where it does not. Bounds a lookup's cost.
 inline constexpr double kAreaMaxPerimeter = 64;
 
-/// Magnification (algorithms.md §5.2): a parallelogram whose longer side is under kAreaBlendLo
-/// level-0 texels takes the mean of the bilinear reconstruction over it by the 2x2-point Gauss
-/// rule; up to kAreaBlendHi that is blended linearly into the region integral.
-inline constexpr double kAreaBlendLo = 1;
-inline constexpr double kAreaBlendHi = 2;
+/// Small regions (algorithms.md §5.2): a parallelogram whose longer side is under kAreaBlendLo
+/// level-0 texels takes the mean of the bilinear reconstruction over it (exact within one
+/// bilinear patch, the 3x3-point Gauss rule otherwise); up to kAreaBlendHi that is blended
+/// linearly into the region integral.
+inline constexpr double kAreaBlendLo = 2.5;
+inline constexpr double kAreaBlendHi = 3;
 
 struct AreaResult {
     Texel value{};
@@ -100,7 +103,7 @@ struct AreaRegion {
 AreaRegion area_region(const FilteredTexture& texture, double u, double v, Vec2d a, Vec2d b);
 
 /// Mean of the texture over the parallelogram (u,v) ± a/2 ± b/2: area_region() integrated on
-/// its level, or for magnified footprints the Gauss rule on the bilinear reconstruction (above).
+/// its level, or for small footprints the mean of the bilinear reconstruction (above).
 AreaResult area_parallelogram(const FilteredTexture& texture, double u, double v, Vec2d a, Vec2d b);
 
 /// Mean of the box-reconstructed texture over a convex polygon given in uv units (the CMAM's
