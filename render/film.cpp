@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <memory>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "render/integrator.h"
+#include "render/memory.h"
 #include "render/tracer.h"
 
 namespace cmam::render {
@@ -168,8 +170,9 @@ class FilmTracer {
     const FootprintProducers m_footprints;
 };
 
-// Without the CMAM: rows in fixed blocks of 8, each row whole, so the image is the same for any
-// thread count.
+// Rows in fixed blocks of 8, each row whole, so the image is the same for any thread count. The
+// 1-D CMAM's caches, which live for one block, see each row as one scan from left to right, as
+// in the paper: its matches never cross a row.
 void render_rows(const FilmTracer& tracer, const RenderOptions& options, int height, int width) {
     constexpr int kBlockRows = 8;
     const int blocks = (height + kBlockRows - 1) / kBlockRows;
@@ -185,28 +188,75 @@ void render_rows(const FilmTracer& tracer, const RenderOptions& options, int hei
     });
 }
 
-// With the CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top to
-// bottom with caches of its own, each row left to right: every row but the image's first has
+// The threads a parallel_range will run on.
+int worker_count(int threads) {
+#ifdef CMAM_STD_THREADS
+    return std::max(1,
+                    threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
+#else
+    return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+#endif
+}
+
+// With the 2-D CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top
+// to bottom with caches of its own, each row left to right: every row but the image's first has
 // the row above in the caches (the 2-D CMAM's Jacobian column), and each strip row starts with
-// the pixels to its left primed (the 1-D CMAM's neighbours; two at one sample per pixel, where
-// the region needs the two previous samples). Samples reach the caches exactly as in a
-// whole-row scan, and the image is the same for any thread count (algorithms.md §6.3.1).
+// the pixels to its left primed (the left neighbours; two at one sample per pixel, where the
+// region needs the two previous samples). Samples reach the caches exactly as in a whole-row
+// scan, and the image is the same for any thread count (algorithms.md §6.3.1).
+//
+// So that the threads finish together, a strip is cut into segments of rows when there are
+// fewer than 16 strips a thread: each segment is a task of its own, whose caches start with the
+// row above the segment traced into them. Caches are then in the state a whole strip would have
+// left them in, so the cut changes no pixel.
 void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, int height,
                         int width) {
     const int strips = (width + kCmamStripWidth - 1) / kCmamStripWidth;
     const int prime_pixels = tracer.sub_rows() ? (tracer.samples_x() >= 2 ? 1 : 2) : 0;
+    const int threads = worker_count(options.threads);
+    const int segments = std::clamp(16 * threads / strips, 1, std::max(1, height / 16));
+    const int seg_rows = (height + segments - 1) / segments;
+    const int tasks_per_strip = (height + seg_rows - 1) / seg_rows;
     std::atomic<int> spans_done{0};
-    parallel_range(strips, options.threads, [&](int begin, int end) {
-        for (int k = begin; k < end; ++k) {
+    parallel_range(strips * tasks_per_strip, options.threads, [&](int begin, int end) {
+        for (int task = begin; task < end; ++task) {
             CmamRowState cmam;
+            const int k = task / tasks_per_strip, r0 = (task % tasks_per_strip) * seg_rows;
             const int x0 = k * kCmamStripWidth, x1 = std::min(width, x0 + kCmamStripWidth);
             const int prime = std::min(x0, prime_pixels);
-            for (int row = 0; row < height; ++row) {
+            if (r0 > 0)  // the row above, into the caches only
+                tracer.span(r0 - 1, x1, x1, x1 - x0 + prime, cmam);
+            for (int row = r0; row < std::min(height, r0 + seg_rows); ++row) {
                 tracer.span(row, x0, x1, prime, cmam);
                 int done = ++spans_done;
                 if (options.progress) options.progress(done, strips * height);
             }
         }
+    });
+}
+
+// The pyramids and tables the scene's filters read, built before tracing and in parallel: each
+// texture's pyramid (and summed-area table), then every level's row prefix table. Left to the
+// first lookup, one thread would build each while the others wait for it.
+void build_texture_tables(const Scene& scene, int threads) {
+    const auto uses = texture_uses(scene);
+    const std::vector<std::pair<const texture::FilteredTexture*, TextureUses>> textures(
+        uses.begin(), uses.end());
+    parallel_range(static_cast<int>(textures.size()), threads, [&](int begin, int end) {
+        for (int i = begin; i < end; ++i) {
+            const auto& [tex, u] = textures[static_cast<std::size_t>(i)];
+            if (u.pyramid) tex->pyramid();
+            if (u.sat) tex->sat();
+        }
+    });
+    std::vector<std::pair<const texture::FilteredTexture*, int>> levels;
+    for (const auto& [tex, u] : textures)
+        if (u.row_prefix)
+            for (int l = 0; l < tex->pyramid().levels(); ++l) levels.emplace_back(tex, l);
+    parallel_range(static_cast<int>(levels.size()), threads, [&](int begin, int end) {
+        for (int i = begin; i < end; ++i)
+            levels[static_cast<std::size_t>(i)].first->row_prefix(
+                levels[static_cast<std::size_t>(i)].second);
     });
 }
 
@@ -223,8 +273,9 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     if (options.threads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                       options.threads);
+    build_texture_tables(scene, options.threads);
     const FilmTracer tracer(scene, options, stats, fb);
-    if (scene.footprint_methods.has(FootprintMethod::Cmam))
+    if (scene.footprint_methods.has(FootprintMethod::Cmam) && scene.cmam.two_d)
         render_cmam_strips(tracer, options, fb.height, fb.width);
     else
         render_rows(tracer, options, fb.height, fb.width);

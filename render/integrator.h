@@ -28,7 +28,7 @@ struct RenderStats {
 /// Arbitrary output variables: what `cmam render --aov` writes instead of radiance.
 enum class AovKind : uint8_t { None, Footprint, Texture };
 
-/// With the CMAM the image is traced in strips this many pixels wide, each top to bottom.
+/// With the 2-D CMAM the image is traced in strips this many pixels wide, each top to bottom.
 inline constexpr int kCmamStripWidth = 64;
 
 struct RenderOptions {

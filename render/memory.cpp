@@ -19,11 +19,6 @@ namespace {
 
 constexpr std::size_t kUnlimited = ~std::size_t(0);
 
-// Which tables the filters reading one texture build.
-struct Uses {
-    bool pyramid = false, sat = false, row_prefix = false;
-};
-
 std::size_t physical_memory() {
     const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
     if (pages <= 0 || page <= 0) return kUnlimited;
@@ -52,15 +47,11 @@ std::size_t statm(int k) {
 
 }  // namespace
 
-MemoryNeed render_memory_need(const Scene& scene) {
-    MemoryNeed need;
-    // The framebuffer, plus per-row buffers of each worker (small beside it).
-    need.film =
-        static_cast<std::size_t>(scene.film.width()) * scene.film.height() * 3 * sizeof(float);
-    std::map<const texture::FilteredTexture*, Uses> uses;
+std::map<const texture::FilteredTexture*, TextureUses> texture_uses(const Scene& scene) {
+    std::map<const texture::FilteredTexture*, TextureUses> uses;
     for (const TextureNode& n : scene.textures) {
         if (n.kind != TextureNode::Kind::Image || !n.image) continue;
-        Uses& u = uses[n.image];
+        TextureUses& u = uses[n.image];
         switch (n.filter.kind) {
             case texture::FilterKind::Nearest:
             case texture::FilterKind::Bilinear:
@@ -75,7 +66,15 @@ MemoryNeed render_memory_need(const Scene& scene) {
                 u.pyramid = true;
         }
     }
-    for (const auto& [tex, u] : uses) {
+    return uses;
+}
+
+MemoryNeed render_memory_need(const Scene& scene) {
+    MemoryNeed need;
+    // The framebuffer, plus per-row buffers of each worker (small beside it).
+    need.film =
+        static_cast<std::size_t>(scene.film.width()) * scene.film.height() * 3 * sizeof(float);
+    for (const auto& [tex, u] : texture_uses(scene)) {
         const texture::Image& im = tex->image();
         const double texels = double(im.width()) * im.height(), c = im.channels();
         // Levels above 0 add a third of level 0 (1/4 + 1/16 + ...), and so do their tables.

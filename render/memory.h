@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -22,6 +23,13 @@ struct MemoryNeed {
 /// An upper bound: tables not built yet are counted for every level, summed-area tables in
 /// double precision.
 MemoryNeed render_memory_need(const Scene& scene);
+
+/// Which tables the filters reading one image texture build.
+struct TextureUses {
+    bool pyramid = false, sat = false, row_prefix = false;
+};
+/// Every image texture the scene's texture nodes read, with the tables their filters build.
+std::map<const texture::FilteredTexture*, TextureUses> texture_uses(const Scene& scene);
 
 /// The memory the process may use: the smallest of the machine's physical memory, the cgroup's
 /// memory.max and RLIMIT_AS.

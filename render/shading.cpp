@@ -130,28 +130,24 @@ texture::Texel cmam_texel(const Scene& scene, const TextureNode& n, int node, do
     texture::CmamOptions o = scene.cmam;
     o.filter = n.filter.kind;
     o.max_aniso = n.filter.max_aniso;
-    CmamRecord own;
-    CmamRecord* rec = ctx.cmam_record && ctx.cmam_record->node == node ? ctx.cmam_record : &own;
-    const bool want = ctx.counts || rec != &own;
     texture::CmamCache& cache =
         ctx.cmam->cache(ctx.object, static_cast<uint32_t>(node), ctx.footprints.path);
-    texture::Texel x;
-    if (want) {
-        const texture::CmamResult r =
-            texture::cmam_lookup_with_info(*n.image, cache, ctx.footprints.tag, s, t, o);
-        x = r.value;
+    CmamRecord* rec = ctx.cmam_record && ctx.cmam_record->node == node ? ctx.cmam_record : nullptr;
+    if (!rec && !ctx.counts)  // nothing to record: the lookup alone
+        return texture::cmam_lookup(*n.image, cache, ctx.footprints.tag, s, t, o);
+    const texture::CmamResult r =
+        texture::cmam_lookup_with_info(*n.image, cache, ctx.footprints.tag, s, t, o);
+    if (rec) {
         rec->info = r.info;
         rec->region = r.region;
-    } else {
-        x = texture::cmam_lookup(*n.image, cache, ctx.footprints.tag, s, t, o);
+        rec->filled = true;
     }
-    rec->filled = true;
     if (ctx.counts) {
         ++ctx.counts->by_filter[static_cast<int>(o.filter)];
-        ctx.counts->non_finite += rec->info.fallback;
-        ctx.counts->cmam_2d_without_above += o.two_d && !rec->region.used_above;
+        ctx.counts->non_finite += r.info.fallback;
+        ctx.counts->cmam_2d_without_above += o.two_d && !r.region.used_above;
     }
-    return x;
+    return r.value;
 }
 
 Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexContext& ctx) {

@@ -374,17 +374,19 @@ TEST(Render, LookupCountingChangesNothingButTheCounts) {
 TEST(Cmam, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
     // A textured plane fills the frame: with the image traced in strips, top to bottom, every
     // 2-D CMAM lookup has its sample above except those of the image's first row of strata,
-    // for any thread count, with the same image.
+    // for any thread count, with the same image. 1024 pixels are 16 strips: one thread traces
+    // each strip whole, two cut each into two segments of rows, the second starting from the
+    // row above traced into its caches.
     const std::string text =
         "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
-        "Film \"image\" \"integer xresolution\" 150 \"integer yresolution\" 40\n"
+        "Film \"image\" \"integer xresolution\" 1024 \"integer yresolution\" 40\n"
         "WorldBegin\nLightSource \"distant\" \"point from\" [0 0 5] \"point to\" [0 0 0]\n"
         "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"" +
         std::string(CMAM_SCENES_DIR) +
         "/textures/bricks.png\" \"string lod\" \"cmam\" \"string filter\" \"area\"\n"
         "Material \"matte\" \"texture Kd\" \"t\"\n"
         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
-        "  \"point P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"float uv\" [0 0 4 0 4 4 0 4]\n"
+        "  \"point P\" [-50 -10 0 50 -10 0 50 10 0 -50 10 0] \"float uv\" [0 0 20 0 20 4 0 4]\n"
         "WorldEnd\n";
     const pbrt::SceneDesc d = pbrt::parse_string(text, "plane.pbrt");
     for (int spp : {1, 4}) {
@@ -398,10 +400,10 @@ TEST(Cmam, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
         RenderStats st1, st2;
         Framebuffer a = render::render(*s, one, &st1), b = render::render(*s, two, &st2);
         EXPECT_EQ(0, std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)));
-        const uint64_t first_row = 150 * static_cast<uint64_t>(s->sampler.xsamples);
+        const uint64_t first_row = 1024 * static_cast<uint64_t>(s->sampler.xsamples);
         EXPECT_EQ(st1.cmam_2d_without_above.load(), first_row) << spp << " spp";
         EXPECT_EQ(st2.cmam_2d_without_above.load(), first_row) << spp << " spp";
         EXPECT_EQ(st1.lookups_by_filter[static_cast<int>(texture::FilterKind::Area)].load(),
-                  150u * 40u * spp);
+                  1024u * 40u * spp);
     }
 }

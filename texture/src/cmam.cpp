@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "kernels.h"
 
@@ -27,6 +28,15 @@ std::string_view to_string(CmamSatMiss m) {
     return kCmamSatMissNames.name(m);
 }
 
+double cmam_width(Vec2d p0, const Vec2d* p, int matches) {
+    if (matches <= 0) return 0;
+    const double du = p[0].u - p0.u, dv = p[0].v - p0.v;
+    if (matches == 1) return std::sqrt(du * du + dv * dv);
+    const double lo_u = std::min({p0.u, p[0].u, p[1].u}), hi_u = std::max({p0.u, p[0].u, p[1].u}),
+                 lo_v = std::min({p0.v, p[0].v, p[1].v}), hi_v = std::max({p0.v, p[0].v, p[1].v});
+    return std::sqrt((hi_u - lo_u) * (hi_u - lo_u) + (hi_v - lo_v) * (hi_v - lo_v));
+}
+
 CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int matches,
                        const CmamOptions& o) {
     CmamRegion r;
@@ -45,8 +55,8 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
                {std::max(box.hi.u, p2.u), std::max(box.hi.v, p2.v)}};
     }
     const double len1 = length(v1);
-    // MIP: segment length, or the bounding box's diagonal.
-    r.width = matches == 1 ? len1 : length(box.hi - box.lo);
+    const Vec2d others[2] = {p1, matches == 2 ? Vec2d{cached[1].s, cached[1].t} : p1};
+    r.width = cmam_width(p0, others, matches);  // MIP
     // SAT: the spanned rectangle (or the square alternative for one match).
     if (matches == 1 && o.sat_box == CmamSatBox::Square) {
         const Vec2d half{len1 / 2, len1 / 2};
@@ -151,7 +161,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, in_range};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
-    CmamCache::Entry above;
+    const CmamCache::Entry* above = nullptr;  // in the row buffer, which the lookup keeps
     if (o.two_d) {
         if (!cache.row_valid || tag.id != cache.row_id) {
             if (cache.row_valid && tag.id == cache.row_id + 1)
@@ -164,30 +174,30 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         }
         if (tag.seq < cache.row_previous.size()) {
             const CmamCache::Entry& e = cache.row_previous[tag.seq];
-            if (e.valid && e.tag.level == tag.level) above = e;
+            if (e.valid && e.tag.level == tag.level) above = &e;
         }
         if (tag.seq >= cache.row_current.size()) cache.row_current.resize(tag.seq + 1);
         cache.row_current[tag.seq] = cache.last;
     }
 
-    LookupInfo scratch;
-    LookupInfo& in = info ? *info : scratch;
     if (info) *info = LookupInfo{};
     if (!in_range) {
-        in.fallback = true;
-        in.texels_read = 1;
+        if (info) {
+            info->fallback = true;
+            info->texels_read = 1;
+        }
         return img.mean();
     }
     // The region: the 2-D CMAM's Jacobian columns; the 1-D region only where the hull weighting
     // or the caller needs it here (the dispatcher builds it from the Points footprint anyway).
-    CmamRegion r;
-    r.matches = matches;
-    if (above.valid)
-        r = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, above, o, tag);
+    // (Built only where it is read: a CmamRegion is large enough that clearing it shows.)
+    std::optional<CmamRegion> region;
+    if (above)
+        region = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag);
     else if (o.hull || region_out)
-        r = cmam_region(s0, t0, cached, matches, o);
-    if (above.valid) matches = std::max(matches, 1);  // a region exists: no miss
-    if (o.hull && matches == 2 && !above.valid) {
+        region = cmam_region(s0, t0, cached, matches, o);
+    if (above) matches = std::max(matches, 1);  // a region exists: no miss
+    if (o.hull && matches == 2 && !above) {
         // Paper §4: integrate only the part of the new triangle outside the hull so far.
         if (!cache.hull_valid || cache.hull_tag.id != tag.id || cache.hull_tag.level != tag.level) {
             cache.hull.clear();
@@ -225,9 +235,9 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
                 Texel t = polygon_integral(tex.level_sat(level), piece);
                 for (int c = 0; c < 4; ++c) integral[c] += t[c] / (kx * ky);
             }
-            r.hull_new_area = new_area;
-            if (region_out) *region_out = r;
-            if (info) in.texels_read = 16;
+            region->hull_new_area = new_area;
+            if (region_out) *region_out = *region;
+            if (info) info->texels_read = 16;
             Texel out{};
             if (new_area > 1e-9) {
                 std::vector<Vec2d> pts = cache.hull;
@@ -247,22 +257,26 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             }
         }
     }
-    if (region_out) *region_out = r;
+    if (region_out) *region_out = *region;
     if (matches == 0) {
         if (o.filter == FilterKind::Sat && o.sat_miss == CmamSatMiss::PaperLiteral) {
             // The region from the table's origin to the texture coordinate (in the base tile).
             double s = s0 - std::floor(s0 / W) * W, t = t0 - std::floor(t0 / H) * H;
-            in.texels_read = 16;
-            in.rect = {{0, 0}, {s, t}};
+            if (info) {
+                info->texels_read = 16;
+                info->rect = {{0, 0}, {s, t}};
+            }
             return tex.sat().average(0, 0, std::max(s, 1e-6), std::max(t, 1e-6));
         }
         if (o.miss == CmamMiss::Average) {  // d = MAXLEVEL: the texture's average
-            in.texels_read = 1;
-            in.lambda = tex.pyramid().levels() - 1;
-            in.level_lo = in.level_hi = tex.pyramid().levels() - 1;
+            if (info) {
+                info->texels_read = 1;
+                info->lambda = tex.pyramid().levels() - 1;
+                info->level_lo = info->level_hi = tex.pyramid().levels() - 1;
+            }
             return img.mean();
         }
-        in.texels_read = 4;  // d = 0: point sample
+        if (info) info->texels_read = 4;  // d = 0: point sample
         return bilinear(img, u, v);
     }
     // One route into the filters: the 2-D CMAM's left and above neighbours are the Jacobian
@@ -274,7 +288,8 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     fo.ellipse = o.ellipse;
     fo.sat_box = o.sat_box;
     Footprint fp;
-    if (above.valid) {
+    if (above) {
+        const CmamRegion& r = *region;
         fp = Footprint::axes({r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
         u += r.offset.u / W;  // the stratum's centre (positioned tags), else no move
         v += r.offset.v / H;

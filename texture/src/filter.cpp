@@ -245,6 +245,22 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
         return bilinear(m_image, u, v);
     }
     const double s0 = fp.points[0].u * W, t0 = fp.points[0].v * H;
+    if (opts.kind != FilterKind::Sat && opts.kind != FilterKind::Ewa &&
+        opts.kind != FilterKind::Area) {  // MIP: the region's width is all it reads
+        const Vec2d others[2] = {{fp.points[1].u * W, fp.points[1].v * H},
+                                 {fp.points[2].u * W, fp.points[2].v * H}};
+        const double width = cmam_width({s0, t0}, others, matches);
+        const MipPyramid& pyr = pyramid();
+        if (info) {
+            const double lambda = pyr.trilinear_lambda(width);
+            info->width = width;
+            info->lambda = lambda;
+            info->level_lo = static_cast<int>(std::floor(lambda));
+            info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
+            info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
+        }
+        return pyr.trilinear(u, v, width);
+    }
     CmamCache::Entry cached[2];
     for (int k = 0; k < matches; ++k) {
         cached[k].s = fp.points[k + 1].u * W;
@@ -260,10 +276,6 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
     LookupInfo scratch;
     LookupInfo& in = info ? *info : scratch;
     switch (opts.kind) {
-        case FilterKind::Sat:
-            in.rect = r.rect;
-            in.texels_read = 16;
-            return sat().average(r.rect.lo.u, r.rect.lo.v, r.rect.hi.u, r.rect.hi.v);
         case FilterKind::Ewa: {
             EwaResult e =
                 ewa(pyramid(), u, v, r.a.u / W, r.a.v / H, r.b.u / W, r.b.v / H, opts.max_aniso);
@@ -293,19 +305,10 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
             in.area = a.area;
             return a.value;
         }
-        case FilterKind::Trilinear:
-        default: {
-            const MipPyramid& pyr = pyramid();
-            if (info) {
-                const double lambda = pyr.trilinear_lambda(r.width);
-                info->width = r.width;
-                info->lambda = lambda;
-                info->level_lo = static_cast<int>(std::floor(lambda));
-                info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
-                info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
-            }
-            return pyr.trilinear(u, v, r.width);
-        }
+        default:  // Sat, the last of the three
+            in.rect = r.rect;
+            in.texels_read = 16;
+            return sat().average(r.rect.lo.u, r.rect.lo.v, r.rect.hi.u, r.rect.hi.v);
     }
 }
 

@@ -129,6 +129,11 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
                           const CmamCache::Entry& above, const CmamOptions& options,
                           const RayTag& current = {});
 
+/// CmamRegion::width alone, what the MIP filter reads, for the current sample p0 and the
+/// `matches` matching samples p[0..]: the distance to the one, or the diagonal of the three
+/// samples' bounding box for two (0 for none).
+double cmam_width(Vec2d p0, const Vec2d* p, int matches);
+
 /// Region for the current sample p0 and the `matches` cached samples that match it
 /// (cached[0] is the most recent). Pure geometry, no texture access.
 CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int matches,
