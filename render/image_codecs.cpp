@@ -32,11 +32,25 @@
 namespace cmam::render::codec {
 
 // Multiplied in double: a header's width × height × channels may exceed 64 bits.
-void check_size(RawImage& img, const SizeCheck& check) {
+void check_size(RawImage& img, const SizeCheck& check, bool keep_8bit) {
     if (img.width <= 0 || img.height <= 0 || img.channels <= 0) throw RenderError("empty image");
     check(img);
-    img.pixels.resize(static_cast<std::size_t>(img.width) * img.height * img.channels);
+    const std::size_t n = static_cast<std::size_t>(img.width) * img.height * img.channels;
+    if (keep_8bit && img.is_8bit)
+        img.bytes.resize(n);
+    else
+        img.pixels.resize(n);
 }
+
+namespace {
+// Sample i of an 8-bit image: the byte itself where the image keeps its bytes, else as a float.
+void put_8bit(RawImage& img, std::size_t i, unsigned char v) {
+    if (!img.bytes.empty())
+        img.bytes[i] = v;
+    else
+        img.pixels[i] = v * (1.0f / 255.0f);
+}
+}  // namespace
 
 namespace {
 
@@ -75,7 +89,7 @@ struct PngReadState {
     ~PngReadState() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
 };
 
-RawImage decode_png(const std::string& path, const SizeCheck& check) {
+RawImage decode_png(const std::string& path, const SizeCheck& check, bool keep_8bit) {
     File f = open_for_reading(path);
     const auto s = std::make_unique<PngReadState>();
     const auto img = std::make_unique<RawImage>();
@@ -106,13 +120,13 @@ RawImage decode_png(const std::string& path, const SizeCheck& check) {
     img->height = static_cast<int>(png_get_image_height(s->png, s->info));
     img->channels = png_get_channels(s->png, s->info);
     img->is_8bit = !wide;
-    check_size(*img, check);
+    check_size(*img, check, keep_8bit);
     const std::size_t row = png_get_rowbytes(s->png, s->info);
     s->bytes.resize(row * img->height);
     s->rows.resize(img->height);
     for (int y = 0; y < img->height; ++y) s->rows[y] = s->bytes.data() + row * y;
     png_read_image(s->png, s->rows.data());
-    const std::size_t n = img->pixels.size();
+    const std::size_t n = static_cast<std::size_t>(img->width) * img->height * img->channels;
     if (wide) {
         for (std::size_t i = 0; i < n; ++i) {
             std::uint16_t v;
@@ -120,7 +134,7 @@ RawImage decode_png(const std::string& path, const SizeCheck& check) {
             img->pixels[i] = v * (1.0f / 65535.0f);
         }
     } else {
-        for (std::size_t i = 0; i < n; ++i) img->pixels[i] = s->bytes[i] * (1.0f / 255.0f);
+        for (std::size_t i = 0; i < n; ++i) put_8bit(*img, i, s->bytes[i]);
     }
     return std::move(*img);
 }
@@ -187,7 +201,7 @@ struct JpegReadState {
     }
 };
 
-RawImage decode_jpeg(const std::string& path, const SizeCheck& check) {
+RawImage decode_jpeg(const std::string& path, const SizeCheck& check, bool keep_8bit) {
     File f = open_for_reading(path);
     const auto s = std::make_unique<JpegReadState>();
     const auto img = std::make_unique<RawImage>();
@@ -205,7 +219,7 @@ RawImage decode_jpeg(const std::string& path, const SizeCheck& check) {
     img->height = static_cast<int>(s->cinfo.output_height);
     img->channels = s->cinfo.output_components;
     img->is_8bit = true;
-    check_size(*img, check);
+    check_size(*img, check, keep_8bit);
     jpeg_start_decompress(&s->cinfo);
     const std::size_t row = static_cast<std::size_t>(img->width) * img->channels;
     s->row.resize(row);
@@ -213,8 +227,7 @@ RawImage decode_jpeg(const std::string& path, const SizeCheck& check) {
         const std::size_t y = s->cinfo.output_scanline;
         JSAMPROW p = s->row.data();
         jpeg_read_scanlines(&s->cinfo, &p, 1);
-        for (std::size_t i = 0; i < row; ++i)
-            img->pixels[y * row + i] = s->row[i] * (1.0f / 255.0f);
+        for (std::size_t i = 0; i < row; ++i) put_8bit(*img, y * row + i, s->row[i]);
     }
     jpeg_finish_decompress(&s->cinfo);
     return std::move(*img);
@@ -281,7 +294,7 @@ using Tiff = std::unique_ptr<TIFF, TiffCloser>;
     throw RenderError(t_tiff_message[0] ? t_tiff_message : fallback);
 }
 
-RawImage decode_tiff(const std::string& path, const SizeCheck& check) {
+RawImage decode_tiff(const std::string& path, const SizeCheck& check, bool keep_8bit) {
     install_tiff_handlers();
     t_tiff_message[0] = '\0';
     Tiff t(TIFFOpen(path.c_str(), "r"));
@@ -329,17 +342,17 @@ RawImage decode_tiff(const std::string& path, const SizeCheck& check) {
     if (!TIFFRGBAImageOK(t.get(), why)) throw RenderError(why[0] ? why : "unsupported TIFF layout");
     img.channels = spp == 2 || spp >= 4 ? 4 : 3;
     img.is_8bit = true;
-    check_size(img, check);
+    check_size(img, check, keep_8bit);
     std::vector<std::uint32_t> raster(static_cast<std::size_t>(w) * h);
     if (!TIFFReadRGBAImageOriented(t.get(), w, h, raster.data(), ORIENTATION_TOPLEFT, 0))
         tiff_fail("corrupt TIFF data");
     for (std::size_t i = 0; i < raster.size(); ++i) {
         const std::uint32_t p = raster[i];
-        float* dst = &img.pixels[i * img.channels];
-        dst[0] = TIFFGetR(p) * (1.0f / 255.0f);
-        dst[1] = TIFFGetG(p) * (1.0f / 255.0f);
-        dst[2] = TIFFGetB(p) * (1.0f / 255.0f);
-        if (img.channels == 4) dst[3] = TIFFGetA(p) * (1.0f / 255.0f);
+        const std::size_t k = i * img.channels;
+        put_8bit(img, k, static_cast<unsigned char>(TIFFGetR(p)));
+        put_8bit(img, k + 1, static_cast<unsigned char>(TIFFGetG(p)));
+        put_8bit(img, k + 2, static_cast<unsigned char>(TIFFGetB(p)));
+        if (img.channels == 4) put_8bit(img, k + 3, static_cast<unsigned char>(TIFFGetA(p)));
     }
     return img;
 }
@@ -404,7 +417,7 @@ struct StbFree {
     void operator()(void* p) const { stbi_image_free(p); }
 };
 
-RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga) {
+RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga, bool keep_8bit) {
     RawImage img;
     if (!stbi_info(path.c_str(), &img.width, &img.height, &img.channels))
         throw RenderError(is_tga ? std::string("corrupt TGA data (") + stbi_failure_reason() + ")"
@@ -412,9 +425,9 @@ RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga
     const bool hdr = stbi_is_hdr(path.c_str());
     const bool wide = !hdr && stbi_is_16_bit(path.c_str());
     img.is_8bit = !hdr && !wide;
-    check_size(img, check);
+    check_size(img, check, keep_8bit);
     int w = 0, h = 0, c = 0;
-    const std::size_t n = img.pixels.size();
+    const std::size_t n = static_cast<std::size_t>(img.width) * img.height * img.channels;
     auto fail = [] {
         return RenderError(std::string("corrupt data (") + stbi_failure_reason() + ")");
     };
@@ -431,7 +444,7 @@ RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga
         std::unique_ptr<unsigned char, StbFree> p(
             stbi_load(path.c_str(), &w, &h, &c, img.channels));
         if (!p) throw fail();
-        for (std::size_t i = 0; i < n; ++i) img.pixels[i] = p.get()[i] * (1.0f / 255.0f);
+        for (std::size_t i = 0; i < n; ++i) put_8bit(img, i, p.get()[i]);
     }
     if (w != img.width || h != img.height) throw RenderError("inconsistent image size");
     return img;
@@ -455,7 +468,7 @@ std::string lower_extension(const std::string& path) {
     return ext;
 }
 
-RawImage decode(const std::string& path, const SizeCheck& check) {
+RawImage decode(const std::string& path, const SizeCheck& check, bool keep_8bit) {
     unsigned char head[8] = {};
     std::size_t n = 0;
     {
@@ -464,15 +477,15 @@ RawImage decode(const std::string& path, const SizeCheck& check) {
         if (std::ferror(f.get())) throw RenderError(std::strerror(errno));
     }
     if (n == 0) throw RenderError("empty file");
-    if (starts_with(head, n, "\x89PNG\r\n\x1a\n", 8)) return decode_png(path, check);
-    if (starts_with(head, n, "\xff\xd8\xff", 3)) return decode_jpeg(path, check);
+    if (starts_with(head, n, "\x89PNG\r\n\x1a\n", 8)) return decode_png(path, check, keep_8bit);
+    if (starts_with(head, n, "\xff\xd8\xff", 3)) return decode_jpeg(path, check, keep_8bit);
     if (starts_with(head, n, "\x76\x2f\x31\x01", 4)) return decode_exr(path, check);
     if (starts_with(head, n, "II*\0", 4) || starts_with(head, n, "MM\0*", 4) ||
         starts_with(head, n, "II+\0", 4) || starts_with(head, n, "MM\0+", 4))
-        return decode_tiff(path, check);
+        return decode_tiff(path, check, keep_8bit);
     if (n >= 3 && head[0] == 'P' && (head[1] == 'F' || head[1] == 'f') && std::isspace(head[2]))
         return decode_pfm(path, check);
-    return decode_stb(path, check, lower_extension(path) == ".tga");
+    return decode_stb(path, check, lower_extension(path) == ".tga", keep_8bit);
 }
 
 Output output_format(const std::string& ext) {

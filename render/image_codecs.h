@@ -21,8 +21,9 @@ namespace cmam::render::codec {
 using SizeCheck = std::function<void(const RawImage&)>;
 
 /// Decodes the file, choosing the format by its first bytes (by the extension only for TGA,
-/// which has no signature). Throws RenderError.
-RawImage decode(const std::string& path, const SizeCheck& check);
+/// which has no signature). With `keep_8bit`, an 8-bit file's samples stay bytes
+/// (RawImage::bytes). Throws RenderError.
+RawImage decode(const std::string& path, const SizeCheck& check, bool keep_8bit = false);
 
 /// The file name's extension in lower case, with the dot (".png"); "" if none.
 std::string lower_extension(const std::string& path);

@@ -9,8 +9,9 @@
 
 namespace cmam::render::codec {
 
-/// Refuses an empty image, asks `check`, then allocates the pixels.
-void check_size(RawImage& img, const SizeCheck& check);
+/// Refuses an empty image, asks `check`, then allocates the pixels: as bytes when `keep_8bit`
+/// and the image is 8-bit (`is_8bit` set before the call), as floats otherwise.
+void check_size(RawImage& img, const SizeCheck& check, bool keep_8bit = false);
 
 /// OpenEXR: the header walked before OpenEXR reads it (sizes and lengths against the limit),
 /// then the pixels as float; throws RenderError with the reason.

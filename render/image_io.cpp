@@ -31,14 +31,15 @@ void set_image_memory_limit(std::size_t bytes) {
     g_image_memory_limit.store(bytes);
 }
 
-RawImage read_image(const std::string& path) {
+RawImage read_image(const std::string& path, bool keep_8bit) {
     const std::string where = "cannot read image \"" + path + "\": ";
     std::error_code ec;
     const fs::file_status st = fs::status(path, ec);
     if (!fs::exists(st)) throw RenderError(where + "file not found");
     if (fs::is_directory(st)) throw RenderError(where + "it is a directory");
     auto check = [&](const RawImage& img) {
-        const double bytes = double(img.width) * img.height * img.channels * sizeof(float);
+        const double bytes = double(img.width) * img.height * img.channels *
+                             (keep_8bit && img.is_8bit ? 1 : sizeof(float));
         if (bytes > double(g_image_memory_limit.load()))
             throw RenderError(std::to_string(img.width) + "x" + std::to_string(img.height) +
                               " with " + std::to_string(img.channels) +
@@ -48,7 +49,7 @@ RawImage read_image(const std::string& path) {
                               std::to_string(g_image_memory_limit.load() >> 20) + " MB");
     };
     try {
-        return codec::decode(path, check);
+        return codec::decode(path, check, keep_8bit);
     } catch (const RenderError& e) {
         throw RenderError(where + e.what());
     } catch (const std::bad_alloc&) {
@@ -58,17 +59,19 @@ RawImage read_image(const std::string& path) {
 
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt,
                             float scale, texture::WrapMode wrap, bool* gamma_used) {
-    RawImage raw = read_image(path);
+    RawImage raw = read_image(path, true);
     bool gamma = gamma_opt.value_or(raw.is_8bit);
     if (gamma_used) *gamma_used = gamma;
     const int w = raw.width, h = raw.height, nc = raw.channels, out_c = is_float ? 1 : 3;
-    // Written row by row into the texture: the file's pixels and the texture are the only
-    // copies of the image in memory.
+    // Written row by row into the texture: the file's pixels (bytes for 8-bit files) and the
+    // texture are the only copies of the image in memory.
     auto fill = [&](int j, float* row) {
         const int y = h - 1 - j;  // flip: v = 0 is the bottom row (pbrt-v3)
         for (int x = 0; x < w; ++x) {
-            const float* src = &raw.pixels[(static_cast<std::size_t>(y) * w + x) * nc];
-            float rgb[3] = {src[0], nc >= 3 ? src[1] : src[0], nc >= 3 ? src[2] : src[0]};
+            const std::size_t k = (static_cast<std::size_t>(y) * w + x) * nc;
+            const float r = raw.sample(k);
+            const float rgb[3] = {r, nc >= 3 ? raw.sample(k + 1) : r,
+                                  nc >= 3 ? raw.sample(k + 2) : r};
             float* dst = &row[static_cast<std::size_t>(x) * out_c];
             if (is_float) {
                 float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];

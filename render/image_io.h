@@ -23,12 +23,19 @@ struct RawImage {
     int width = 0, height = 0, channels = 0;
     bool is_8bit = false;  // the file stores 8-bit (or narrower) integers
     std::vector<float> pixels;
+    /// An 8-bit image read with keep_8bit: its samples as stored, `pixels` then empty.
+    std::vector<unsigned char> bytes;
+    /// Sample i (of width × height × channels, top row first) in [0,1] for 8-bit data, either way.
+    float sample(std::size_t i) const {
+        return bytes.empty() ? pixels[i] : bytes[i] * (1.0f / 255.0f);
+    }
 };
 
 /// Reads an image; throws RenderError naming the file and the reason. An image whose pixels
-/// (as 32-bit floats) would take more than the image memory limit is refused, with its size,
-/// before anything is allocated.
-RawImage read_image(const std::string& path);
+/// (as 32-bit floats, or bytes when kept) would take more than the image memory limit is
+/// refused, with its size, before anything is allocated. With `keep_8bit` an 8-bit file's
+/// samples stay bytes (`bytes`, a quarter of the floats' memory); `sample()` reads either.
+RawImage read_image(const std::string& path, bool keep_8bit = false);
 
 /// The image memory limit in bytes (default: memory_limit() of memory.h); for tests and
 /// fuzzing, which keep hostile sizes small.

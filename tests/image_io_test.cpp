@@ -127,6 +127,39 @@ TEST(ImageIo, EveryOutputFormatReadsBack) {
     EXPECT_EQ(d.entries(), 8u);  // no temporaries left behind
 }
 
+// Read with keep_8bit, an 8-bit file keeps its samples as bytes (a quarter of the memory, what
+// load_texture reads) with exactly the floats of a plain read; other files are read as before.
+TEST(ImageIo, EightBitFilesCanKeepTheirBytes) {
+    TempDir d;
+    std::vector<std::string> paths;
+    for (const char* name : {"a.png", "a.tga", "a.bmp", "a.jpg", "a.exr", "a.pfm", "a.hdr"}) {
+        paths.push_back((d.path / name).string());
+        write_image(paths.back(), 7, 5, gradient(7, 5));
+    }
+    for (const char* name : {"gray1.png", "gray16.png", "palette.png", "rgba.png", "gray.jpg",
+                             "uint16.tif", "float32.tif"})
+        paths.push_back(std::string(CMAM_TEST_DATA_DIR) + "/images/" + name);
+    int eight_bit = 0;
+    for (const std::string& p : paths) {
+        SCOPED_TRACE(p);
+        const RawImage plain = read_image(p), kept = read_image(p, true);
+        ASSERT_EQ(kept.width, plain.width);
+        ASSERT_EQ(kept.channels, plain.channels);
+        EXPECT_EQ(kept.is_8bit, plain.is_8bit);
+        const std::size_t n = std::size_t(plain.width) * plain.height * plain.channels;
+        if (plain.is_8bit) {
+            ++eight_bit;
+            EXPECT_TRUE(kept.pixels.empty());
+            ASSERT_EQ(kept.bytes.size(), n);
+        } else {
+            EXPECT_TRUE(kept.bytes.empty());
+            ASSERT_EQ(kept.pixels.size(), n);
+        }
+        for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(kept.sample(i), plain.pixels[i]) << i;
+    }
+    EXPECT_EQ(eight_bit, 8);
+}
+
 namespace {
 RawImage read_fixture(const char* name) {
     return read_image(std::string(CMAM_TEST_DATA_DIR) + "/images/" + name);
