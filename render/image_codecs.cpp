@@ -122,10 +122,15 @@ RawImage decode_png(const std::string& path, const SizeCheck& check, bool keep_8
     img->is_8bit = !wide;
     check_size(*img, check, keep_8bit);
     const std::size_t row = png_get_rowbytes(s->png, s->info);
-    s->bytes.resize(row * img->height);
+    // Bytes kept: libpng writes the rows straight into them (8-bit rows are width × channels
+    // bytes), with no second copy of the image.
+    const bool direct = !img->bytes.empty() && row * img->height == img->bytes.size();
+    if (!direct) s->bytes.resize(row * img->height);
+    unsigned char* data = direct ? img->bytes.data() : s->bytes.data();
     s->rows.resize(img->height);
-    for (int y = 0; y < img->height; ++y) s->rows[y] = s->bytes.data() + row * y;
+    for (int y = 0; y < img->height; ++y) s->rows[y] = data + row * y;
     png_read_image(s->png, s->rows.data());
+    if (direct) return std::move(*img);
     const std::size_t n = static_cast<std::size_t>(img->width) * img->height * img->channels;
     if (wide) {
         for (std::size_t i = 0; i < n; ++i) {

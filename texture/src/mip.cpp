@@ -34,19 +34,20 @@ namespace {
 // same operations and order as the general weights below (every weight 1/2), so the same floats
 // at a fraction of the cost.
 Image halve(const Image& src) {
-    const int w = src.width() / 2, h = src.height() / 2, C = src.channels();
-    std::vector<float> out(static_cast<std::size_t>(w) * h * C);
-    for (int k = 0; k < h; ++k)
+    const int w = src.width() / 2, C = src.channels();
+    // Written row by row into the level: no second copy of it.
+    auto fill = [&](int k, float* row) {
         for (int i = 0; i < w; ++i) {
             const float *a = src.texel(2 * i, 2 * k), *b = src.texel(2 * i + 1, 2 * k),
                         *c = src.texel(2 * i, 2 * k + 1), *d = src.texel(2 * i + 1, 2 * k + 1);
-            float* o = &out[(static_cast<std::size_t>(k) * w + i) * C];
+            float* o = row + static_cast<std::size_t>(i) * C;
             for (int ch = 0; ch < C; ++ch) {
                 const double top = 0.5 * a[ch] + 0.5 * b[ch], bottom = 0.5 * c[ch] + 0.5 * d[ch];
                 o[ch] = static_cast<float>(0.5 * top + 0.5 * bottom);
             }
         }
-    return Image(w, h, C, std::move(out), src.wrap_s(), src.wrap_t());
+    };
+    return Image::from_rows(w, src.height() / 2, C, fill, src.wrap_s(), src.wrap_t());
 }
 }  // namespace
 
