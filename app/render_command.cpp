@@ -220,14 +220,15 @@ int run_render(const RenderArgs& a) {
     if (!a.resolution.empty()) override_resolution(desc, a.resolution);
     if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
     note_spp_rounding(a.spp);
-    const render::BuildOptions bo = build_options(a);
-    auto scene = render::build_scene(desc, bo, print_warning);
-    std::string out = a.output.empty() ? scene->film.filename : a.output;
-    check_output_folder(out);  // before rendering: a long render is not lost to a typo
     std::optional<std::size_t> max_memory;
     if (!a.max_memory.empty() && !(max_memory = render::parse_bytes(a.max_memory)))
         throw UsageError("--max-memory: expected a size such as 8G or 512M, not \"" + a.max_memory +
                          "\"");
+    render::BuildOptions bo = build_options(a);
+    bo.max_memory = max_memory;  // mesh files too big are refused before they are read
+    auto scene = render::build_scene(desc, bo, print_warning);
+    std::string out = a.output.empty() ? scene->film.filename : a.output;
+    check_output_folder(out);  // before rendering: a long render is not lost to a typo
     render::check_render_memory(*scene, max_memory);  // before rendering, with the sizes
 
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));

@@ -349,7 +349,7 @@ void check_mesh(const PlyMesh& mesh, const std::string& path) {
 
 }  // namespace
 
-PlyMesh read_ply(const std::string& path) {
+PlyMesh read_ply(const std::string& path, const PlyCheck& check) {
     if (std::string why = not_a_regular_file(path); !why.empty())
         throw ply_error(path, "cannot read PLY file: " + why);
     std::ifstream in(path, std::ios::binary);
@@ -358,6 +358,20 @@ PlyMesh read_ply(const std::string& path) {
     if (!std::getline(in, line) || line.substr(0, 3) != "ply")
         throw ply_error(path, "not a PLY file (missing \"ply\" magic)");
     const Header header = read_header(in, path);
+    if (check) {
+        PlyCounts counts;
+        for (const Element& e : header.elements) {
+            if (e.name == "vertex") {
+                const VertexLayout at(e);
+                counts.vertices += e.count;
+                counts.normals = counts.normals || (at.nx >= 0 && at.ny >= 0 && at.nz >= 0);
+                counts.uvs = counts.uvs || (at.u >= 0 && at.v >= 0);
+            } else if (e.name == "face" && !e.props.empty()) {
+                counts.faces += e.count;
+            }
+        }
+        check(counts);
+    }
     PlyMesh mesh;
     Reader r(in, header.format, path);
     bool have_vertices = false;

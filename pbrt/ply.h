@@ -3,6 +3,8 @@
 // texture_s texture_t) and faces (triangles and quads; quads are split along their 0-2 diagonal).
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,9 +19,17 @@ struct PlyMesh {
     std::vector<int> indices;      // three per triangle
 };
 
+/// What a PLY header announces, before any vertex is read.
+struct PlyCounts {
+    std::size_t vertices = 0, faces = 0;
+    bool normals = false, uvs = false;
+};
+/// Called with the header's counts before the data is read; throws to refuse the file.
+using PlyCheck = std::function<void(const PlyCounts&)>;
+
 /// Reads the PLY file at `path`. When it cannot be read or is malformed: a SceneError not tied
 /// to a scene location, whose message names the file and the reason ("mesh.ply: PLY header has
-/// no end_header").
-PlyMesh read_ply(const std::string& path);
+/// no end_header"). `check`, if given, sees the header's counts first.
+PlyMesh read_ply(const std::string& path, const PlyCheck& check = {});
 
 }  // namespace cmam::pbrt

@@ -21,6 +21,9 @@ struct BuildOptions {
     std::optional<texture::FilterKind> filter;
     TagPolicy tags = TagPolicy::Scanline;
     texture::CmamOptions cmam;
+    /// The memory the process may use (nullopt: memory_limit() of memory.h): a mesh file whose
+    /// header announces more than what is left of it is refused before it is read.
+    std::optional<std::size_t> max_memory;
 };
 
 /// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.

@@ -4,10 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <string>
 
+#include "expect_throw.h"
 #include "pbrt/parser.h"
 #include "render/build_scene.h"
+#include "temp_dir.h"
 
 using namespace cmam::render;
 
@@ -64,6 +67,40 @@ TEST(Memory, ARenderOverTheLimitIsRefusedWithItsSizes) {
         EXPECT_NE(m.find("--resolution"), std::string::npos) << m;  // the film is the larger
     }
     EXPECT_NO_THROW(check_render_memory(*s, resident_memory() + need.total() + (1 << 20)));
+}
+
+TEST(Memory, AMeshFileTooBigIsRefusedFromItsHeaderWithItsLocation) {
+    // A header announcing a billion vertices and faces: refused at the shape's filename before
+    // any vertex is read (the file holds none), naming the counts and the sizes.
+    const cmam::test::TempDir d("cmam_memory_ply");
+    const std::string ply = (d.path / "huge.ply").string();
+    std::ofstream(ply) << "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
+                          "property float x\nproperty float y\nproperty float z\n"
+                          "element face 1000000000\nproperty list uchar int vertex_indices\n"
+                          "end_header\n";
+    const std::string text =
+        "LookAt 0 0 3  0 0 0  0 1 0\nCamera \"perspective\"\n"
+        "WorldBegin\nShape \"plymesh\" \"string filename\" \"" +
+        ply + "\"\nWorldEnd\n";
+    BuildOptions bo;
+    bo.max_memory = std::size_t(8) << 30;
+    try {
+        build_scene(cmam::pbrt::parse_string(text, "m.pbrt"), bo, {});
+        FAIL() << "not refused";
+    } catch (const cmam::pbrt::SceneError& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind("m.pbrt:4:17: error: \"huge.ply\": 1000000000 vertices and "
+                          "1000000000 faces need about 147.1 GiB, over the ",
+                          0),
+                  0u)
+            << m;
+        EXPECT_NE(m.find(" left of the limit of 8.0 GiB set by --max-memory"), std::string::npos)
+            << m;
+    }
+    // The same header under a limit it fits: read, and then refused for its missing data.
+    bo.max_memory = std::size_t(1) << 50;
+    EXPECT_THROW_CONTAINS(build_scene(cmam::pbrt::parse_string(text, "m.pbrt"), bo, {}),
+                          cmam::pbrt::SceneError, "huge.ply");
 }
 
 TEST(Memory, SizesParseInPowersOf1024) {

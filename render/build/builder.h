@@ -164,6 +164,8 @@ class Builder {
     bool analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
     bool tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
     bool ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
+    void check_mesh_memory(const pbrt::FileLoc& loc, const std::string& name,
+                           const pbrt::PlyCounts& counts);
     bool triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
     bool subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                          const std::vector<int>& idx, Primitive& prim);

@@ -2,13 +2,17 @@
 // and PLY meshes), object instances, and the area lights their shapes emit.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 
 #include "pbrt/parser.h"
 #include "render/build/builder.h"
+#include "render/memory.h"
 
 namespace cmam::render::build_detail {
+
+namespace fs = std::filesystem;
 
 // pbrt-v3's sphere and disk, intersected analytically in object space.
 bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
@@ -60,6 +64,27 @@ bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim);
 }
 
+// A mesh of `c.vertices` vertices and `c.faces` faces takes, once read and placed: its arrays
+// twice (as read, and placed in the scene: 12 bytes a position, 12 a normal, 8 a texture
+// coordinate, 12 a triangle's indices) and the acceleration structure Embree builds over it,
+// about 110 bytes a triangle (measured: 2 million triangles with texture coordinates take
+// 313 MB). A face is counted as one triangle (quads are two), so this is a lower bound.
+void Builder::check_mesh_memory(const pbrt::FileLoc& loc, const std::string& name,
+                                const pbrt::PlyCounts& c) {
+    const double per_vertex = 12 + (c.normals ? 12 : 0) + (c.uvs ? 8 : 0);
+    const double need = 2 * per_vertex * double(c.vertices) + (2 * 12 + 110) * double(c.faces);
+    const std::size_t limit = m_opts.max_memory.value_or(memory_limit()), have = resident_memory();
+    const double left = have < limit ? double(limit - have) : 0;
+    if (need <= left) return;
+    throw SceneError(
+        loc, name + ": " + std::to_string(c.vertices) + " vertices and " + std::to_string(c.faces) +
+                 " faces need about " +
+                 format_bytes(static_cast<std::size_t>(std::min(need, 1e18))) + ", over the " +
+                 format_bytes(static_cast<std::size_t>(left)) + " left of the limit of " +
+                 format_bytes(limit) +
+                 (m_opts.max_memory ? " set by --max-memory" : " (what this process may use)"));
+}
+
 bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
     mesh_primitive(s, prim);
@@ -67,11 +92,14 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     if (!fp) throw SceneError(e.loc, "plymesh needs a \"string filename\" parameter");
     std::string path =
         pbrt::resolve_path(m_desc.base_dir, fp->loc, e.params.get_string("filename", ""));
-    // Each file is read once, however many shapes name it.
+    // Each file is read once, however many shapes name it; refused before its data is read
+    // when what its header announces would not fit.
     auto& mesh = m_ply[path];
     if (!mesh) {
+        const std::string name = in_quotes(fs::path(path).filename().string());
+        auto check = [&](const pbrt::PlyCounts& c) { check_mesh_memory(fp->loc, name, c); };
         try {
-            mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path));
+            mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path, check));
         } catch (const SceneError& err) {
             throw SceneError(fp->loc, err.message());
         }
