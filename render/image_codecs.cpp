@@ -43,6 +43,9 @@ void check_size(RawImage& img, const SizeCheck& check, bool keep_8bit) {
 }
 
 namespace {
+
+namespace fs = std::filesystem;
+
 // Sample i of an 8-bit image: the byte itself where the image keeps its bytes, else as a float.
 void put_8bit(RawImage& img, std::size_t i, unsigned char v) {
     if (!img.bytes.empty())
@@ -50,11 +53,6 @@ void put_8bit(RawImage& img, std::size_t i, unsigned char v) {
     else
         img.pixels[i] = v * (1.0f / 255.0f);
 }
-}  // namespace
-
-namespace {
-
-namespace fs = std::filesystem;
 
 struct FileCloser {
     void operator()(std::FILE* f) const { std::fclose(f); }
