@@ -100,18 +100,20 @@ void precheck_exr(const std::string& path, const SizeCheck& check) {
         } else if (type == "chlist") {
             // name, pixel type (int), pLinear and 3 reserved bytes, x and y sampling (ints).
             // Any attribute of this type is walked: OpenEXR reads each to its terminator.
+            // OpenEXR reads the list to its terminator, not to the declared size: so does this
+            // walk, which then requires the two to agree.
             std::int64_t count = 0;
             std::string ch;
-            while (in.tellg() < at + size) {
+            while (true) {
                 if (!read_string(ch, max_name)) throw corrupt("channel list");
                 if (ch.empty()) break;
                 std::int32_t f[4];
                 if (!in.read(reinterpret_cast<char*>(f), 16)) throw corrupt("channel list");
                 if (f[0] < 0 || f[0] > 2 || f[2] < 1 || f[2] > 64 || f[3] < 1 || f[3] > 64)
                     throw corrupt("channel \"" + ch + "\"");
+                if (in.tellg() > at + size) throw corrupt("channel list");
                 ++count;
             }
-            // OpenEXR reads the list to its terminator, not to the declared size.
             if (in.tellg() != at + size) throw corrupt("channel list");
             if (name == "channels") channels = count;
         } else if (const int fixed = fixed_exr_size(type); fixed >= 0 && size != fixed) {

@@ -238,7 +238,8 @@ void write_image(const std::string& path, int w, int h, const std::vector<float>
     const std::string ext = codec::lower_extension(path);
     const fs::path target(path);
     const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-    if (!fs::is_directory(dir))
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
         throw RenderError("cannot write \"" + path + "\": directory \"" + dir.string() +
                           "\" does not exist");
     const codec::Output format = codec::output_format(ext);

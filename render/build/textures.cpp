@@ -86,9 +86,14 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     float scale = float(finite_float(e, "scale", 1));
     std::optional<bool> gamma;
     if (e.params.find("gamma")) gamma = e.params.get_bool("gamma", true);
-    std::string key = std::filesystem::weakly_canonical(path).string() + "|" +
-                      (is_float ? "f" : "s") + "|" + std::string(texture::to_string(*wrap)) + "|" +
-                      std::to_string(scale) + "|" + (gamma ? (*gamma ? "1" : "0") : "default");
+    // The same file under the same settings is loaded once. A path the file system cannot
+    // resolve (too long a name, say) keys as written; reading it then fails with the reason.
+    std::error_code ec;
+    std::string canonical = std::filesystem::weakly_canonical(path, ec).string();
+    if (ec) canonical = path;
+    std::string key = canonical + "|" + (is_float ? "f" : "s") + "|" +
+                      std::string(texture::to_string(*wrap)) + "|" + std::to_string(scale) + "|" +
+                      (gamma ? (*gamma ? "1" : "0") : "default");
     auto it = m_scene->images.find(key);
     if (it != m_scene->images.end()) return it->second.get();
     texture::Image level0;
