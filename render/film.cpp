@@ -19,6 +19,16 @@ namespace cmam::render {
 
 namespace {
 
+// The threads a parallel_range will run on.
+int worker_count(int threads) {
+#ifdef CMAM_STD_THREADS
+    return std::max(1,
+                    threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
+#else
+    return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+#endif
+}
+
 // body(begin, end) over [0, n) in parallel: with oneTBB, or, in a build for ThreadSanitizer
 // (CMAM_STD_THREADS), with std::thread workers taking one index at a time, whose hand-offs
 // ThreadSanitizer sees (it cannot see into an uninstrumented oneTBB). The image does not depend
@@ -26,8 +36,7 @@ namespace {
 template <class Body>
 void parallel_range(int n, int threads, Body&& body) {
 #ifdef CMAM_STD_THREADS
-    const int workers =
-        std::max(1, threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
+    const int workers = worker_count(threads);
     std::atomic<int> next{0};
     std::vector<std::thread> pool;
     for (int w = 0; w < workers; ++w)
@@ -186,16 +195,6 @@ void render_rows(const FilmTracer& tracer, const RenderOptions& options, int hei
                 if (options.progress) options.progress(done, height);
             }
     });
-}
-
-// The threads a parallel_range will run on.
-int worker_count(int threads) {
-#ifdef CMAM_STD_THREADS
-    return std::max(1,
-                    threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
-#else
-    return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
-#endif
 }
 
 // With the 2-D CMAM the image goes in fixed strips of kCmamStripWidth columns, each traced top

@@ -45,6 +45,14 @@ union Uninit8 {
     Uninit8() {}
 };
 
+// The multiple of an axis's period (n texels for repeat, 2n for mirror; none for clamp and black)
+// that moves x (|x| < 2^30) into the base period.
+double period_shift(double x, int n, WrapMode mode) {
+    if (mode != WrapMode::Repeat && mode != WrapMode::Mirror) return 0;
+    const double period = mode == WrapMode::Repeat ? n : 2.0 * n;
+    return double(floor_to_int(x / period)) * period;
+}
+
 int64_t floor_div(int64_t a, int64_t b) {  // b > 0
     int64_t q = a / b;
     return q - ((a % b != 0) && (a < 0) ? 1 : 0);
@@ -335,16 +343,12 @@ Texel RowPrefixTable::integral_in_range(const Vec2d* v0, int n, double area2) co
     n = std::min(n, 8);
     const double area = std::abs(area2) / 2;
     // Periodic modes: move the polygon to the base period (small knots, no cancellation).
-    double sx = 0, sy = 0;
     double xmin = v0[0].u, ymin = v0[0].v;
     for (int i = 1; i < n; ++i) {
         xmin = std::min(xmin, v0[i].u);
         ymin = std::min(ymin, v0[i].v);
     }
-    if (m_wrap_s == WrapMode::Repeat) sx = std::floor(xmin / m_w) * m_w;
-    if (m_wrap_s == WrapMode::Mirror) sx = std::floor(xmin / (2.0 * m_w)) * 2.0 * m_w;
-    if (m_wrap_t == WrapMode::Repeat) sy = std::floor(ymin / m_h) * m_h;
-    if (m_wrap_t == WrapMode::Mirror) sy = std::floor(ymin / (2.0 * m_h)) * 2.0 * m_h;
+    const double sx = period_shift(xmin, m_w, m_wrap_s), sy = period_shift(ymin, m_h, m_wrap_t);
     for (int i = 0; i < n; ++i) v[i] = {v0[i].u - sx, v0[i].v - sy};
     double acc[4] = {0, 0, 0, 0};
     switch (m_c) {
@@ -427,14 +431,6 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     for (int c = 0; c < img.channels(); ++c) r.value[c] = static_cast<float>(t[c] * inv);
     r.knots = static_cast<int>(1.5 * perimeter_l) + 2 * n;  // about: rows + columns crossed
     return r;
-}
-
-// The multiple of an axis's period (n texels for repeat, 2n for mirror; none for clamp and black)
-// that moves x (|x| < 2^30) into the base period.
-double period_shift(double x, int n, WrapMode mode) {
-    if (mode != WrapMode::Repeat && mode != WrapMode::Mirror) return 0;
-    const double period = mode == WrapMode::Repeat ? n : 2.0 * n;
-    return double(floor_to_int(x / period)) * period;
 }
 
 // The mean of the bilinear reconstruction over the parallelogram c ± a/2 ± b/2 (uv units). When
