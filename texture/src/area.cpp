@@ -223,6 +223,25 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
 // row it crosses, each piece adds its height times the mean of R_j over its x-span (the midpoint
 // value within one texel; partial end texels and whole ones between otherwise, times
 // `h_per_x`).
+#if defined(__SSE2__)
+namespace {
+// A knot's channels as one float vector: a 3-channel knot's fourth lane is the next knot's first
+// channel, or the table's slack, never used; one or two channels leave the other lanes zero.
+template <int NC>
+inline __m128 knot4(const float* d) {
+    if constexpr (NC == 1) return _mm_load_ss(d);
+    if constexpr (NC == 2)
+        return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(d)));
+    return _mm_loadu_ps(d);
+}
+// acc (two double pairs) += x, widened.
+inline void add_wide(__m128d& lo, __m128d& hi, __m128 x) {
+    lo = _mm_add_pd(lo, _mm_cvtps_pd(x));
+    hi = _mm_add_pd(hi, _mm_cvtps_pd(_mm_movehl_ps(x, x)));
+}
+}  // namespace
+#endif
+
 template <int NC>
 [[gnu::always_inline]] inline void RowPrefixTable::edge_inside(Vec2d p, Vec2d q, double sign,
                                                                double dxdy, double h_per_x,
@@ -231,6 +250,51 @@ template <int NC>
     double y = p.v, x = p.u;
     int64_t j = floor_to_int(y);
     const float* row = m_d.data() + static_cast<std::size_t>(j) * stride;
+#if defined(__SSE2__)
+    {
+        // The channels as one vector: each piece's value in float (the table's precision), added
+        // to double sums. Every channel count takes this path, so a channel's result does not
+        // depend on how many there are.
+        __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
+        while (y < q.v) {
+            const double ynext = std::min(double(j + 1), q.v);
+            const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
+            const double h = sign * (ynext - y);
+            const double x0 = std::min(x, xnext), x1 = std::max(x, xnext);
+            const int64_t k0 = static_cast<int64_t>(x0);
+            const float* d = row + k0 * NC;
+            if (x1 <= double(k0 + 2)) {  // as below: h m0 + h_per_x l1 (m1 − m0)
+                const double b0 = std::min(x1, double(k0 + 1)), l1 = x1 - b0;
+                const __m128 f0 = _mm_set1_ps(static_cast<float>(0.5 * (x0 + b0) - double(k0))),
+                             f1 = _mm_set1_ps(static_cast<float>(0.5 * l1));
+                const __m128 d0 = knot4<NC>(d), d1 = knot4<NC>(d + NC), d2 = knot4<NC>(d + 2 * NC);
+                const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
+                const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
+                add_wide(lo, hi,
+                         _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(h)), m0),
+                                    _mm_mul_ps(_mm_set1_ps(static_cast<float>(h_per_x * l1)),
+                                               _mm_sub_ps(m1, m0))));
+            } else {
+                double sum[NC];
+                for (int c = 0; c < NC; ++c) sum[c] = 0;
+                integral_inside<NC>(row, x0, x1, sum);
+                lo = _mm_add_pd(lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_loadu_pd(sum)));
+                hi = _mm_add_pd(hi,
+                                _mm_mul_pd(_mm_set1_pd(h_per_x),
+                                           NC == 4 ? _mm_loadu_pd(sum + 2) : _mm_load_sd(sum + 2)));
+            }
+            y = ynext;
+            x = xnext;
+            ++j;
+            row += stride;
+        }
+        alignas(16) double out[4];
+        _mm_store_pd(out, lo);
+        _mm_store_pd(out + 2, hi);
+        for (int c = 0; c < NC; ++c) acc[c] += out[c];
+        return;
+    }
+#endif
     while (y < q.v) {
         const double ynext = std::min(double(j + 1), q.v);
         const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
@@ -433,14 +497,131 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     return r;
 }
 
-// The mean of the bilinear reconstruction over the parallelogram c ± a/2 ± b/2 (uv units). When
-// the parallelogram lies within one bilinear patch it is exact in closed form: B there is B(c)
-// plus the twist d = t00 − t10 − t01 + t11 times the product of the offsets from c, whose mean
-// over the parallelogram is (a_s a_t + b_s b_t) / 12, so one patch read does. Otherwise the 3x3
-// Gauss–Legendre product rule in the parallelogram's coordinates (points 0 and ±√(3/5)/2 of a
-// side, weights 8/18 and 5/18), which is exact within one patch too, so the two agree where the
-// choice changes. `texels` receives the number of texels read.
-Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, int* texels) {
+// Gauss–Legendre product rules on the parallelogram's own coordinates: nodes on [-1/2, 1/2] and
+// their weights, per coordinate.
+template <int N>
+struct GaussRule;
+template <>
+struct GaussRule<3> {
+    static constexpr double x[3] = {-0.38729833462074170, 0, 0.38729833462074170};  // sqrt(3/5)/2
+    static constexpr float w[3] = {5.0f / 18, 8.0f / 18, 5.0f / 18};
+};
+template <>
+struct GaussRule<4> {
+    static constexpr double x[4] = {-0.43056815579702629, -0.16999052179242813, 0.16999052179242813,
+                                    0.43056815579702629};
+    static constexpr float w[4] = {0.17392742256872693f, 0.32607257743127307f, 0.32607257743127307f,
+                                   0.17392742256872693f};
+};
+
+// The rule's weights for a region whose longer side is `major` level-0 texels: the 3x3 rule up to
+// kAreaRule4Lo, the 4x4 one from kAreaRule4Hi, linearly between (continuous in the size).
+double rule4_weight(double major) {
+    return std::clamp((major - kAreaRule4Lo) / (kAreaRule4Hi - kAreaRule4Lo), 0.0, 1.0);
+}
+
+#if defined(__SSE2__)
+// A block of texels around the region, read once (wrapped per row and column) as four lanes a
+// texel (a 3-channel texel's fourth lane is the next float, unused; one or two channels leave the
+// other lanes zero), so every channel count has the same lane arithmetic.
+struct TexelBlock {
+    static constexpr int kMax = 10;
+    __m128 t[kMax][kMax];
+    int64_t k0, j0;  // texel indices of t[0][0], before wrapping
+    int nx, ny;      // texels read per row, rows read
+};
+
+// The block holding every point within es texels of the centre s along s and et along t (with
+// the texel after each, for the bilinear blend); false when it would not fit.
+bool read_block(const Image& img, double s, double t, double es, double et, TexelBlock& b) {
+    b.k0 = floor_to_int(s - es);
+    b.j0 = floor_to_int(t - et);
+    const int nx = static_cast<int>(floor_to_int(s + es) - b.k0) + 2,
+              ny = static_cast<int>(floor_to_int(t + et) - b.j0) + 2;
+    if (nx > TexelBlock::kMax || ny > TexelBlock::kMax) return false;
+    b.nx = nx;
+    b.ny = ny;
+    const int nc = img.channels();
+    std::ptrdiff_t col[TexelBlock::kMax];
+    const float* base = img.row(0);
+    const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
+    for (int i = 0; i < nx; ++i) {
+        const int64_t c = wrap_index(b.k0 + i, img.width(), img.wrap_s());
+        col[i] = c < 0 ? -1 : cols[c];
+    }
+    for (int jj = 0; jj < ny; ++jj) {
+        const int64_t r = wrap_index(b.j0 + jj, img.height(), img.wrap_t());
+        for (int i = 0; i < nx; ++i) {
+            if (r < 0 || col[i] < 0) {
+                b.t[jj][i] = _mm_setzero_ps();
+            } else if (nc >= 3) {
+                b.t[jj][i] = _mm_loadu_ps(base + rows[r] + col[i]);
+            } else {
+                const float* p = base + rows[r] + col[i];
+                b.t[jj][i] = _mm_setr_ps(p[0], nc > 1 ? p[1] : 0.0f, 0.0f, 0.0f);
+            }
+        }
+    }
+    return true;
+}
+
+// The N x N rule's weighted sum of the bilinear reconstruction at c + fa a + fb b, from the block;
+// N independent sums (one per fb).
+template <int N>
+__m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, double bs,
+                double bt) {
+    using R = GaussRule<N>;
+    __m128 total = _mm_setzero_ps();
+    for (int ib = 0; ib < N; ++ib) {
+        const double cs = s + R::x[ib] * bs, ct = t + R::x[ib] * bt;
+        __m128 sum = _mm_setzero_ps();
+        for (int ia = 0; ia < N; ++ia) {
+            const double ps = cs + R::x[ia] * as, pt = ct + R::x[ia] * at;
+            const int64_t i = floor_to_int(ps), j = floor_to_int(pt);
+            const float fs = static_cast<float>(ps - double(i)),
+                        ft = static_cast<float>(pt - double(j));
+            const __m128* r0 = b.t[j - b.j0] + (i - b.k0);
+            const __m128* r1 = b.t[j - b.j0 + 1] + (i - b.k0);
+            const __m128 lo = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r0[0]),
+                                         _mm_mul_ps(_mm_set1_ps(fs), r0[1]));
+            const __m128 hi = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r1[0]),
+                                         _mm_mul_ps(_mm_set1_ps(fs), r1[1]));
+            const __m128 v =
+                _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - ft), lo), _mm_mul_ps(_mm_set1_ps(ft), hi));
+            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(R::w[ia]), v));
+        }
+        total = _mm_add_ps(total, _mm_mul_ps(_mm_set1_ps(R::w[ib]), sum));
+    }
+    return total;
+}
+#endif
+
+// The same rule point by point (any block size; also the path without SSE2).
+template <int N>
+Texel rule_points(const Image& img, double s, double t, double as, double at, double bs,
+                  double bt) {
+    using R = GaussRule<N>;
+    Texel out{};
+    for (int ib = 0; ib < N; ++ib)
+        for (int ia = 0; ia < N; ++ia) {
+            const Texel p = detail::bilinear_at(img, s + R::x[ia] * as + R::x[ib] * bs,
+                                                t + R::x[ia] * at + R::x[ib] * bt);
+            const float wq = R::w[ia] * R::w[ib];
+            for (int c = 0; c < 4; ++c) out[c] += wq * p[c];
+        }
+    return out;
+}
+
+// The mean of the bilinear reconstruction over the parallelogram c ± a/2 ± b/2 (uv units), whose
+// longer side is `major` level-0 texels (under kAreaBlendHi). When the parallelogram lies within
+// one bilinear patch it is exact in closed form: B there is B(c) plus the twist d = t00 − t10 −
+// t01 + t11 times the product of the offsets from c, whose mean over the parallelogram is
+// (a_s a_t + b_s b_t) / 12, so one patch read does. Otherwise a Gauss–Legendre product rule in the
+// parallelogram's coordinates, 3x3 or 4x4 points by size (rule4_weight), which is exact within one
+// patch too, so the cases agree where the choice changes. `texels` receives the number of texels
+// read.
+Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double major,
+                 int* texels) {
     const double W = img.width(), H = img.height();
     double s = u * W - 0.5, t = v * H - 0.5;
     const double as = a.u * W, at = a.v * H, bs = b.u * W, bt = b.v * H;
@@ -462,83 +643,45 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, int* te
             out[c] += twist * (p.t00[c] - p.t10[c] - p.t01[c] + p.t11[c]);
         return out;
     }
-    constexpr double x = 0.38729833462074170;  // sqrt(3/5) / 2
-    constexpr float w[3] = {5.0f / 18, 8.0f / 18, 5.0f / 18};
+    const double w4 = rule4_weight(major);
 #if defined(__SSE2__)
-    // The nine points lie within a block of at most 7x7 texels (per axis they span 2x = 0.77 of
-    // the two sides' extents, under 4.7 texels while the longer side is under kAreaBlendHi = 3):
-    // read it once, wrapped per row and column, as four lanes a texel (a 3-channel texel's
-    // fourth lane is the next float, unused), and blend each point's 2x2. Every channel count
-    // takes this path, so each lane's arithmetic is the same whatever the number of channels.
-    static_assert(kAreaBlendHi <= 3);
-    const int nc = img.channels();
+    // The points lie within a block of at most 10x10 texels: per axis they span twice the outer
+    // node (0.86) times the two sides' extents, under 7.75 texels while the longer side is under
+    // kAreaBlendHi = 4.5.
+    static_assert(kAreaBlendHi <= 4.5);
     {
-        const double es = x * (std::abs(as) + std::abs(bs)), et = x * (std::abs(at) + std::abs(bt));
-        const int64_t k0 = floor_to_int(s - es), j0 = floor_to_int(t - et);
-        const int nx = static_cast<int>(floor_to_int(s + es) - k0) + 2,
-                  ny = static_cast<int>(floor_to_int(t + et) - j0) + 2;
-        if (nx <= 7 && ny <= 7) {
-            __m128 block[7][7];
-            std::ptrdiff_t col[7];
-            const float* base = img.row(0);
-            const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
-            for (int i = 0; i < nx; ++i) {
-                const int64_t c = wrap_index(k0 + i, img.width(), img.wrap_s());
-                col[i] = c < 0 ? -1 : cols[c];
-            }
-            for (int jj = 0; jj < ny; ++jj) {
-                const int64_t r = wrap_index(j0 + jj, img.height(), img.wrap_t());
-                for (int i = 0; i < nx; ++i) {
-                    if (r < 0 || col[i] < 0) {
-                        block[jj][i] = _mm_setzero_ps();
-                    } else if (nc >= 3) {
-                        block[jj][i] = _mm_loadu_ps(base + rows[r] + col[i]);
-                    } else {  // one or two channels: the others' lanes zero
-                        const float* p = base + rows[r] + col[i];
-                        block[jj][i] = _mm_setr_ps(p[0], nc > 1 ? p[1] : 0.0f, 0.0f, 0.0f);
-                    }
-                }
-            }
-            // Points c + fa·a + fb·b for fa, fb in {−x, 0, x}; three independent sums (per fb).
-            const double os[3] = {-x * as, 0, x * as}, ot[3] = {-x * at, 0, x * at};
-            __m128 sums[3];
-            for (int ib = 0; ib < 3; ++ib) {
-                const double cs = s + (ib - 1) * x * bs, ct = t + (ib - 1) * x * bt;
-                __m128 sum = _mm_setzero_ps();
-                for (int ia = 0; ia < 3; ++ia) {
-                    const double ps = cs + os[ia], pt = ct + ot[ia];
-                    const int64_t i = floor_to_int(ps), j = floor_to_int(pt);
-                    const float fs = static_cast<float>(ps - double(i)),
-                                ft = static_cast<float>(pt - double(j));
-                    const __m128* r0 = block[j - j0] + (i - k0);
-                    const __m128* r1 = block[j - j0 + 1] + (i - k0);
-                    const __m128 lo = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r0[0]),
-                                                 _mm_mul_ps(_mm_set1_ps(fs), r0[1]));
-                    const __m128 hi = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r1[0]),
-                                                 _mm_mul_ps(_mm_set1_ps(fs), r1[1]));
-                    const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - ft), lo),
-                                                _mm_mul_ps(_mm_set1_ps(ft), hi));
-                    sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(w[ia]), v));
-                }
-                sums[ib] = _mm_mul_ps(_mm_set1_ps(w[ib]), sum);
-            }
-            const __m128 sum = _mm_add_ps(_mm_add_ps(sums[0], sums[2]), sums[1]);
-            *texels = nx * ny;
+        const double reach = w4 > 0 ? GaussRule<4>::x[3] : GaussRule<3>::x[2];
+        TexelBlock block;
+        if (read_block(img, s, t, reach * (std::abs(as) + std::abs(bs)),
+                       reach * (std::abs(at) + std::abs(bt)), block)) {
+            *texels = block.nx * block.ny;
+            __m128 sum;
+            if (w4 == 0)
+                sum = rule_sum<3>(block, s, t, as, at, bs, bt);
+            else if (w4 == 1)
+                sum = rule_sum<4>(block, s, t, as, at, bs, bt);
+            else
+                sum = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - w4)),
+                                            rule_sum<3>(block, s, t, as, at, bs, bt)),
+                                 _mm_mul_ps(_mm_set1_ps(static_cast<float>(w4)),
+                                            rule_sum<4>(block, s, t, as, at, bs, bt)));
             Texel out;
             _mm_storeu_ps(out.data(), sum);
-            if (nc == 3) out[3] = 0;
+            if (img.channels() == 3) out[3] = 0;
             return out;
         }
     }
 #endif
-    *texels = 36;
     Texel out{};
-    for (int q = 0; q < 9; ++q) {
-        const int ia = q % 3, ib = q / 3;
-        const double fa = (ia - 1) * x, fb = (ib - 1) * x;
-        const Texel p = detail::bilinear_at(img, s + fa * as + fb * bs, t + fa * at + fb * bt);
-        const float wq = w[ia] * w[ib];
-        for (int c = 0; c < 4; ++c) out[c] += wq * p[c];
+    if (w4 < 1) {
+        const Texel g3 = rule_points<3>(img, s, t, as, at, bs, bt);
+        for (int c = 0; c < 4; ++c) out[c] += static_cast<float>(1 - w4) * g3[c];
+        *texels = 36;
+    }
+    if (w4 > 0) {
+        const Texel g4 = rule_points<4>(img, s, t, as, at, bs, bt);
+        for (int c = 0; c < 4; ++c) out[c] += static_cast<float>(w4) * g4[c];
+        *texels += 64;
     }
     return out;
 }
@@ -603,7 +746,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
         return r;
     }
     // Small regions: the mean of the bilinear reconstruction over the parallelogram, exact
-    // within one bilinear patch, by the 3x3 Gauss rule otherwise; from kAreaBlendLo to
+    // within one bilinear patch, by a Gauss rule otherwise; from kAreaBlendLo to
     // kAreaBlendHi texels (the longer side) it is blended into the region's integral, beyond it
     // is the integral alone. algorithms.md §5.2.
     const double W = tex.image().width(), H = tex.image().height();
@@ -614,7 +757,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
     double w_gauss = 0;
     int gauss_texels = 0;
     if (major < kAreaBlendHi) {
-        gauss = gauss_mean(tex.image(), u, v, a, b, &gauss_texels);
+        gauss = gauss_mean(tex.image(), u, v, a, b, major, &gauss_texels);
         w_gauss = std::clamp((kAreaBlendHi - major) / (kAreaBlendHi - kAreaBlendLo), 0.0, 1.0);
         if (w_gauss == 1) {
             AreaResult r;

@@ -69,10 +69,14 @@ inline constexpr double kAreaMaxPerimeter = 64;
 
 /// Small regions (algorithms.md §5.2): a parallelogram whose longer side is under kAreaBlendLo
 /// level-0 texels takes the mean of the bilinear reconstruction over it (exact within one
-/// bilinear patch, the 3x3-point Gauss rule otherwise); up to kAreaBlendHi that is blended
+/// bilinear patch, a Gauss–Legendre product rule otherwise); up to kAreaBlendHi that is blended
 /// linearly into the region integral.
-inline constexpr double kAreaBlendLo = 2.5;
-inline constexpr double kAreaBlendHi = 3;
+inline constexpr double kAreaBlendLo = 4;
+inline constexpr double kAreaBlendHi = 4.5;
+/// The Gauss rule has 3x3 points up to kAreaRule4Lo texels and 4x4 from kAreaRule4Hi, blended
+/// linearly between.
+inline constexpr double kAreaRule4Lo = 2.5;
+inline constexpr double kAreaRule4Hi = 2.75;
 
 struct AreaResult {
     Texel value{};
