@@ -251,11 +251,20 @@ struct SurfaceHit {
     UvDelta uv_offset(const Vec3& dp) const;
     /// Change of the (unit) shading normal for a world-space offset dP along the surface.
     Vec3 normal_offset(const Vec3& dp) const;
+    /// uv_offset and normal_offset of two offsets at once (a footprint's two axes): what they
+    /// share (the triangle's barycentric basis, the quadric's partials or normal) is computed
+    /// once. The results equal the single calls' bit for bit.
+    std::array<UvDelta, 2> uv_offsets(const Vec3& dp1, const Vec3& dp2) const;
+    std::array<Vec3, 2> normal_offsets(const Vec3& dp1, const Vec3& dp2) const;
 
     // The same in the primitive's own space (an instance's object space; else the world).
     Partials local_partials() const;
     UvDelta local_uv_offset(const Vec3& dp) const;
     Vec3 local_normal_offset(const Vec3& dp) const;
+    template <std::size_t N>
+    std::array<UvDelta, N> local_uv_offsets(const std::array<Vec3, N>& dp) const;
+    template <std::size_t N>
+    std::array<Vec3, N> local_normal_offsets(const std::array<Vec3, N>& dp) const;
 };
 
 struct RenderStats;

@@ -384,7 +384,8 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
     if (!(dv > 0)) dv = 0.0005f;
     const Partials partials = hit.partials();
     const Vec3 &dpdu = partials.dpdu, &dpdv = partials.dpdv;
-    const Vec3 n = hit.ns, dndu = hit.normal_offset(dpdu), dndv = hit.normal_offset(dpdv);
+    const Vec3 n = hit.ns;
+    const auto [dndu, dndv] = hit.normal_offsets(dpdu, dpdv);
     // The displacement at the point and one step along u and along v (the world point moves
     // with them, for the textures that read it).
     auto displacement = [&](float su, float sv) {

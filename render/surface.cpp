@@ -160,62 +160,99 @@ Partials SurfaceHit::local_partials() const {
 }
 
 namespace {
-// Barycentric differentials of triangle `tri`: (db1, db2) for a world offset dp in its plane.
-std::pair<float, float> barycentric_offsets(const Primitive& pr, uint32_t tri, const Vec3& dp) {
-    const Vec3& p0 = pr.positions[pr.indices[3 * tri]];
-    Vec3 e1 = pr.positions[pr.indices[3 * tri + 1]] - p0,
-         e2 = pr.positions[pr.indices[3 * tri + 2]] - p0;
-    Vec3 n = cross(e1, e2);
-    Vec3 l1 = cross(e2, n), l2 = cross(e1, n);
-    return {dot(l1, dp) / dot(l1, e1), dot(l2, dp) / dot(l2, e2)};
-}
+// Barycentric differentials of triangle `tri`: (db1, db2) = (l1 . dp / l1 . e1, l2 . dp / l2 .
+// e2) for a world offset dp in its plane.
+struct BarycentricBasis {
+    Vec3 l1, l2;
+    float d1, d2;
+    BarycentricBasis(const Primitive& pr, uint32_t tri) {
+        const Vec3& p0 = pr.positions[pr.indices[3 * tri]];
+        const Vec3 e1 = pr.positions[pr.indices[3 * tri + 1]] - p0,
+                   e2 = pr.positions[pr.indices[3 * tri + 2]] - p0;
+        const Vec3 n = cross(e1, e2);
+        l1 = cross(e2, n);
+        l2 = cross(e1, n);
+        d1 = dot(l1, e1);
+        d2 = dot(l2, e2);
+    }
+    std::pair<float, float> operator()(const Vec3& dp) const {
+        return {dot(l1, dp) / d1, dot(l2, dp) / d2};
+    }
+};
 }  // namespace
 
-UvDelta SurfaceHit::local_uv_offset(const Vec3& dp) const {
+template <std::size_t N>
+std::array<UvDelta, N> SurfaceHit::local_uv_offsets(const std::array<Vec3, N>& dp) const {
+    std::array<UvDelta, N> out{};
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles) {
         // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
-        const auto [db1, db2] = barycentric_offsets(pr, triangle, dp);
+        const BarycentricBasis basis(pr, triangle);
         std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
         if (!pr.uvs.empty()) {
             uv0 = pr.uvs[i0];
             uv1 = pr.uvs[i1];
             uv2 = pr.uvs[i2];
         }
-        return {db1 * (uv1[0] - uv0[0]) + db2 * (uv2[0] - uv0[0]),
-                db1 * (uv1[1] - uv0[1]) + db2 * (uv2[1] - uv0[1])};
+        for (std::size_t k = 0; k < N; ++k) {
+            const auto [db1, db2] = basis(dp[k]);
+            out[k] = {db1 * (uv1[0] - uv0[0]) + db2 * (uv2[0] - uv0[0]),
+                      db1 * (uv1[1] - uv0[1]) + db2 * (uv2[1] - uv0[1])};
+        }
+        return out;
     }
     // Least squares: [dpdu dpdv] (du dv)^T = dP.
     const auto [a, b] = local_partials();
-    double aa = dot(a, a), ab = dot(a, b), bb = dot(b, b), ad = dot(a, dp), bd = dot(b, dp);
+    double aa = dot(a, a), ab = dot(a, b), bb = dot(b, b);
     double det = aa * bb - ab * ab;
-    if (!(std::abs(det) > 0) || !std::isfinite(det)) return {};
-    return {static_cast<float>((bb * ad - ab * bd) / det),
-            static_cast<float>((aa * bd - ab * ad) / det)};
+    if (!(std::abs(det) > 0) || !std::isfinite(det)) return out;
+    for (std::size_t k = 0; k < N; ++k) {
+        double ad = dot(a, dp[k]), bd = dot(b, dp[k]);
+        out[k] = {static_cast<float>((bb * ad - ab * bd) / det),
+                  static_cast<float>((aa * bd - ab * ad) / det)};
+    }
+    return out;
+}
+
+template <std::size_t N>
+std::array<Vec3, N> SurfaceHit::local_normal_offsets(const std::array<Vec3, N>& dp) const {
+    std::array<Vec3, N> out{};
+    const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles) {
+        if (pr.normals.empty()) return out;  // flat: the normal is constant
+        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
+                 i2 = pr.indices[3 * triangle + 2];
+        const BarycentricBasis basis(pr, triangle);
+        float b0 = 1 - b1 - b2;
+        Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
+        for (std::size_t k = 0; k < N; ++k) {
+            const auto [db1, db2] = basis(dp[k]);
+            Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];
+            Vec3 d = unit_derivative(ni, dn);
+            out[k] = pr.flip ? -d : d;
+        }
+        return out;
+    }
+    if (pr.kind == Primitive::Kind::Disk) return out;
+    // Sphere: n_obj = p_obj, so dn_obj = dp_obj; normals map with (object_from_world)^T.
+    Vec3 n = to_vec(xform_normal(pr.object_from_world, p_object));
+    for (std::size_t k = 0; k < N; ++k) {
+        D3 dpo = xform_vector(pr.object_from_world, {dp[k].x, dp[k].y, dp[k].z});
+        Vec3 dn = to_vec(xform_normal(pr.object_from_world, dpo));
+        Vec3 d = unit_derivative(n, dn);
+        out[k] = pr.flip ? -d : d;
+    }
+    return out;
+}
+
+UvDelta SurfaceHit::local_uv_offset(const Vec3& dp) const {
+    return local_uv_offsets<1>({dp})[0];
 }
 
 Vec3 SurfaceHit::local_normal_offset(const Vec3& dp) const {
-    const Primitive& pr = *prim;
-    if (pr.kind == Primitive::Kind::Triangles) {
-        if (pr.normals.empty()) return Vec3(0, 0, 0);  // flat: the normal is constant
-        uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
-                 i2 = pr.indices[3 * triangle + 2];
-        const auto [db1, db2] = barycentric_offsets(pr, triangle, dp);
-        float b0 = 1 - b1 - b2;
-        Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
-        Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];
-        Vec3 d = unit_derivative(ni, dn);
-        return pr.flip ? -d : d;
-    }
-    if (pr.kind == Primitive::Kind::Disk) return Vec3(0, 0, 0);
-    // Sphere: n_obj = p_obj, so dn_obj = dp_obj; normals map with (object_from_world)^T.
-    D3 dpo = xform_vector(pr.object_from_world, {dp.x, dp.y, dp.z});
-    Vec3 n = to_vec(xform_normal(pr.object_from_world, p_object));
-    Vec3 dn = to_vec(xform_normal(pr.object_from_world, dpo));
-    Vec3 d = unit_derivative(n, dn);
-    return pr.flip ? -d : d;
+    return local_normal_offsets<1>({dp})[0];
 }
 
 Partials SurfaceHit::partials() const {
@@ -226,6 +263,20 @@ Partials SurfaceHit::partials() const {
 
 UvDelta SurfaceHit::uv_offset(const Vec3& dp) const {
     return local_uv_offset(instance ? instance->to_object_vector(dp) : dp);
+}
+
+std::array<UvDelta, 2> SurfaceHit::uv_offsets(const Vec3& dp1, const Vec3& dp2) const {
+    if (!instance) return local_uv_offsets<2>({dp1, dp2});
+    return local_uv_offsets<2>({instance->to_object_vector(dp1), instance->to_object_vector(dp2)});
+}
+
+std::array<Vec3, 2> SurfaceHit::normal_offsets(const Vec3& dp1, const Vec3& dp2) const {
+    if (!instance) return local_normal_offsets<2>({dp1, dp2});
+    const std::array<Vec3, 2> dn =
+        local_normal_offsets<2>({instance->to_object_vector(dp1), instance->to_object_vector(dp2)});
+    const Vec3 n = instance->to_world_normal(ns_object);
+    return {unit_derivative(n, instance->to_world_normal(dn[0])),
+            unit_derivative(n, instance->to_world_normal(dn[1]))};
 }
 
 Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {

@@ -45,7 +45,7 @@ HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const Surfac
     Vec3 ox = ray.dodx + t * ray.dddx, oy = ray.dody + t * ray.dddy;
     h.dpdx = ox + (-dot(ox, n) / dn) * d;
     h.dpdy = oy + (-dot(oy, n) / dn) * d;
-    const UvDelta x = hit.uv_offset(h.dpdx), y = hit.uv_offset(h.dpdy);
+    const auto [x, y] = hit.uv_offsets(h.dpdx, h.dpdy);
     h.dudx = x.du;
     h.dvdx = x.dv;
     h.dudy = y.du;
@@ -61,15 +61,15 @@ RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, c
     if (!ray.valid || !hd.valid) return out;
     const Vec3& n = hit.ns;
     const float dn = dot(d, n);
-    auto one = [&](const Vec3& dp, const Vec3& dd) {
-        Vec3 dnrm = hit.normal_offset(dp);
+    auto one = [&](const Vec3& dnrm, const Vec3& dd) {
         float ddn = dot(dd, n) + dot(d, dnrm);
         return dd - 2 * (dn * dnrm + ddn * n);
     };
+    const auto [dnx, dny] = hit.normal_offsets(hd.dpdx, hd.dpdy);
     out.dodx = hd.dpdx;
     out.dody = hd.dpdy;
-    out.dddx = one(hd.dpdx, ray.dddx);
-    out.dddy = one(hd.dpdy, ray.dddy);
+    out.dddx = one(dnx, ray.dddx);
+    out.dddy = one(dny, ray.dddy);
     out.valid = finite(out.dddx) && finite(out.dddy);
     return out;
 }
@@ -86,16 +86,17 @@ RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, c
     if (k < 0) return reflect(ray, hd, d, hit);  // total internal reflection
     const float tn = -std::sqrt(k);              // T.N
     const float mu = eta * dn - tn;
-    auto one = [&](const Vec3& dp, const Vec3& dd) {
-        Vec3 dnrm = side * hit.normal_offset(dp);
+    auto one = [&](const Vec3& dn_hit, const Vec3& dd) {
+        Vec3 dnrm = side * dn_hit;
         float ddn = dot(dd, n) + dot(d, dnrm);
         float dmu = (eta - eta * eta * dn / tn) * ddn;
         return eta * dd - (mu * dnrm + dmu * n);
     };
+    const auto [dnx, dny] = hit.normal_offsets(hd.dpdx, hd.dpdy);
     out.dodx = hd.dpdx;
     out.dody = hd.dpdy;
-    out.dddx = one(hd.dpdx, ray.dddx);
-    out.dddy = one(hd.dpdy, ray.dddy);
+    out.dddx = one(dnx, ray.dddx);
+    out.dddy = one(dny, ray.dddy);
     out.valid = finite(out.dddx) && finite(out.dddy);
     return out;
 }
