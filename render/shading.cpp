@@ -158,8 +158,7 @@ Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexC
         x = cmam_texel(scene, n, node, s, t, ctx);
     } else {
         if (n.filter.kind == texture::FilterKind::Area && n.lod == FootprintMethod::Differentials &&
-            n.mapping == TextureNode::Mapping::Uv &&
-            ctx.footprints.axes.kind == texture::Footprint::Kind::Axes) {
+            n.mapping == TextureNode::Mapping::Uv && ctx.footprints.axes.valid) {
             s += n.su * ctx.footprints.stratum_offset.u;
             t += n.sv * ctx.footprints.stratum_offset.v;
         }

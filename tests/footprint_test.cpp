@@ -211,8 +211,8 @@ TEST(FootprintProducers, RunOnlyTheMethodsUsedAndCarryTagAndPath) {
         EXPECT_FLOAT_EQ(camera.cone.spread, camera_cone(s->camera, 0.5f).spread);
         const HitFootprint at = producers.at_hit(camera, d, h);
         using Kind = texture::Footprint::Kind;
-        EXPECT_EQ(at.axes.kind == Kind::Axes, m == FootprintMethod::Differentials);
-        EXPECT_EQ(at.cone_aniso.kind == Kind::Axes, m == FootprintMethod::ConesAniso);
+        EXPECT_EQ(at.axes.valid, m == FootprintMethod::Differentials);
+        EXPECT_EQ(at.cone_aniso.valid, m == FootprintMethod::ConesAniso);
         EXPECT_EQ(at.of(m).kind == Kind::Axes, m != FootprintMethod::None);
         EXPECT_EQ(at.of(FootprintMethod::Cmam).kind, Kind::None);
         EXPECT_EQ(at.tag.id, 7u);
@@ -256,9 +256,9 @@ TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {
     ctx.v = 0.3f;
     EXPECT_EQ(eval_texture(*s, in, ctx).r,
               1.0f);  // no footprint: point sample of check (2,2): tex1
-    ctx.footprints.axes = texture::Footprint::axes({0.5, 0}, {0, 0.5});  // 4 checks wide
+    ctx.footprints.axes = {{0.5, 0}, {0, 0.5}, true};  // 4 checks wide
     EXPECT_NEAR(eval_texture(*s, in, ctx).r, 0.5, 1e-6);
-    ctx.footprints.axes = texture::Footprint::axes({0.001, 0}, {0, 0.001});  // inside one check
+    ctx.footprints.axes = {{0.001, 0}, {0, 0.001}, true};  // inside one check
     EXPECT_EQ(eval_texture(*s, in, ctx).r, 1.0f);
 }
 

@@ -7,9 +7,6 @@ namespace cmam::render {
 
 namespace {
 
-// What point sampling and the CMAM (which builds its own region) are given at a hit.
-const texture::Footprint kNoFootprint{};
-
 // The environment camera's ray differential: the rays one pixel right and down, differenced
 // (pbrt-v3's default for cameras without a closed form), scaled by `scale`.
 RayDifferential environment_differential(const Camera& c, float px, float py, const Vec3& dir,
@@ -30,19 +27,19 @@ RayCone camera_ray_cone(const Camera& c, float scale) {
 
 }  // namespace
 
-const texture::Footprint& HitFootprint::of(FootprintMethod method) const {
+texture::Footprint HitFootprint::of(FootprintMethod method) const {
     switch (method) {
         case FootprintMethod::Differentials:
-            return axes;
+            return axes.footprint();
         case FootprintMethod::Cones:
-            return cone;
+            return cone.footprint();
         case FootprintMethod::ConesAniso:
-            return cone_aniso;
+            return cone_aniso.footprint();
         case FootprintMethod::None:
         case FootprintMethod::Cmam:
             break;
     }
-    return kNoFootprint;
+    return texture::Footprint::none();
 }
 
 FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp)
@@ -79,7 +76,7 @@ HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir
         if (hd.valid) {
             f.dpdx = hd.dpdx;
             f.dpdy = hd.dpdy;
-            f.axes = texture::Footprint::axes({hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy});
+            f.axes = {{hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy}, true};
             f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
                                 hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
         } else
@@ -87,9 +84,12 @@ HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir
     }
     if (m_cones) {
         const float w = cone_uv_width(ray.cone, dir, hit);
-        f.cone = texture::Footprint::axes({w, 0}, {0, w});
+        f.cone = {{w, 0}, {0, w}, true};
     }
-    if (m_cones_aniso) f.cone_aniso = cone_uv_axes(ray.cone, dir, hit);
+    if (m_cones_aniso) {
+        const texture::Footprint ax = cone_uv_axes(ray.cone, dir, hit);
+        f.cone_aniso = {ax.axis_a, ax.axis_b, ax.kind == texture::Footprint::Kind::Axes};
+    }
     return f;
 }
 

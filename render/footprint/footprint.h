@@ -32,23 +32,35 @@ struct RayFootprint {
     float to_stratum_x = 0, to_stratum_y = 0;
 };
 
+/// A footprint's two axes in (u,v) units, or none (a point sample): what a producer gives at a
+/// hit, held compactly (a texture::Footprint also has room for the CMAM's points), since every
+/// hit makes one per producer.
+struct UvAxes {
+    texture::Vec2d a{}, b{};
+    bool valid = false;
+
+    texture::Footprint footprint() const {
+        return valid ? texture::Footprint::axes(a, b) : texture::Footprint::none();
+    }
+};
+
 /// The producers' footprints at one hit, in the surface's (u,v) units.
 struct HitFootprint {
     HitDifferential diff;  // as transferred (invalid: no footprint from differentials)
     // The hit's screen derivatives dP/dx, dP/dy when the differentials are valid, zero
     // otherwise: what 3-D textures and the non-uv mappings read.
     Vec3 dpdx{}, dpdy{};
-    texture::Footprint axes{};      // ray differentials' Jacobian columns (None: point sample)
+    UvAxes axes;                    // ray differentials' Jacobian columns
     texture::Vec2d stratum_offset;  // differentials: from the hit to the stratum's centre
-    texture::Footprint cone{};      // isotropic ray cone
-    texture::Footprint cone_aniso{};
+    UvAxes cone;                    // isotropic ray cone
+    UvAxes cone_aniso;
     texture::RayTag tag;  // the ray's tag at this depth
     uint64_t path = 1;
     bool dropped = false;  // the ray carried differentials, but they failed at this hit
 
     /// The footprint `method` gives here (None for point sampling and for the CMAM, which
     /// builds its own from its cache).
-    const texture::Footprint& of(FootprintMethod method) const;
+    texture::Footprint of(FootprintMethod method) const;
 };
 
 /// The footprint producers of one render: one call per event of a ray.
