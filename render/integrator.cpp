@@ -221,14 +221,12 @@ struct Tracer {
             SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-            TexContext ctx{h.u,
-                           h.v,
-                           h.p,
-                           footprints.at_hit(ray.fp, ray.dir, h),
+            TexContext ctx{h.u, h.v, h.p,
+                           // A hit whose shading reads no texture needs no (u,v) footprint;
+                           // the footprint AOV records it wherever it is.
+                           footprints.at_hit(ray.fp, ray.dir, h, aov || m.reads_textures()),
                            counts && counts->count_lookups ? &counts->lookups : nullptr,
-                           h.object_id,
-                           cmam,
-                           nullptr};
+                           h.object_id, cmam, nullptr};
             const HitFootprint& at = ctx.footprints;
             const HitDifferential& hd = at.diff;
             if (counts && at.dropped) ++counts->dropped_differentials;

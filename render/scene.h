@@ -126,6 +126,16 @@ struct Material {
     // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
     // node -1 and a constant: none (a constant displacement leaves the normal as it is here).
     TexInput bump;
+
+    /// Whether shading it evaluates a texture node (a mix evaluates its amount and one of two
+    /// materials): only then does a hit need its footprints in (u,v).
+    bool reads_textures() const {
+        if (type == Type::Mix) return true;
+        for (const TexInput* in :
+             {&kd, &ks, &kr, &kt, &sigma, &roughness, &eta, &k, &amount, &bump})
+            if (in->node >= 0) return true;
+        return false;
+    }
 };
 
 struct Light {

@@ -15,13 +15,22 @@ Vec3 world_vector(const Camera& c, const Vec3& v) {
 }
 }  // namespace
 
+CameraSteps camera_steps(const Camera& c) {
+    return {world_vector(c, Vec3((c.screen[1] - c.screen[0]) / c.xres * c.tan_half_fov, 0, 0)),
+            world_vector(c, Vec3(0, -(c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov, 0))};
+}
+
 RayDifferential camera_differential(const Camera& c, float px, float py, float scale) {
+    return camera_differential(c, camera_steps(c), px, py, scale);
+}
+
+RayDifferential camera_differential(const Camera& c, const CameraSteps& steps, float px, float py,
+                                    float scale) {
     // Unnormalised direction d(x,y) = V + x R + y U in world space; R, U are one-pixel steps.
     const float sx = c.screen[0] + (px / c.xres) * (c.screen[1] - c.screen[0]);
     const float sy = c.screen[3] - (py / c.yres) * (c.screen[3] - c.screen[2]);
     Vec3 d = world_vector(c, Vec3(sx * c.tan_half_fov, sy * c.tan_half_fov, 1));
-    Vec3 r = world_vector(c, Vec3((c.screen[1] - c.screen[0]) / c.xres * c.tan_half_fov, 0, 0));
-    Vec3 u = world_vector(c, Vec3(0, -(c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov, 0));
+    const Vec3 &r = steps.right, &u = steps.down;
     RayDifferential rd;
     rd.valid = true;
     if (c.orthographic) {  // parallel rays: the origin moves one pixel, the direction not at all
@@ -35,7 +44,8 @@ RayDifferential camera_differential(const Camera& c, float px, float py, float s
     return rd;
 }
 
-HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit) {
+HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit,
+                         bool uv) {
     HitDifferential h;
     if (!ray.valid) return h;
     const Vec3& n = hit.ng;
@@ -45,6 +55,10 @@ HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const Surfac
     Vec3 ox = ray.dodx + t * ray.dddx, oy = ray.dody + t * ray.dddy;
     h.dpdx = ox + (-dot(ox, n) / dn) * d;
     h.dpdy = oy + (-dot(oy, n) / dn) * d;
+    if (!uv) {
+        h.valid = finite(h.dpdx) && finite(h.dpdy);
+        return h;
+    }
     const auto [x, y] = hit.uv_offsets(h.dpdx, h.dpdy);
     h.dudx = x.du;
     h.dvdx = x.dv;

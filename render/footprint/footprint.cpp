@@ -45,6 +45,7 @@ texture::Footprint HitFootprint::of(FootprintMethod method) const {
 FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp)
     : m_methods(methods),
       m_camera(camera),
+      m_steps(camera_steps(camera)),
       m_scale(1 / std::sqrt(float(spp))),
       m_camera_cone(camera_ray_cone(camera, m_scale)),
       m_differentials(methods.has(FootprintMethod::Differentials)),
@@ -57,7 +58,7 @@ RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
     RayFootprint r;
     if (m_differentials)
         r.diff = m_camera.environment ? environment_differential(m_camera, fx, fy, dir, m_scale)
-                                      : camera_differential(m_camera, fx, fy, m_scale);
+                                      : camera_differential(m_camera, m_steps, fx, fy, m_scale);
     r.cone = m_camera_cone;
     r.tag = tag;
     r.to_stratum_x = to_stratum_x;
@@ -66,22 +67,25 @@ RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
 }
 
 HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir,
-                                        const SurfaceHit& hit) const {
+                                        const SurfaceHit& hit, bool uv) const {
     HitFootprint f;
     f.tag = ray.tag;
     f.path = ray.path;
     if (m_differentials) {
-        f.diff = transfer(ray.diff, dir, hit);
+        f.diff = transfer(ray.diff, dir, hit, uv);
         const HitDifferential& hd = f.diff;
         if (hd.valid) {
             f.dpdx = hd.dpdx;
             f.dpdy = hd.dpdy;
-            f.axes = {{hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy}, true};
-            f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
-                                hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
+            if (uv) {
+                f.axes = {{hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy}, true};
+                f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
+                                    hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
+            }
         } else
             f.dropped = ray.diff.valid;
     }
+    if (!uv) return f;
     if (m_cones) {
         const float w = cone_uv_width(ray.cone, dir, hit);
         f.cone = {{w, 0}, {0, w}, true};

@@ -73,8 +73,10 @@ class FootprintProducers {
     /// The state of the camera ray through raster position (fx, fy), direction `dir`.
     RayFootprint camera_ray(float fx, float fy, const Vec3& dir, texture::RayTag tag,
                             float to_stratum_x, float to_stratum_y) const;
-    /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`.
-    HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit) const;
+    /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`. Without `uv`
+    /// (a hit whose shading reads no texture) only what the ray's children need: dP/dx, dP/dy.
+    HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit,
+                        bool uv = true) const;
     /// The child ray's state after a perfect reflection at `hit`.
     RayFootprint reflected(const RayFootprint& ray, const HitFootprint& at, const Vec3& dir,
                            const SurfaceHit& hit) const;
@@ -90,6 +92,7 @@ class FootprintProducers {
   private:
     FootprintMethods m_methods;
     const Camera& m_camera;
+    CameraSteps m_steps;    // the camera's one-pixel direction steps
     float m_scale;          // 1/sqrt(spp)
     RayCone m_camera_cone;  // every camera ray's cone
     bool m_differentials, m_cones, m_cones_aniso;
