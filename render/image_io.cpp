@@ -58,11 +58,13 @@ RawImage read_image(const std::string& path, bool keep_8bit) {
 }
 
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt,
-                            float scale, texture::WrapMode wrap, bool* gamma_used) {
+                            float scale, texture::WrapMode wrap, bool* gamma_used, bool keep_grey) {
     RawImage raw = read_image(path, true);
     bool gamma = gamma_opt.value_or(raw.is_8bit);
     if (gamma_used) *gamma_used = gamma;
-    const int w = raw.width, h = raw.height, nc = raw.channels, out_c = is_float ? 1 : 3;
+    const int w = raw.width, h = raw.height, nc = raw.channels;
+    const bool grey = !is_float && keep_grey && nc < 3;  // grey, or grey and alpha
+    const int out_c = is_float || grey ? 1 : 3;
     // Written row by row into the texture: the file's pixels (bytes for 8-bit files) and the
     // texture are the only copies of the image in memory.
     auto fill = [&](int j, float* row) {
@@ -73,7 +75,9 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
             const float rgb[3] = {r, nc >= 3 ? raw.sample(k + 1) : r,
                                   nc >= 3 ? raw.sample(k + 2) : r};
             float* dst = &row[static_cast<std::size_t>(x) * out_c];
-            if (is_float) {
+            if (grey) {
+                dst[0] = scale * (gamma ? texture::srgb_to_linear(r) : r);
+            } else if (is_float) {
                 float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
                 dst[0] = scale * (gamma ? texture::srgb_to_linear(yv) : yv);
             } else {

@@ -44,9 +44,12 @@ void set_image_memory_limit(std::size_t bytes);
 /// Reads a texture as pbrt-v3's imagemap does: flipped so that row 0 is v = 0, decoded from
 /// sRGB when `gamma` (default: when the file stores 8-bit data), multiplied by `scale`. Float
 /// textures (`is_float`) keep one channel, the luminance of the stored RGB (decoded after
-/// taking the luminance, as pbrt-v3 does); others keep RGB (grey files are replicated).
+/// taking the luminance, as pbrt-v3 does); others keep RGB, grey files replicated to three
+/// channels, or with `keep_grey` kept as one (the renderer's spectrum textures: a third of the
+/// memory, and every filter gives each channel the same value bit for bit either way).
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma,
-                            float scale, texture::WrapMode wrap, bool* gamma_used = nullptr);
+                            float scale, texture::WrapMode wrap, bool* gamma_used = nullptr,
+                            bool keep_grey = false);
 
 /// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
 /// extension: .exr (32-bit float), .pfm (float), .hdr (RGBE), .tif/.tiff (32-bit float), or

@@ -1,6 +1,7 @@
 // Image output formats round-trip; writes are atomic (temp file + rename).
 #include "render/image_io.h"
 
+#include <cmam/texture/filter.h>
 #include <cmam/texture/image.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -16,6 +17,7 @@
 #include "expect_throw.h"
 
 using namespace cmam::render;
+namespace texture = cmam::texture;
 namespace fs = std::filesystem;
 
 namespace {
@@ -158,6 +160,34 @@ TEST(ImageIo, EightBitFilesCanKeepTheirBytes) {
         for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(kept.sample(i), plain.pixels[i]) << i;
     }
     EXPECT_EQ(eight_bit, 8);
+}
+
+// A grey file read as a spectrum texture with keep_grey stays one channel, and every filter
+// gives it, bit for bit, the value each channel of the replicated three-channel texture has.
+TEST(ImageIo, GreyTexturesCanStayOneChannel) {
+    for (const char* name : {"gray1.png", "gray16.png", "gray.jpg"}) {
+        SCOPED_TRACE(name);
+        const std::string p = std::string(CMAM_TEST_DATA_DIR) + "/images/" + name;
+        const texture::FilteredTexture one(
+            load_texture(p, false, std::nullopt, 0.7f, texture::WrapMode::Repeat, nullptr, true));
+        const texture::FilteredTexture three(
+            load_texture(p, false, std::nullopt, 0.7f, texture::WrapMode::Repeat));
+        ASSERT_EQ(one.image().channels(), 1);
+        ASSERT_EQ(three.image().channels(), 3);
+        const texture::Footprint fp = texture::Footprint::axes({0.05, 0.01}, {-0.02, 0.03});
+        for (int f = 0; f < texture::kFilterKinds; ++f) {
+            const texture::FilterOptions o{static_cast<texture::FilterKind>(f)};
+            for (double u : {0.1, 0.37, 0.9}) {
+                const texture::Texel a = one.lookup(u, 0.6, fp, o), b = three.lookup(u, 0.6, fp, o);
+                for (int c = 0; c < 3; ++c) EXPECT_EQ(a[0], b[c]) << f << " " << u;
+            }
+        }
+    }
+    // An RGB file keeps its three channels.
+    const std::string rgba = std::string(CMAM_TEST_DATA_DIR) + "/images/rgba.png";
+    EXPECT_EQ(load_texture(rgba, false, std::nullopt, 1, texture::WrapMode::Repeat, nullptr, true)
+                  .channels(),
+              3);
 }
 
 namespace {

@@ -98,7 +98,7 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     if (it != m_scene->images.end()) return it->second.get();
     texture::Image level0;
     try {
-        level0 = load_texture(path, is_float, gamma, scale, *wrap);
+        level0 = load_texture(path, is_float, gamma, scale, *wrap, nullptr, true);
     } catch (const RenderError& err) {
         throw SceneError(fp->loc, err.what());
     }
