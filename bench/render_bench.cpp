@@ -61,12 +61,10 @@ void BM_RenderLod(benchmark::State& state, render::FootprintMethod lod,
     }
 }
 
-// The same render against `--lod none`, alternately within one benchmark (which of the two goes
-// first alternates too), each timed on its own: on a shared machine whose speed drifts by tens
-// of percent between runs, separate benchmarks read the drift as overhead. Counter "overhead":
-// the method's total render time over none's, minus one, in percent.
-// Two renders alternately (which goes first alternates too), each timed on its own; the
-// counter `name` is the first's total render time over the second's, minus one, in percent.
+// Two renders alternately within one benchmark (which goes first alternates too), each timed on
+// its own: on a shared machine whose speed drifts by tens of percent between runs, separate
+// benchmarks would read the drift as a difference. The counter `name` is the first's total
+// render time over the second's, minus one, in percent.
 void paired(benchmark::State& state, const render::Scene& first, const render::Scene& second,
             const char* name) {
     using Clock = std::chrono::steady_clock;
@@ -93,6 +91,7 @@ void paired(benchmark::State& state, const render::Scene& first, const render::S
                                     1);
 }
 
+// A footprint method's render against `--lod none`'s, paired. Counter "overhead".
 void BM_RenderLodVsNone(benchmark::State& state, render::FootprintMethod lod,
                         texture::FilterKind filter) {
     const auto scene = lod_scene(lod, filter),
