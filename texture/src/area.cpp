@@ -219,10 +219,6 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
     for (int c = 0; c < NC; ++c) acc[c] += h_per_x * sum[c];
 }
 
-// An edge from p to q (p.v < q.v, `sign` its direction) that lies within the table: cut at every
-// row it crosses, each piece adds its height times the mean of R_j over its x-span (the midpoint
-// value within one texel; partial end texels and whole ones between otherwise, times
-// `h_per_x`).
 #if defined(__SSE2__)
 namespace {
 // A knot's channels as one float vector: a 3-channel knot's fourth lane is the next knot's first
@@ -242,6 +238,10 @@ inline void add_wide(__m128d& lo, __m128d& hi, __m128 x) {
 }  // namespace
 #endif
 
+// An edge from p to q (p.v < q.v, `sign` its direction) that lies within the table: cut at every
+// row it crosses, each piece adds its height times the mean of R_j over its x-span (the midpoint
+// value within one texel; partial end texels and whole ones between otherwise, times
+// `h_per_x`).
 template <int NC>
 [[gnu::always_inline]] inline void RowPrefixTable::edge_inside(Vec2d p, Vec2d q, double sign,
                                                                double dxdy, double h_per_x,
@@ -275,13 +275,10 @@ template <int NC>
                                     _mm_mul_ps(_mm_set1_ps(static_cast<float>(h_per_x * l1)),
                                                _mm_sub_ps(m1, m0))));
             } else {
-                double sum[NC];
-                for (int c = 0; c < NC; ++c) sum[c] = 0;
+                alignas(16) double sum[4] = {0, 0, 0, 0};
                 integral_inside<NC>(row, x0, x1, sum);
-                lo = _mm_add_pd(lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_loadu_pd(sum)));
-                hi = _mm_add_pd(hi,
-                                _mm_mul_pd(_mm_set1_pd(h_per_x),
-                                           NC == 4 ? _mm_loadu_pd(sum + 2) : _mm_load_sd(sum + 2)));
+                lo = _mm_add_pd(lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum)));
+                hi = _mm_add_pd(hi, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum + 2)));
             }
             y = ynext;
             x = xnext;
