@@ -65,25 +65,45 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
     const int w = raw.width, h = raw.height, nc = raw.channels;
     const bool grey = !is_float && keep_grey && nc < 3;  // grey, or grey and alpha
     const int out_c = is_float || grey ? 1 : 3;
+    // A spectrum texture's channel from one sample; a float texture's value from an RGB sample.
+    auto decode = [&](float r) { return scale * (gamma ? texture::srgb_to_linear(r) : r); };
+    auto luminance = [&](const float* rgb) {
+        float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
+        return scale * (gamma ? texture::srgb_to_linear(yv) : yv);
+    };
+    // Bytes decode through a table of their 256 values, the same floats as decoding each sample
+    // (sRGB decoding costs a pow a sample: seconds for a large texture), except a float texture
+    // of an RGB file, whose luminance has too many inputs.
+    const bool by_table = !raw.bytes.empty() && !(is_float && nc >= 3);
+    float table[256];
+    if (by_table)
+        for (int b = 0; b < 256; ++b) {
+            const float r = float(b) * (1.0f / 255.0f), rgb[3] = {r, r, r};
+            table[b] = is_float ? luminance(rgb) : decode(r);
+        }
     // Written row by row into the texture: the file's pixels (bytes for 8-bit files) and the
     // texture are the only copies of the image in memory.
     auto fill = [&](int j, float* row) {
         const int y = h - 1 - j;  // flip: v = 0 is the bottom row (pbrt-v3)
+        const std::size_t k0 = static_cast<std::size_t>(y) * w * nc;
+        if (by_table) {
+            const unsigned char* b = raw.bytes.data() + k0;
+            for (int x = 0; x < w; ++x, b += nc) {
+                float* dst = &row[static_cast<std::size_t>(x) * out_c];
+                for (int c = 0; c < out_c; ++c) dst[c] = table[b[nc >= 3 ? c : 0]];
+            }
+            return;
+        }
         for (int x = 0; x < w; ++x) {
-            const std::size_t k = (static_cast<std::size_t>(y) * w + x) * nc;
+            const std::size_t k = k0 + static_cast<std::size_t>(x) * nc;
             const float r = raw.sample(k);
             const float rgb[3] = {r, nc >= 3 ? raw.sample(k + 1) : r,
                                   nc >= 3 ? raw.sample(k + 2) : r};
             float* dst = &row[static_cast<std::size_t>(x) * out_c];
-            if (grey) {
-                dst[0] = scale * (gamma ? texture::srgb_to_linear(r) : r);
-            } else if (is_float) {
-                float yv = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
-                dst[0] = scale * (gamma ? texture::srgb_to_linear(yv) : yv);
-            } else {
-                for (int c = 0; c < 3; ++c)
-                    dst[c] = scale * (gamma ? texture::srgb_to_linear(rgb[c]) : rgb[c]);
-            }
+            if (is_float)
+                dst[0] = luminance(rgb);
+            else
+                for (int c = 0; c < out_c; ++c) dst[c] = decode(rgb[c]);
         }
     };
     return texture::Image::from_rows(w, h, out_c, fill, wrap, wrap);

@@ -162,6 +162,41 @@ TEST(ImageIo, EightBitFilesCanKeepTheirBytes) {
     EXPECT_EQ(eight_bit, 8);
 }
 
+// load_texture decodes 8-bit samples through a table of their 256 values: each texel must be
+// the sample decoded on its own (sRGB, then the scale), for spectrum and float textures, grey
+// and colour files, flipped so that row 0 is the file's bottom row.
+TEST(ImageIo, TextureTexelsAreTheirSamplesDecoded) {
+    for (const char* name : {"gray1.png", "gray.jpg", "palette.png", "rgba.png", "gray16.png"}) {
+        SCOPED_TRACE(name);
+        const std::string p = std::string(CMAM_TEST_DATA_DIR) + "/images/" + name;
+        const RawImage raw = read_image(p);
+        const int nc = raw.channels;
+        for (const bool is_float : {false, true})
+            for (const bool keep_grey : {false, true}) {
+                bool gamma = false;
+                const texture::Image t = load_texture(p, is_float, std::nullopt, 0.8f,
+                                                      texture::WrapMode::Repeat, &gamma, keep_grey);
+                EXPECT_EQ(gamma, raw.is_8bit);
+                for (int y = 0; y < raw.height; ++y)
+                    for (int x = 0; x < raw.width; ++x) {
+                        const float* px = &raw.pixels[(std::size_t(y) * raw.width + x) * nc];
+                        const float rgb[3] = {px[0], px[nc >= 3 ? 1 : 0], px[nc >= 3 ? 2 : 0]};
+                        auto decode = [&](float v) {
+                            return 0.8f * (gamma ? texture::srgb_to_linear(v) : v);
+                        };
+                        const float* got = t.texel(x, raw.height - 1 - y);
+                        if (is_float) {
+                            ASSERT_EQ(got[0], decode(0.212671f * rgb[0] + 0.715160f * rgb[1] +
+                                                     0.072169f * rgb[2]));
+                        } else {
+                            for (int c = 0; c < t.channels(); ++c)
+                                ASSERT_EQ(got[c], decode(rgb[c]));
+                        }
+                    }
+            }
+    }
+}
+
 // A grey file read as a spectrum texture with keep_grey stays one channel, and every filter
 // gives it, bit for bit, the value each channel of the replicated three-channel texture has.
 TEST(ImageIo, GreyTexturesCanStayOneChannel) {
