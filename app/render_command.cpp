@@ -252,6 +252,10 @@ int run_render(const RenderArgs& a) {
                       seconds(t1, t2));
     }
     if (a.stats) print_stats(*scene, stats);
+    if (stats.non_finite_samples)
+        warn(std::to_string(stats.non_finite_samples) +
+             " samples had a radiance that is not a finite number (from NaN or infinite "
+             "texels or parameters) and were taken as black");
     return 0;
 }
 

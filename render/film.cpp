@@ -162,7 +162,10 @@ class FilmTracer {
                           i < sp.prime ? nullptr : &sp.counts, &cmam,
                           m_options.aov == AovKind::None ? nullptr : &aov);
         if (m_options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
-        if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) L = Rgb();
+        if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) {
+            if (i >= sp.prime) ++sp.counts.non_finite_samples;
+            L = Rgb();
+        }
         double* acc = &sp.sum[static_cast<std::size_t>(i) * 3];
         acc[0] += L.r;
         acc[1] += L.g;

@@ -318,6 +318,7 @@ void Scene::commit() {
 }
 
 bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const {
+    if (!finite(org) || !finite(dir) || std::isnan(tmin) || std::isnan(tmax)) return true;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay ray{};
@@ -336,6 +337,7 @@ bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) c
 
 std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, float tmin,
                                            float tmax) const {
+    if (!finite(org) || !finite(dir) || std::isnan(tmin) || std::isnan(tmax)) return std::nullopt;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};

@@ -214,6 +214,10 @@ struct Tracer {
     };
 
     Rgb li(Ray ray, int depth) {
+        // A ray that is not finite (a NaN or infinite index, texel or parameter upstream) has no
+        // radiance: its sample is counted as non-finite and taken as black (FilmTracer).
+        if (!finite(ray.org) || !finite(ray.dir))
+            return Rgb(std::numeric_limits<float>::quiet_NaN());
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             std::optional<SurfaceHit> hit =
                 scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity());

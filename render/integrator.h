@@ -22,6 +22,9 @@ struct RenderStats {
     // 2-D CMAM lookups without a sample above on the same object and path (the image's first
     // row, or where the object or path was not hit above)
     std::atomic<uint64_t> cmam_2d_without_above{0};
+    // Samples whose radiance was NaN or infinite (from NaN or infinite texels or parameters):
+    // taken as black, as pbrt-v3 does after reporting them.
+    std::atomic<uint64_t> non_finite_samples{0};
     uint64_t total_rays() const { return camera_rays + secondary_rays + shadow_rays; }
 };
 

@@ -312,7 +312,9 @@ class Scene {
     /// Creates the Embree scene from `primitives` and `instances` (one Embree scene per object,
     /// shared by its instances); call once after filling them.
     void commit();
-    /// Nearest hit along org + t dir, t in (tmin, tmax); nothing when the ray hits nothing.
+    /// Nearest hit along org + t dir, t in (tmin, tmax); nothing when the ray hits nothing. A
+    /// ray whose origin or direction is not finite (NaN or infinite parameters or texels upstream)
+    /// is never given to Embree: it hits nothing here and is occluded below.
     std::optional<SurfaceHit> intersect(const Vec3& org, const Vec3& dir, float tmin,
                                         float tmax) const;
     /// True when anything lies along org + t dir, t in (tmin, tmax).

@@ -33,7 +33,8 @@ struct RayCounts {
     uint64_t camera = 0, secondary = 0, shadow = 0;
     LookupCounts lookups;
     uint64_t dropped_differentials = 0;
-    bool count_lookups = true;  // whether texture lookups are counted (RenderOptions)
+    uint64_t non_finite_samples = 0;  // samples whose radiance was NaN or infinite
+    bool count_lookups = true;        // whether texture lookups are counted (RenderOptions)
 
     void add_to(RenderStats* stats) const {
         if (!stats) return;
@@ -46,6 +47,7 @@ struct RayCounts {
         stats->lookups_non_finite += lookups.non_finite;
         stats->cmam_2d_without_above += lookups.cmam_2d_without_above;
         stats->dropped_differentials += dropped_differentials;
+        stats->non_finite_samples += non_finite_samples;
     }
 };
 

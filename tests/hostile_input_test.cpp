@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -327,4 +329,38 @@ TEST(HostileInput, NumbersTheRendererUsesMustBeFinite) {
         EXPECT_EQ(error_of(std::string(kCamera) + "WorldBegin\n" + world + "\nWorldEnd\n"),
                   expected)
             << world;
+}
+
+// Values a texture computes at render time cannot be checked when the scene is read: a glass
+// index of infinity or NaN (a scale texture of huge constants) bent rays into directions that
+// were not finite, and Embree aborted on them. Such a ray now gives its sample a radiance that is
+// not a number, which the film counts and takes as black; no ray that is not finite reaches
+// Embree.
+TEST(HostileInput, NonFiniteValuesFromTexturesGiveCountedBlackSamples) {
+    for (const char* index : {"\"inf\"", "\"nan\""}) {
+        SCOPED_TRACE(index);
+        const std::string text =
+            "Camera \"perspective\"\nFilm \"image\" \"integer xresolution\" 8 "
+            "\"integer yresolution\" 8\nWorldBegin\nLightSource \"distant\"\n"
+            "Texture \"inf\" \"float\" \"scale\" \"float tex1\" 1e30 \"float tex2\" 1e30\n"
+            "Texture \"nan\" \"float\" \"scale\" \"texture tex1\" \"inf\" \"float tex2\" 0\n"
+            "Material \"glass\" \"texture index\" " +
+            std::string(index) + "\nTranslate 0 0 3\nShape \"sphere\"\nWorldEnd\n";
+        auto scene = render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
+        render::RenderStats stats;
+        const render::Framebuffer fb = render::render(*scene, {}, &stats);
+        EXPECT_GT(stats.non_finite_samples, 0u);
+        // The sphere's samples, not the background's.
+        EXPECT_LT(stats.non_finite_samples, 64u * scene->sampler.spp() / 2);
+        for (float v : fb.rgb) EXPECT_TRUE(std::isfinite(v));
+    }
+    // The scene's own intersection refuses such rays.
+    auto scene = render::build_scene(
+        pbrt::parse_string(std::string(kCamera) + "WorldBegin\nShape \"sphere\"\nWorldEnd\n",
+                           "t.pbrt"),
+        {}, {});
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_FALSE(scene->intersect({0, 0, -5}, {0, nan, 1}, 0, 1e30f));
+    EXPECT_TRUE(scene->occluded({0, 0, -5}, {0, 0, 1}, 0, nan));
+    EXPECT_TRUE(scene->intersect({0, 0, -5}, {0, 0, 1}, 0, 1e30f).has_value());
 }

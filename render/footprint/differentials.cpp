@@ -5,9 +5,6 @@
 namespace cmam::render {
 
 namespace {
-bool finite(const Vec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 Vec3 world_vector(const Camera& c, const Vec3& v) {
     const auto& m = c.world_from_camera;
     return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
