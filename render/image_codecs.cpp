@@ -420,6 +420,47 @@ struct StbFree {
     void operator()(void* p) const { stbi_image_free(p); }
 };
 
+// The bytes a binary PNM (P5, P6) or an uncompressed TGA (types 1-3) must hold, from its
+// header; 0 for other files, whose size the header does not give. stb_image reads missing pixel
+// data of these two as zeros, so a truncated file would load as a black image.
+std::uintmax_t expected_size(const std::string& path, bool is_tga) {
+    File f = open_for_reading(path);
+    unsigned char h[18] = {};
+    const std::size_t n = std::fread(h, 1, sizeof(h), f.get());
+    if (n >= 2 && h[0] == 'P' && (h[1] == '5' || h[1] == '6')) {
+        // "P6", then width, height and maxval as decimal numbers separated by whitespace and
+        // comments, then one whitespace byte before the samples.
+        std::rewind(f.get());
+        std::fgetc(f.get());
+        std::fgetc(f.get());
+        std::uintmax_t v[3] = {0, 0, 0};
+        for (auto& x : v) {
+            int c = std::fgetc(f.get());
+            while (c != EOF && (std::isspace(c) || c == '#')) {
+                if (c == '#')
+                    while (c != EOF && c != '\n') c = std::fgetc(f.get());
+                c = std::fgetc(f.get());
+            }
+            if (c == EOF || !std::isdigit(c)) return 0;  // stb reports a bad header itself
+            for (; c != EOF && std::isdigit(c) && x < (std::uintmax_t(1) << 40);
+                 c = std::fgetc(f.get()))
+                x = x * 10 + std::uintmax_t(c - '0');
+            if (c == EOF) return 0;
+        }
+        const long header = std::ftell(f.get());
+        if (header < 0) return 0;
+        const std::uintmax_t channels = h[1] == '6' ? 3 : 1, bytes = v[2] > 255 ? 2 : 1;
+        return std::uintmax_t(header) + v[0] * v[1] * channels * bytes;
+    }
+    if (is_tga && n == 18 && h[2] >= 1 && h[2] <= 3) {  // uncompressed: no RLE packets
+        const std::uintmax_t id = h[0], map_entries = h[5] | (h[6] << 8), map_bits = h[7];
+        const std::uintmax_t w = h[12] | (h[13] << 8), ht = h[14] | (h[15] << 8), bits = h[16];
+        const std::uintmax_t map = h[1] ? map_entries * ((map_bits + 7) / 8) : 0;
+        return 18 + id + map + w * ht * ((bits + 7) / 8);
+    }
+    return 0;
+}
+
 RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga, bool keep_8bit) {
     RawImage img;
     if (!stbi_info(path.c_str(), &img.width, &img.height, &img.channels))
@@ -429,6 +470,13 @@ RawImage decode_stb(const std::string& path, const SizeCheck& check, bool is_tga
     const bool wide = !hdr && stbi_is_16_bit(path.c_str());
     img.is_8bit = !hdr && !wide;
     check_size(img, check, keep_8bit);
+    if (const std::uintmax_t need = expected_size(path, is_tga)) {
+        std::error_code ec;
+        const std::uintmax_t have = fs::file_size(path, ec);
+        if (!ec && have < need)
+            throw RenderError("truncated: " + std::to_string(have) + " bytes, the header needs " +
+                              std::to_string(need));
+    }
     int w = 0, h = 0, c = 0;
     const std::size_t n = static_cast<std::size_t>(img.width) * img.height * img.channels;
     auto fail = [] {

@@ -37,6 +37,8 @@ RawImage read_image(const std::string& path, bool keep_8bit) {
     const fs::file_status st = fs::status(path, ec);
     if (!fs::exists(st)) throw RenderError(where + "file not found");
     if (fs::is_directory(st)) throw RenderError(where + "it is a directory");
+    // A FIFO or a device would block or never end: only regular files are read, as for scenes.
+    if (!fs::is_regular_file(st)) throw RenderError(where + "it is not a regular file");
     auto check = [&](const RawImage& img) {
         const double bytes = double(img.width) * img.height * img.channels *
                              (keep_8bit && img.is_8bit ? 1 : sizeof(float));

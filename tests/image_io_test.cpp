@@ -5,6 +5,7 @@
 #include <cmam/texture/image.h>
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -342,6 +343,40 @@ TEST(ImageIo, UnreadableImagesNameFileAndReason) {
         EXPECT_EQ(std::string(e.what()).rfind("cannot read image \"" + p + "\": ", 0), 0u)
             << e.what();
     }
+}
+
+// Files that are not regular are refused (a FIFO blocked the reader forever), and so are binary
+// PNM and uncompressed TGA files shorter than their headers say (stb_image reads the missing
+// pixels as zeros: they loaded as black images). Whole files of both formats still read.
+TEST(ImageIo, FifosAndTruncatedPnmAndTgaFilesAreErrors) {
+    TempDir d;
+    const std::string fifo = (d.path / "fifo.png").string();
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    EXPECT_THROW_MSG(read_image(fifo), RenderError,
+                     "cannot read image \"" + fifo + "\": it is not a regular file");
+    auto write = [&](const std::string& name, const std::string& bytes) {
+        const std::string p = (d.path / name).string();
+        std::ofstream(p, std::ios::binary) << bytes;
+        return p;
+    };
+    const std::string pixels(4 * 3 * 3, '\x80');  // 4x3 RGB
+    const std::string ppm = "P6\n# a comment\n4 3\n255\n";
+    EXPECT_EQ(read_image(write("whole.ppm", ppm + pixels)).width, 4);
+    const std::string cut = write("cut.ppm", ppm + pixels.substr(0, 20));
+    EXPECT_THROW_MSG(read_image(cut), RenderError,
+                     "cannot read image \"" + cut +
+                         "\": truncated: " + std::to_string(ppm.size() + 20) +
+                         " bytes, the header needs " + std::to_string(ppm.size() + 36));
+    std::string tga(18, '\0');
+    tga[2] = 2;   // uncompressed true colour
+    tga[12] = 4;  // width 4
+    tga[14] = 3;  // height 3
+    tga[16] = 24;
+    EXPECT_EQ(read_image(write("whole.tga", tga + pixels)).height, 3);
+    const std::string cut_tga = write("cut.tga", tga + pixels.substr(0, 5));
+    EXPECT_THROW_MSG(
+        read_image(cut_tga), RenderError,
+        "cannot read image \"" + cut_tga + "\": truncated: 23 bytes, the header needs 54");
 }
 
 // A header claiming more pixels than the image memory limit is refused, naming the file and the
