@@ -122,12 +122,13 @@ std::optional<FileLoc> ParamSet::add(Param p) {
     // pbrt-v3 takes the later of two values of one parameter: the earlier one is dropped (and
     // its location returned, for the caller's warning).
     std::optional<FileLoc> replaced;
-    for (auto it = m_params.begin(); it != m_params.end(); ++it)
-        if (it->name == p.name) {
-            replaced = it->loc;
-            m_params.erase(it);
-            break;
-        }
+    if (m_names.count(p.name))  // linear only for a repeated name: 10^5 parameters stay fast
+        for (auto it = m_params.begin(); it != m_params.end(); ++it)
+            if (it->name == p.name) {
+                replaced = it->loc;
+                m_params.erase(it);
+                break;
+            }
     std::size_t n = p.numbers.size() + p.strings.size() + p.bools.size();
     if (n == 0) throw SceneError(p.loc, "parameter " + in_quotes(p.name) + " has no values");
     if (p.type_name == "blackbody") {  // [temperature scale]: a sampled spectrum
@@ -170,6 +171,7 @@ std::optional<FileLoc> ParamSet::add(Param p) {
                 throw SceneError(p.loc, "integer parameter " + in_quotes(p.name) +
                                             " must be a whole number in int's range, got " +
                                             number_text(x));
+    m_names.insert(p.name);
     m_params.push_back(std::move(p));
     return replaced;
 }

@@ -6,6 +6,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "pbrt/error.h"
@@ -88,6 +89,7 @@ class ParamSet {
 
   private:
     std::vector<Param> m_params;
+    std::unordered_set<std::string> m_names;  // of m_params: a new name needs no scan
     const Param* find_typed(const std::string& name, std::initializer_list<ParamType> types) const;
 };
 

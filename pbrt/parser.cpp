@@ -125,6 +125,7 @@ void Parser::push_file(Tokenizer t) {
     std::error_code ec;
     auto canon = std::filesystem::weakly_canonical(t.filename(), ec).string();
     m_desc.sources.push_back(t.filename());
+    m_reading.insert(canon);
     m_files.push_back(std::make_unique<Source>(Source{std::move(t), canon}));
 }
 
@@ -133,10 +134,8 @@ void Parser::include(const Token& dir) {
     std::string path = resolve_path(m_desc.base_dir, dir.loc, name);
     std::error_code ec;
     std::string canon = std::filesystem::weakly_canonical(path, ec).string();
-    for (const auto& f : m_files)
-        if (f->canonical == canon)
-            throw SceneError(dir.loc,
-                             "Include cycle: " + in_quotes(name) + " is already being read");
+    if (m_reading.count(canon))  // a set: a chain of 10^5 Includes stays linear
+        throw SceneError(dir.loc, "Include cycle: " + in_quotes(name) + " is already being read");
     if (m_peeked) throw SceneError(dir.loc, "internal: lookahead across Include");
     push_file(Tokenizer::from_file(path, dir.loc));
 }
@@ -152,6 +151,7 @@ std::optional<Token> Parser::next() {
             m_last_loc = t->loc;
             return t;
         }
+        m_reading.erase(m_files.back()->canonical);
         m_files.pop_back();
     }
     return std::nullopt;

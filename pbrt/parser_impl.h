@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <unordered_set>
 #include <vector>
 
 #include "pbrt/error.h"
@@ -111,6 +112,7 @@ class Parser {
         std::string canonical;
     };
     std::vector<std::unique_ptr<Source>> m_files;
+    std::unordered_set<std::string> m_reading;  // the canonical names of m_files: the cycle check
     std::optional<Token> m_peeked;
     WarningSink m_warn;
     SceneDesc m_desc;

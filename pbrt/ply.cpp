@@ -312,9 +312,8 @@ void read_faces(Reader& r, const Element& e, PlyMesh& mesh) {
                 mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
             else if (n == 4)
                 mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
-            else
-                r.fail("face with " + std::to_string(n) +
-                       " vertices (only triangles and quads are supported)");
+            else if (mesh.skipped_faces++ == 0)
+                mesh.first_skipped_size = n;
         }
     }
 }

@@ -1,6 +1,7 @@
 // pbrt — PLY mesh reader (ASCII and binary, either endianness) for Shape "plymesh".
 // Reads vertex positions, normals and texture coordinates (u v, s t, texture_u texture_v,
-// texture_s texture_t) and faces (triangles and quads; quads are split along their 0-2 diagonal).
+// texture_s texture_t) and faces (triangles and quads; quads are split along their 0-2 diagonal;
+// other faces are skipped and counted).
 #pragma once
 
 #include <cstddef>
@@ -17,6 +18,10 @@ struct PlyMesh {
     std::vector<float> normals;    // xyz per vertex, or empty
     std::vector<float> uvs;        // uv per vertex, or empty
     std::vector<int> indices;      // three per triangle
+    // Faces with other than three or four vertices, skipped as pbrt-v3 skips them: their number
+    // and the first one's vertex count.
+    std::size_t skipped_faces = 0;
+    std::size_t first_skipped_size = 0;
 };
 
 /// What a PLY header announces, before any vertex is read.

@@ -63,6 +63,20 @@ TEST(Ply, AsciiQuadWithTextureUV) {
     EXPECT_EQ(m.indices, (std::vector<int>{0, 1, 2, 0, 2, 3}));
 }
 
+// Faces with other than three or four vertices are skipped and counted, as pbrt-v3 skips them
+// with a warning (the scene builder gives it, located at the Shape's filename).
+TEST(Ply, FacesOtherThanTrianglesAndQuadsAreSkippedAndCounted) {
+    std::string path = write_temp(
+        "pentagon.ply",
+        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+        "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 2 0\n5 0 1 2 3 4\n3 0 1 2\n2 0 1\n4 0 1 2 3\n");
+    PlyMesh m = read_ply(path);
+    EXPECT_EQ(m.indices, (std::vector<int>{0, 1, 2, 0, 1, 2, 0, 2, 3}));
+    EXPECT_EQ(m.skipped_faces, 2u);
+    EXPECT_EQ(m.first_skipped_size, 5u);
+}
+
 TEST(Ply, BinaryLittleEndianWithNormalsAndExtraElement) {
     std::string header =
         "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float "
@@ -195,10 +209,6 @@ TEST(Ply, EveryMalformationHasItsMessage) {
         {"novertex.ply", "ply\nformat ascii 1.0\nend_header\n", "PLY file has no vertex element"},
         {"noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
          "vertex element lacks x, y, z properties"},
-        {"pentagon.ply",
-         "ply\nformat ascii 1.0\nelement vertex 5\n" + xyz + faces +
-             "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 2 0\n5 0 1 2 3 4\n",
-         "face with 5 vertices (only triangles and quads are supported)"},
         {"short.ply",
          "ply\nformat binary_little_endian 1.0\nelement vertex 1\n" + xyz + "end_header\n\x01\x02",
          "unexpected end of data"},

@@ -103,6 +103,11 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
         } catch (const SceneError& err) {
             throw SceneError(fp->loc, err.message());
         }
+        if (const std::size_t k = mesh->skipped_faces)
+            warn(fp->loc, name + ": " + std::to_string(k) + (k == 1 ? " face" : " faces") +
+                              " with neither three nor four vertices skipped (the first has " +
+                              std::to_string(mesh->first_skipped_size) +
+                              "), as pbrt-v3 skips them");
     }
     e.params.check_unused("shape \"plymesh\"", m_warn,
                           {"alpha", "shadowalpha", "displacement", "edgelength"});
