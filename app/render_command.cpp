@@ -255,7 +255,8 @@ int run_render(const RenderArgs& a) {
     if (stats.non_finite_samples)
         warn(std::to_string(stats.non_finite_samples) +
              " samples had a radiance that is not a finite number (from NaN or infinite "
-             "texels or parameters) and were taken as black");
+             "texels or parameters, or an index of refraction a texture gives that is not "
+             "positive) and were taken as black");
     return 0;
 }
 

@@ -193,7 +193,10 @@ struct Tracer {
     const Material& pick_mixed(const Material& m, const TexContext& ctx) {
         mix_weight = Rgb(1);
         const Material* cur = &m;
-        for (int k = 0; k < 16 && cur->type == Material::Type::Mix; ++k) {
+        // A mix names materials made before it, so the chain ends within their number (a bound
+        // of 16 left deeper chains as an unresolved mix: black).
+        for (std::size_t k = 0; k <= scene.materials.size() && cur->type == Material::Type::Mix;
+             ++k) {
             Rgb a = eval_texture(scene, cur->amount, ctx);
             a = Rgb(std::clamp(a.r, 0.0f, 1.0f), std::clamp(a.g, 0.0f, 1.0f),
                     std::clamp(a.b, 0.0f, 1.0f));

@@ -113,6 +113,11 @@ struct TextureNode {
     TexInput tex1, tex2, amount;                           // Checkerboard, Scale, Mix
 };
 
+/// Texture evaluation recurses through the nodes a texture names (scale, mix, checkerboard and
+/// dots inputs) on a render thread's stack: a texture nesting more is an error where it is
+/// declared (a chain of 6000 crashed a render thread).
+constexpr int kMaxTextureDepth = 256;
+
 struct Material {
     enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, None, Mix };
     Type type = Type::Matte;

@@ -405,6 +405,16 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
     return faceforward(nb, hit.ng);
 }
 
+namespace {
+// An index of refraction a texture gives. A constant one is checked when the scene is read; a
+// texture's value that is not a positive finite number has no meaning (a negative one bent rays
+// into radiance of 1e24): NaN, so the sample's radiance is not a number, counted and taken as
+// black with the render's warning.
+float index_of(float eta) {
+    return eta > 0 && std::isfinite(eta) ? eta : std::numeric_limits<float>::quiet_NaN();
+}
+}  // namespace
+
 std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit,
                               const TexContext& ctx) {
     std::optional<Bsdf> made;
@@ -437,7 +447,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
         case Material::Type::Glass:
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.kt = clamp0(eval_texture(scene, m.kt, ctx));
-            b.eta = eval_texture(scene, m.eta, ctx).r;
+            b.eta = index_of(eval_texture(scene, m.eta, ctx).r);
             break;
         case Material::Type::Uber: {
             b.kd = clamp0(eval_texture(scene, m.kd, ctx));
@@ -446,7 +456,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.kt = clamp0(eval_texture(scene, m.kt, ctx));
-            b.eta = eval_texture(scene, m.eta, ctx).r;
+            b.eta = index_of(eval_texture(scene, m.eta, ctx).r);
             break;
         }
         case Material::Type::Metal: {

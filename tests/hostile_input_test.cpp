@@ -333,17 +333,18 @@ TEST(HostileInput, NumbersTheRendererUsesMustBeFinite) {
 
 // Values a texture computes at render time cannot be checked when the scene is read: a glass
 // index of infinity or NaN (a scale texture of huge constants) bent rays into directions that
-// were not finite, and Embree aborted on them. Such a ray now gives its sample a radiance that is
-// not a number, which the film counts and takes as black; no ray that is not finite reaches
-// Embree.
+// were not finite, and Embree aborted on them; a negative one gave radiance of 1e24. Such a ray now
+// gives its sample a radiance that is not a number, which the film counts and takes as black; no
+// ray that is not finite reaches Embree.
 TEST(HostileInput, NonFiniteValuesFromTexturesGiveCountedBlackSamples) {
-    for (const char* index : {"\"inf\"", "\"nan\""}) {
+    for (const char* index : {"\"inf\"", "\"nan\"", "\"negative\""}) {
         SCOPED_TRACE(index);
         const std::string text =
             "Camera \"perspective\"\nFilm \"image\" \"integer xresolution\" 8 "
             "\"integer yresolution\" 8\nWorldBegin\nLightSource \"distant\"\n"
             "Texture \"inf\" \"float\" \"scale\" \"float tex1\" 1e30 \"float tex2\" 1e30\n"
             "Texture \"nan\" \"float\" \"scale\" \"texture tex1\" \"inf\" \"float tex2\" 0\n"
+            "Texture \"negative\" \"float\" \"constant\" \"float value\" -1.5\n"
             "Material \"glass\" \"texture index\" " +
             std::string(index) + "\nTranslate 0 0 3\nShape \"sphere\"\nWorldEnd\n";
         auto scene = render::build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
@@ -363,4 +364,35 @@ TEST(HostileInput, NonFiniteValuesFromTexturesGiveCountedBlackSamples) {
     EXPECT_FALSE(scene->intersect({0, 0, -5}, {0, nan, 1}, 0, 1e30f));
     EXPECT_TRUE(scene->occluded({0, 0, -5}, {0, 0, 1}, 0, nan));
     EXPECT_TRUE(scene->intersect({0, 0, -5}, {0, 0, 1}, 0, 1e30f).has_value());
+}
+
+// Texture evaluation recurses on a render thread's stack: a chain of 6000 scale textures crashed
+// a render thread. A texture nesting more than kMaxTextureDepth is a located error; a chain at
+// the limit builds. A chain of mix materials resolves however long it is (17 rendered black).
+TEST(HostileInput, TextureNestingIsBoundedAndMixChainsResolve) {
+    auto chain = [](int n) {
+        std::string s = std::string(kCamera) +
+                        "WorldBegin\nTexture \"t0\" \"float\" \"constant\" \"float value\" 0.5\n";
+        for (int i = 1; i < n; ++i)
+            s += "Texture \"t" + std::to_string(i) + "\" \"float\" \"scale\" \"texture tex1\" \"t" +
+                 std::to_string(i - 1) + "\"\n";
+        return s + "Material \"matte\" \"texture sigma\" \"t" + std::to_string(n - 1) +
+               "\"\nShape \"sphere\"\nWorldEnd\n";
+    };
+    EXPECT_EQ(error_of(chain(render::kMaxTextureDepth)), "no error");
+    EXPECT_EQ(error_of(chain(render::kMaxTextureDepth + 1)),
+              "t.pbrt:259:1: error: texture \"t256\" nests 257 textures deep, beyond cmam's "
+              "limit of 256");
+    std::string mix =
+        "Camera \"perspective\" \"float fov\" 10\nFilm \"image\" \"integer xresolution\" 4 "
+        "\"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\"\n"
+        "MakeNamedMaterial \"m0\" \"string type\" \"matte\"\n";
+    for (int i = 1; i <= 40; ++i)
+        mix += "MakeNamedMaterial \"m" + std::to_string(i) +
+               "\" \"string type\" \"mix\" \"string namedmaterial1\" \"m" + std::to_string(i - 1) +
+               "\" \"string namedmaterial2\" \"m" + std::to_string(i - 1) + "\"\n";
+    mix += "NamedMaterial \"m40\"\nTranslate 0 0 3\nShape \"sphere\"\nWorldEnd\n";
+    auto scene = render::build_scene(pbrt::parse_string(mix, "t.pbrt"), {}, {});
+    const render::Framebuffer fb = render::render(*scene, {}, nullptr);
+    for (float v : fb.rgb) EXPECT_GT(v, 0.1f);  // the matte under the environment, not black
 }

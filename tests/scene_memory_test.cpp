@@ -31,8 +31,9 @@ void operator delete(void* p, std::size_t) noexcept {
 using namespace cmam;
 
 namespace {
-// `n` chained float textures and as many materials using them, then n/2 nested and n/2
-// serial AttributeBegin blocks, each declaring a texture and a named material of its own.
+// `n` chained float textures (in chains of 128, within kMaxTextureDepth) and as many materials
+// using them, then n/2 nested and n/2 serial AttributeBegin blocks, each declaring a texture and
+// a named material of its own.
 std::string many_names(int n) {
     auto name = [](char prefix, int i) { return prefix + std::to_string(i); };
     std::string s =
@@ -40,7 +41,7 @@ std::string many_names(int n) {
         "Texture \"t0\" \"float\" \"constant\" \"float value\" 0.5\n";
     for (int i = 1; i < n; ++i) {
         s += "Texture \"" + name('t', i) + "\" \"float\" \"scale\" \"texture tex1\" \"" +
-             name('t', i - 1) + "\"\n";
+             name('t', i % 128 == 0 ? 0 : i - 1) + "\"\n";
         s += "Material \"matte\" \"texture sigma\" \"" + name('t', i) + "\"\n";
     }
     for (int i = 0; i < n; ++i) {

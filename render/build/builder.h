@@ -78,6 +78,8 @@ class Builder {
     pbrt::WarningSink m_warn;
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
+    // Per texture node: how many nodes deep its evaluation recurses (itself included).
+    std::vector<int> m_texture_depth;
     std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
     bool m_light_samples = false;      // lights' nsamples are used (directlighting, "all")
     double m_film_diagonal = 35;       // Film "diagonal" (mm): a realistic camera's film size

@@ -290,9 +290,14 @@ void Builder::integrator() {
     // times ("all", its default) or one light chosen per point ("one": here each light
     // once, the same expectation).
     const bool direct = e.type == "directlighting";
-    if (direct)
-        m_light_samples = e.params.get_string("strategy", "all") == "all";
-    else if (e.type != "whitted")
+    if (direct) {
+        const std::string strategy = e.params.get_string("strategy", "all");
+        if (strategy != "all" && strategy != "one")
+            warn(e.params.find("strategy")->loc,
+                 "unknown direct lighting strategy " + in_quotes(strategy) +
+                     " (expected \"all\" or \"one\"); \"all\" is used, as pbrt-v3 does");
+        m_light_samples = strategy != "one";
+    } else if (e.type != "whitted")
         warn(e.loc, "Integrator " + in_quotes(e.type) + " is rendered as \"whitted\"");
     if (const auto* p = e.params.find("maxdepth")) {
         const int depth = e.params.get_int("maxdepth", 5);

@@ -295,6 +295,18 @@ void Builder::texture(const pbrt::TextureDesc& t) {
         n.lod == FootprintMethod::Differentials)
         m_scene->footprint_methods.add(FootprintMethod::Differentials);
     e.params.check_unused(what, m_warn);
+    auto depth_of = [&](const TexInput& in) {
+        return in.node >= 0 && std::size_t(in.node) < m_texture_depth.size()
+                   ? m_texture_depth[std::size_t(in.node)]
+                   : 0;
+    };
+    const int depth = 1 + std::max({depth_of(n.tex1), depth_of(n.tex2), depth_of(n.amount)});
+    if (depth > kMaxTextureDepth)
+        throw SceneError(e.loc, "texture " + in_quotes(t.name) + " nests " + std::to_string(depth) +
+                                    " textures deep, beyond cmam's limit of " +
+                                    std::to_string(kMaxTextureDepth));
+    m_texture_depth.resize(m_scene->textures.size(), 1);
+    m_texture_depth.push_back(depth);
     if (n.kind == TextureNode::Kind::Image ||
         (n.kind == TextureNode::Kind::Checkerboard && n.closed_form))
         m_scene->footprint_methods.add(n.lod);
