@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -60,7 +59,8 @@ RawImage read_image(const std::string& path, bool keep_8bit) {
 }
 
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt,
-                            float scale, texture::WrapMode wrap, bool* gamma_used, bool keep_grey) {
+                            float scale, texture::WrapMode wrap, bool* gamma_used, bool keep_grey,
+                            std::size_t* non_finite) {
     RawImage raw = read_image(path, true);
     bool gamma = gamma_opt.value_or(raw.is_8bit);
     if (gamma_used) *gamma_used = gamma;
@@ -85,7 +85,9 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
         }
     // Written row by row into the texture: the file's pixels (bytes for 8-bit files) and the
     // texture are the only copies of the image in memory.
+    std::size_t bad = 0;  // texel values that are not finite (a table's values all are)
     auto fill = [&](int j, float* row) {
+        std::size_t row_bad = 0;
         const int y = h - 1 - j;  // flip: v = 0 is the bottom row (pbrt-v3)
         const std::size_t k0 = static_cast<std::size_t>(y) * w * nc;
         if (by_table) {
@@ -106,9 +108,13 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
                 dst[0] = luminance(rgb);
             else
                 for (int c = 0; c < out_c; ++c) dst[c] = decode(rgb[c]);
+            for (int c = 0; c < out_c; ++c) row_bad += !std::isfinite(dst[c]);
         }
+        bad += row_bad;
     };
-    return texture::Image::from_rows(w, h, out_c, fill, wrap, wrap);
+    texture::Image image = texture::Image::from_rows(w, h, out_c, fill, wrap, wrap);
+    if (non_finite) *non_finite = bad;
+    return image;
 }
 
 namespace {

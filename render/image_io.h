@@ -47,9 +47,11 @@ void set_image_memory_limit(std::size_t bytes);
 /// taking the luminance, as pbrt-v3 does); others keep RGB, grey files replicated to three
 /// channels, or with `keep_grey` kept as one (the renderer's spectrum textures: a third of the
 /// memory, and every filter gives each channel the same value bit for bit either way).
+/// `non_finite`, if given, receives the number of texel values that are not finite (only float
+/// files can have them).
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma,
                             float scale, texture::WrapMode wrap, bool* gamma_used = nullptr,
-                            bool keep_grey = false);
+                            bool keep_grey = false, std::size_t* non_finite = nullptr);
 
 /// Writes linear RGB `rgb` (top row first, 3 floats per pixel). The format follows the
 /// extension: .exr (32-bit float), .pfm (float), .hdr (RGBE), .tif/.tiff (32-bit float), or

@@ -13,6 +13,7 @@
 #include "pbrt/input_file.h"
 #include "pbrt/parser.h"
 #include "render/build_scene.h"
+#include "render/image_io.h"
 #include "render/integrator.h"
 #include "render/scene.h"
 
@@ -395,4 +396,27 @@ TEST(HostileInput, TextureNestingIsBoundedAndMixChainsResolve) {
     auto scene = render::build_scene(pbrt::parse_string(mix, "t.pbrt"), {}, {});
     const render::Framebuffer fb = render::render(*scene, {}, nullptr);
     for (float v : fb.rgb) EXPECT_GT(v, 0.1f);  // the matte under the environment, not black
+}
+
+// A float image may hold NaN or infinite texels: lookups that read them give the same, which
+// shading clamps to black. pbrt-v3 reads them silently; cmam warns where the texture is declared.
+TEST(HostileInput, NonFiniteTexelsGiveALocatedWarning) {
+    const fs::path dir = fs::temp_directory_path() / ("cmam_nan_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    render::write_image((dir / "nan.pfm").string(), 2, 2, {1, 1, 1, nan, 1, 1, 1, 1, 1, 1, 1, 1});
+    const std::string text = std::string(kCamera) +
+                             "WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string "
+                             "filename\" \"nan.pfm\"\nMaterial \"matte\" \"texture Kd\" \"t\"\n"
+                             "Shape \"sphere\"\nWorldEnd\n";
+    std::vector<std::string> warnings;
+    auto sink = [&](const std::string& w) { warnings.push_back(w); };
+    render::build_scene(pbrt::parse_string(text, (dir / "t.pbrt").string()), {}, sink);
+    fs::remove_all(dir);
+    std::erase_if(warnings, [](const std::string& w) { return w.find("nan.pfm") == w.npos; });
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0], (dir / "t.pbrt").string() +
+                               ":3:35: warning: \"nan.pfm\" has 1 texel value that is not a "
+                               "finite number (NaN or infinite); the samples whose lookups read "
+                               "it are taken as black");
 }

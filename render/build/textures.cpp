@@ -97,11 +97,20 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     auto it = m_scene->images.find(key);
     if (it != m_scene->images.end()) return it->second.get();
     texture::Image level0;
+    std::size_t bad = 0;  // texel values that are not finite
     try {
-        level0 = load_texture(path, is_float, gamma, scale, *wrap, nullptr, true);
+        level0 = load_texture(path, is_float, gamma, scale, *wrap, nullptr, true, &bad);
     } catch (const RenderError& err) {
         throw SceneError(fp->loc, err.what());
     }
+    // Float files may hold NaN or infinite texels; every filter reading one returns one, and the
+    // samples it reaches are taken as black. pbrt-v3 reads them silently; cmam says so here.
+    if (bad)
+        warn(fp->loc, in_quotes(name) + " has " + std::to_string(bad) +
+                          (bad == 1 ? " texel value that is not a finite number"
+                                    : " texel values that are not finite numbers") +
+                          " (NaN or infinite); the samples whose lookups read " +
+                          (bad == 1 ? "it" : "them") + " are taken as black");
     auto img = std::make_unique<texture::FilteredTexture>(std::move(level0));
     const texture::FilteredTexture* ptr = img.get();
     m_scene->images.emplace(key, std::move(img));
