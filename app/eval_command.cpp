@@ -2,10 +2,13 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +16,7 @@
 #include "app/common.h"
 #include "eval/evaluation.h"
 #include "pbrt/error.h"
+#include "render/scene.h"
 
 namespace cmam::app {
 
@@ -20,7 +24,8 @@ namespace {
 
 struct EvalArgs {
     std::vector<std::string> scenes;
-    std::string methods, spp = "1,4,16", out = "eval-out";
+    std::optional<std::string> methods;  // given, even empty: the list; not given: the defaults
+    std::string spp = "1,4,16", out = "eval-out";
     int reference_spp = 1024, timing_runs = 1;
     bool quiet = false;
 };
@@ -38,18 +43,24 @@ eval::EvalOptions eval_options(const EvalArgs& a) {
     o.reference_spp = a.reference_spp;
     o.out_dir = a.out;
     for (const std::string& name :
-         a.methods.empty() ? eval::default_methods() : split_list(a.methods)) {
+         a.methods ? split_list(*a.methods) : eval::default_methods()) {
         auto m = eval::parse_method(name);
         if (!m)
             throw UsageError("--methods: unknown method \"" + name + "\" (" + method_syntax() +
                              ")");
         o.methods.push_back(*m);
     }
+    if (o.methods.empty()) throw UsageError("--methods: give at least one method");
     o.spp.clear();
     for (const std::string& v : split_list(a.spp)) {
         char* end = nullptr;
+        errno = 0;
         long n = std::strtol(v.c_str(), &end, 10);
-        if (*end || n < 1) throw UsageError("--spp: \"" + v + "\" is not a positive integer");
+        if (*end || n < 1 || errno == ERANGE)
+            throw UsageError("--spp: \"" + v + "\" is not a positive integer");
+        if (n > render::kMaxSamplesPerPixel)  // an int would wrap 4294967297 to 1
+            throw UsageError("--spp " + v + " is above cmam's limit of " +
+                             std::to_string(render::kMaxSamplesPerPixel) + " samples per pixel");
         o.spp.push_back(static_cast<int>(n));
         note_spp_rounding(o.spp.back());
     }
@@ -61,6 +72,11 @@ eval::EvalOptions eval_options(const EvalArgs& a) {
 
 int run_eval(const EvalArgs& a) {
     eval::EvalOptions o = eval_options(a);
+    {
+        std::error_code ec;
+        if (std::filesystem::exists(a.out, ec) && !std::filesystem::is_directory(a.out, ec))
+            throw UsageError("-o " + a.out + ": it is a file, not a folder for the report");
+    }
     ProgressBar bar(!a.quiet && ::isatty(STDERR_FILENO));
     o.progress = [&](int done, int total, const std::string&) { bar.update(done, total); };
     // Warnings and failures interrupt the progress bar on a line of their own.

@@ -3,6 +3,7 @@
 // Libraries throw; main is the only place that prints their errors, and CLI11 prints the errors
 // of the command line itself.
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <iostream>
 #include <new>
 #include <string>
@@ -32,6 +33,9 @@ int run_reporting_errors(const std::function<int()>& run) {
 
 int main(int argc, char** argv) {
     using namespace cmam::app;
+    // Past a file size limit (ulimit -f) a write fails with EFBIG, which the writers report and
+    // clean up after, instead of the process ending on SIGXFSZ with a temporary left behind.
+    std::signal(SIGXFSZ, SIG_IGN);
     CLI::App app{"cmam: a texture-filtering Whitted ray tracer for pbrt-v3 scenes"};
     app.set_version_flag("--version", std::string("cmam ") + CMAM_VERSION);
     app.require_subcommand(1);

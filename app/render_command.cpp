@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -66,15 +67,19 @@ pbrt::Param film_param(const char* type, const char* name, std::vector<double> v
 void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
     const int xres = desc.film.params.get_int("xresolution", 640),
               yres = desc.film.params.get_int("yresolution", 480);
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    const int n = std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra);
-    if (n == 1 && w > 0)
-        h = std::max(1, static_cast<int>(std::lround(double(w) * yres / xres)));
-    else if (!(n == 3 && (x == 'x' || x == 'X') && w > 0 && h > 0))
+    // Whole numbers read without wrapping around (sscanf's %d once made 4294967328 a width of 32).
+    auto whole = [](std::string_view s, long long& v) {
+        const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+        return ec == std::errc() && end == s.data() + s.size() && v > 0;
+    };
+    const std::size_t cut = text.find_first_of("xX");
+    long long w = 0, h = 0;
+    if (cut == std::string::npos && whole(text, w))
+        h = std::max(1LL, std::llround(double(w) * yres / xres));
+    else if (!(cut != std::string::npos && whole(std::string_view(text).substr(0, cut), w) &&
+               whole(std::string_view(text).substr(cut + 1), h)))
         throw UsageError("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text + "\"");
-    if (w > render::kMaxFilmSide || h > render::kMaxFilmSide ||
-        static_cast<long long>(w) * h > render::kMaxFilmPixels)
+    if (w > render::kMaxFilmSide || h > render::kMaxFilmSide || w * h > render::kMaxFilmPixels)
         throw UsageError("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
                          " is above cmam's limits of " + std::to_string(render::kMaxFilmSide) +
                          " pixels a side and " + std::to_string(render::kMaxFilmPixels) +

@@ -165,6 +165,27 @@ cmam_run(render ${demo} -o ${OUT}/res.exr --resolution 70000)
 expect_failure("cmam: error: --resolution 70000x43750 is above cmam's limits" "a --resolution above the limits")
 cmam_run(render ${demo} -o ${OUT}/res.exr --resolution 12y)
 expect_failure("cmam: error: --resolution: expected WIDTHxHEIGHT or WIDTH, got \"12y\"" "a bad --resolution")
+# Sizes beyond int's range are errors, not wrapped around (4294967328 once rendered 32 wide).
+cmam_run(render ${demo} -o ${OUT}/res.exr --resolution 4294967328x24)
+expect_failure("cmam: error: --resolution 4294967328x24 is above cmam's limits" "a --resolution beyond int")
+cmam_run(eval ${demo} --spp 4294967297 -o ${OUT}/ev)
+expect_failure("cmam: error: --spp 4294967297 is above cmam's limit of 1048576" "an eval --spp beyond int")
+cmam_run(eval ${demo} --methods ",," -o ${OUT}/ev)
+expect_failure("cmam: error: --methods: give at least one method" "an eval without methods")
+file(WRITE ${OUT}/a_file "")
+cmam_run(eval ${demo} --methods none --spp 1 -o ${OUT}/a_file)
+expect_failure("cmam: error: -o ${OUT}/a_file: it is a file, not a folder for the report" "eval -o a file")
+# Past the file size limit a write fails with a message and leaves no temporary (SIGXFSZ once
+# ended the process and left .res.exr.tmp* behind).
+file(MAKE_DIRECTORY ${OUT}/fsz)
+execute_process(COMMAND sh -c "ulimit -f 4; exec \"$0\" render \"$1\" -o \"$2\" --resolution 256x160 --spp 1 --quiet"
+                        ${CMAM} ${demo} ${OUT}/fsz/big.exr RESULT_VARIABLE rc ERROR_VARIABLE err)
+expect_failure("cmam: error: cannot write \"${OUT}/fsz/big.exr\"" "a write past the file size limit")
+file(GLOB leftovers ${OUT}/fsz/*)
+file(GLOB hidden ${OUT}/fsz/.*)
+if(leftovers OR hidden)
+  message(FATAL_ERROR "a failed write must leave nothing behind: ${leftovers} ${hidden}")
+endif()
 # One prefix: located scene errors, "cmam: error:" for everything else (command line included).
 cmam_run(render ${demo} --spp 0)
 expect_failure("^cmam: error: --spp" "--spp 0")
