@@ -420,3 +420,31 @@ TEST(HostileInput, NonFiniteTexelsGiveALocatedWarning) {
                                "finite number (NaN or infinite); the samples whose lookups read "
                                "it are taken as black");
 }
+
+// pbrt-v3's "discarddegenerateUVs" (pbrt-v3-scenes' head uses it): with normals, a mesh with a
+// triangle two of whose vertices share a (u,v) loses all its (u,v), with a located warning;
+// without the flag, or without normals, they are kept.
+TEST(HostileInput, DiscardDegenerateUvsDropsTheMeshsUv) {
+    auto mesh = [](const std::string& extra) {
+        return std::string(kCamera) +
+               "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"normal N\" "
+               "[0 0 1 0 0 1 0 0 1] \"point2 uv\" [0 0 0 0 1 1]" +
+               extra + "\nWorldEnd\n";
+    };
+    for (const auto& [extra, kept] :
+         {std::pair<std::string, bool>{" \"bool discarddegenerateUVs\" true", false},
+          {" \"bool discarddegenerateUVs\" false", true},
+          {"", true}}) {
+        std::vector<std::string> warnings;
+        auto sink = [&](const std::string& w) { warnings.push_back(w); };
+        auto scene = render::build_scene(pbrt::parse_string(mesh(extra), "t.pbrt"), {}, sink);
+        ASSERT_EQ(scene->primitives.size(), 1u) << extra;
+        EXPECT_EQ(scene->primitives[0]->uvs.empty(), !kept) << extra;
+        std::erase_if(warnings, [](const std::string& w) { return w.find("(u,v)") == w.npos; });
+        EXPECT_EQ(warnings.size(), kept ? 0u : 1u) << extra;
+        if (!kept)
+            EXPECT_EQ(warnings[0],
+                      "t.pbrt:3:110: warning: a triangle has two vertices at the same (u,v): all "
+                      "of the mesh's (u,v) are discarded, as pbrt-v3's discarddegenerateUVs does");
+    }
+}

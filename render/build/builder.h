@@ -172,6 +172,9 @@ class Builder {
     bool subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                          const std::vector<int>& idx, Primitive& prim);
     void mesh_primitive(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool degenerate_uvs(const pbrt::Entity& e, const std::vector<float>& P,
+                        const std::vector<float>& N, const std::vector<float>& UV,
+                        const std::vector<int>& idx);
     bool place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                     const std::vector<float>& N, const std::vector<float>& UV,
                     const std::vector<int>& idx, Primitive& prim);

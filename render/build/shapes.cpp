@@ -85,6 +85,30 @@ void Builder::check_mesh_memory(const pbrt::FileLoc& loc, const std::string& nam
                  (m_opts.max_memory ? " set by --max-memory" : " (what this process may use)"));
 }
 
+// pbrt-v3's "discarddegenerateUVs" (trianglemesh and plymesh): with normals given, a mesh one of
+// whose triangles (of area 1e-7 or more) has two vertices at the same (u,v) loses all its (u,v),
+// with a warning; the surface then takes the default parameterisation.
+bool Builder::degenerate_uvs(const Entity& e, const std::vector<float>& P,
+                             const std::vector<float>& N, const std::vector<float>& UV,
+                             const std::vector<int>& idx) {
+    if (!e.params.get_bool("discarddegenerateUVs", false) || UV.empty() || N.empty()) return false;
+    auto p = [&](int v) { return Vec3(P[3 * v], P[3 * v + 1], P[3 * v + 2]); };
+    auto same = [&](int a, int b) {
+        return UV[2 * a] == UV[2 * b] && UV[2 * a + 1] == UV[2 * b + 1];
+    };
+    for (std::size_t i = 0; i + 2 < idx.size(); i += 3) {
+        const int a = idx[i], b = idx[i + 1], c = idx[i + 2];
+        if (0.5f * length(cross(p(a) - p(b), p(c) - p(b))) < 1e-7f) continue;
+        if (same(a, b) || same(b, c) || same(c, a)) {
+            warn(loc_of(e, "discarddegenerateUVs"),
+                 "a triangle has two vertices at the same (u,v): all of the mesh's (u,v) are "
+                 "discarded, as pbrt-v3's discarddegenerateUVs does");
+            return true;
+        }
+    }
+    return false;
+}
+
 bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
     mesh_primitive(s, prim);
@@ -109,9 +133,12 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
                               std::to_string(mesh->first_skipped_size) +
                               "), as pbrt-v3 skips them");
     }
+    const bool drop_uv =
+        degenerate_uvs(e, mesh->positions, mesh->normals, mesh->uvs, mesh->indices);
     e.params.check_unused("shape \"plymesh\"", m_warn,
                           {"alpha", "shadowalpha", "displacement", "edgelength"});
-    return place_mesh(s, mesh->positions, mesh->normals, mesh->uvs, mesh->indices, prim);
+    return place_mesh(s, mesh->positions, mesh->normals, drop_uv ? std::vector<float>{} : mesh->uvs,
+                      mesh->indices, prim);
 }
 
 // pbrt-v3's "trianglemesh", and "loopsubdiv": its control mesh subdivided at load
@@ -154,6 +181,7 @@ bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
                              std::string(uvname) + " must have one (u,v) pair per vertex of P");
         for (double x : finite_values(e, uvname, *uv)) UV.push_back(float(x));
     }
+    if (degenerate_uvs(e, P, N, UV, idx)) UV.clear();
     e.params.check_unused("shape " + what, m_warn, {"alpha", "shadowalpha", "S", "faceIndices"});
     return place_mesh(s, P, N, UV, idx, prim);
 }
