@@ -474,11 +474,15 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     const double perimeter_l = perimeter * std::max(kx, ky);
     if (l == pyr.levels() - 1) {
         // The coarsest level: a periodic texture's integral over a region spanning many periods
-        // is its mean (up to the boundary, 1/perimeter of it); a single texel is constant.
-        const bool periodic = img.wrap_s() != WrapMode::Clamp && img.wrap_s() != WrapMode::Black &&
-                              img.wrap_t() != WrapMode::Clamp && img.wrap_t() != WrapMode::Black;
-        if (periodic &&
-            ((lev.width() == 1 && lev.height() == 1) || perimeter_l > kAreaMaxPerimeter)) {
+        // is its mean (up to the boundary, 1/perimeter of it); a single texel is constant. With
+        // one periodic axis and one clamped or black (the library allows it; a scene's "wrap"
+        // sets both) the walk along the periodic axis is not bounded by the level rule (a fuzzed
+        // region thousands of periods long took 1.5 s): beyond kAreaMaxPerimeter the mean too, an
+        // approximation for such a region.
+        auto periodic = [](WrapMode m) { return m == WrapMode::Repeat || m == WrapMode::Mirror; };
+        const bool ps = periodic(img.wrap_s()), pt = periodic(img.wrap_t());
+        if ((ps && pt && lev.width() == 1 && lev.height() == 1) ||
+            ((ps || pt) && perimeter_l > kAreaMaxPerimeter)) {
             r.value = img.mean();
             r.knots = 1;
             return r;
@@ -490,7 +494,14 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     const Texel t = tex.row_prefix(l).integral_in_range(q, n, area2 * kx * ky);
     const double inv = 1 / (r.area * kx * ky);
     for (int c = 0; c < img.channels(); ++c) r.value[c] = static_cast<float>(t[c] * inv);
-    r.knots = static_cast<int>(1.5 * perimeter_l) + 2 * n;  // about: rows + columns crossed
+    // About the rows and columns the walk crosses. With neither axis periodic the parts beyond
+    // the edges are closed forms (and rows beyond them one piece each): at most the level's own.
+    const bool any_periodic = img.wrap_s() == WrapMode::Repeat ||
+                              img.wrap_s() == WrapMode::Mirror ||
+                              img.wrap_t() == WrapMode::Repeat || img.wrap_t() == WrapMode::Mirror;
+    const double walked =
+        any_periodic ? perimeter_l : std::min(perimeter_l, 2.0 * (lev.width() + lev.height()));
+    r.knots = static_cast<int>(1.5 * walked) + 2 * n;
     return r;
 }
 
