@@ -246,7 +246,8 @@ TEST(Area, SmallRegionsAreCloseToTheBilinearMean) {
     FilteredTexture t(img);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0, 1);
-    for (const auto [lo, hi, bound] : {std::tuple{0.5, 2.5, 0.007}, std::tuple{2.5, 4.5, 0.0075}}) {
+    for (const auto& [lo, hi, bound] :
+         {std::tuple{0.5, 2.5, 0.007}, std::tuple{2.5, 4.5, 0.0075}}) {
         double se = 0;
         const int count = 200;
         for (int k = 0; k < count; ++k) {
