@@ -42,8 +42,7 @@ eval::EvalOptions eval_options(const EvalArgs& a) {
     o.scenes = a.scenes;
     o.reference_spp = a.reference_spp;
     o.out_dir = a.out;
-    for (const std::string& name :
-         a.methods ? split_list(*a.methods) : eval::default_methods()) {
+    for (const std::string& name : a.methods ? split_list(*a.methods) : eval::default_methods()) {
         auto m = eval::parse_method(name);
         if (!m)
             throw UsageError("--methods: unknown method \"" + name + "\" (" + method_syntax() +

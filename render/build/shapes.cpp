@@ -133,12 +133,14 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
                               std::to_string(mesh->first_skipped_size) +
                               "), as pbrt-v3 skips them");
     }
-    const bool drop_uv =
-        degenerate_uvs(e, mesh->positions, mesh->normals, mesh->uvs, mesh->indices);
+    // The shared mesh's (u,v), or none: a reference either way, the arrays are not copied.
+    static const std::vector<float> kNoUv;
+    const std::vector<float>& uvs =
+        degenerate_uvs(e, mesh->positions, mesh->normals, mesh->uvs, mesh->indices) ? kNoUv
+                                                                                    : mesh->uvs;
     e.params.check_unused("shape \"plymesh\"", m_warn,
                           {"alpha", "shadowalpha", "displacement", "edgelength"});
-    return place_mesh(s, mesh->positions, mesh->normals, drop_uv ? std::vector<float>{} : mesh->uvs,
-                      mesh->indices, prim);
+    return place_mesh(s, mesh->positions, mesh->normals, uvs, mesh->indices, prim);
 }
 
 // pbrt-v3's "trianglemesh", and "loopsubdiv": its control mesh subdivided at load
