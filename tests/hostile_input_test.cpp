@@ -442,9 +442,10 @@ TEST(HostileInput, DiscardDegenerateUvsDropsTheMeshsUv) {
         EXPECT_EQ(scene->primitives[0]->uvs.empty(), !kept) << extra;
         std::erase_if(warnings, [](const std::string& w) { return w.find("(u,v)") == w.npos; });
         EXPECT_EQ(warnings.size(), kept ? 0u : 1u) << extra;
-        if (!kept)
+        if (!kept) {
             EXPECT_EQ(warnings[0],
                       "t.pbrt:3:110: warning: a triangle has two vertices at the same (u,v): all "
                       "of the mesh's (u,v) are discarded, as pbrt-v3's discarddegenerateUVs does");
+        }
     }
 }

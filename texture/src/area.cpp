@@ -230,11 +230,117 @@ inline __m128 knot4(const float* d) {
         return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(d)));
     return _mm_loadu_ps(d);
 }
-// acc (two double pairs) += x, widened.
-inline void add_wide(__m128d& lo, __m128d& hi, __m128 x) {
-    lo = _mm_add_pd(lo, _mm_cvtps_pd(x));
-    hi = _mm_add_pd(hi, _mm_cvtps_pd(_mm_movehl_ps(x, x)));
-}
+// The walk of one edge within the table (p.v < q.v, `sign` its direction), row by row: the
+// first row's piece (from p to the next row's line, or to q), whole rows of height one, then the
+// last row's piece to q. Each piece adds its height times the mean of R_j over its x-span (the
+// midpoint value within one texel; partial end texels and whole ones between otherwise, times
+// `h_per_x`), with the channels as one vector: each piece's value in float (the table's
+// precision), added to double sums. Every channel count takes this path, so a channel's result
+// does not depend on how many there are.
+template <int NC>
+struct EdgeWalk {
+    const float* row;
+    std::size_t stride;
+    Vec2d p, q;
+    double dxdy, h_per_x, sign;
+    int64_t j, j_last;
+    bool one_row;
+    double x, xnext;
+    __m128 h_row;
+    __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
+
+    EdgeWalk(const float* table, std::size_t stride_, Vec2d p_, Vec2d q_, double sign_,
+             double dxdy_, double h_per_x_)
+        : stride(stride_), p(p_), q(q_), dxdy(dxdy_), h_per_x(h_per_x_), sign(sign_) {
+        j = floor_to_int(p.v);
+        j_last = static_cast<int64_t>(std::ceil(q.v)) - 1;  // >= j, as q.v > p.v
+        one_row = j == j_last;
+        row = table + static_cast<std::size_t>(j) * stride;
+        h_row = _mm_set1_ps(static_cast<float>(sign));
+        x = p.u;
+        xnext = p.u;
+    }
+    // Whole rows' pieces span |dxdy| texels: at most one knot when |dxdy| < 1 (below one with a
+    // margin for the rounding of xnext), and then they take no branch.
+    bool steep() const { return std::abs(dxdy) < 0.999; }
+    // After first(): the whole rows left.
+    int64_t whole_rows() const { return j_last - j; }
+
+    // The piece of the current row from xa to xb, of height h (hv: h as a float vector). `Short`:
+    // the caller knows it spans at most one knot.
+    template <bool Short>
+    [[gnu::always_inline]] void piece(double xa, double xb, __m128 hv) {
+        const double x0 = std::min(xa, xb), x1 = std::max(xa, xb);
+        const int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
+        const float* d = row + k0 * NC;
+        if (Short || x1 <= double(k0 + 2)) {
+            // Within texel k0, or into the next one by l1: the span's first part [x0, b0] has
+            // mean m0, the rest m1, so the piece is h_per_x ((b0 − x0) m0 + l1 m1) =
+            // h m0 + h_per_x l1 (m1 − m0), which is h m0 when l1 = 0 (no branch between the two).
+            // Knot k0 + 2 is read even then: at most one past the row, the next row's first
+            // entry or the buffer's slack, finite either way.
+            const double b0 = std::min(x1, double(k0 + 1)), l1 = x1 - b0;
+            const __m128 f0 = _mm_set1_ps(static_cast<float>(0.5 * (x0 + b0) - double(k0))),
+                         f1 = _mm_set1_ps(static_cast<float>(0.5 * l1));
+            const __m128 d0 = knot4<NC>(d), d1 = knot4<NC>(d + NC), d2 = knot4<NC>(d + 2 * NC);
+            const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
+            const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
+            const __m128 v = _mm_add_ps(
+                _mm_mul_ps(hv, m0),
+                _mm_mul_ps(_mm_set1_ps(static_cast<float>(h_per_x * l1)), _mm_sub_ps(m1, m0)));
+            lo = _mm_add_pd(lo, _mm_cvtps_pd(v));
+            if constexpr (NC > 2) hi = _mm_add_pd(hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+        } else {  // partial first and last texels, whole ones between
+            alignas(16) double sum[4] = {0, 0, 0, 0};
+            integral_inside<NC>(row, x0, x1, sum);
+            lo = _mm_add_pd(lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum)));
+            if constexpr (NC > 2)
+                hi = _mm_add_pd(hi, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum + 2)));
+        }
+    }
+    // The first row's piece; the walk is then at the first whole row.
+    void first() {
+        if (one_row) {
+            piece<false>(p.u, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - p.v))));
+            return;
+        }
+        xnext = p.u + (double(j + 1) - p.v) * dxdy;
+        piece<false>(x, xnext, _mm_set1_ps(static_cast<float>(sign * (double(j + 1) - p.v))));
+        ++j;
+        row += stride;
+    }
+    // One whole row (j < j_last).
+    template <bool Steep>
+    [[gnu::always_inline]] void step() {
+        x = xnext;
+        xnext = p.u + (double(j + 1) - p.v) * dxdy;
+        piece<Steep>(x, xnext, h_row);
+        ++j;
+        row += stride;
+    }
+    template <bool Steep>
+    void rows() {
+        while (j < j_last) step<Steep>();
+    }
+    // The last row's piece (none when first() had the whole edge); the sums into acc.
+    void finish(double* acc) {
+        if (!one_row)
+            piece<false>(xnext, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - double(j)))));
+        alignas(16) double out[4];
+        _mm_store_pd(out, lo);
+        _mm_store_pd(out + 2, hi);
+        for (int c = 0; c < NC; ++c) acc[c] += out[c];
+    }
+    void walk(double* acc) {
+        first();
+        if (steep())
+            rows<true>();
+        else
+            rows<false>();
+        finish(acc);
+    }
+};
+
 }  // namespace
 #endif
 
@@ -247,51 +353,12 @@ template <int NC>
                                                                double dxdy, double h_per_x,
                                                                double* acc) const {
     const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
+#if defined(__SSE2__)
+    EdgeWalk<NC>(m_d.data(), stride, p, q, sign, dxdy, h_per_x).walk(acc);
+#else
     double y = p.v, x = p.u;
     int64_t j = floor_to_int(y);
     const float* row = m_d.data() + static_cast<std::size_t>(j) * stride;
-#if defined(__SSE2__)
-    {
-        // The channels as one vector: each piece's value in float (the table's precision), added
-        // to double sums. Every channel count takes this path, so a channel's result does not
-        // depend on how many there are.
-        __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
-        while (y < q.v) {
-            const double ynext = std::min(double(j + 1), q.v);
-            const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
-            const double h = sign * (ynext - y);
-            const double x0 = std::min(x, xnext), x1 = std::max(x, xnext);
-            const int64_t k0 = static_cast<int64_t>(x0);
-            const float* d = row + k0 * NC;
-            if (x1 <= double(k0 + 2)) {  // as below: h m0 + h_per_x l1 (m1 − m0)
-                const double b0 = std::min(x1, double(k0 + 1)), l1 = x1 - b0;
-                const __m128 f0 = _mm_set1_ps(static_cast<float>(0.5 * (x0 + b0) - double(k0))),
-                             f1 = _mm_set1_ps(static_cast<float>(0.5 * l1));
-                const __m128 d0 = knot4<NC>(d), d1 = knot4<NC>(d + NC), d2 = knot4<NC>(d + 2 * NC);
-                const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
-                const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
-                add_wide(lo, hi,
-                         _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(h)), m0),
-                                    _mm_mul_ps(_mm_set1_ps(static_cast<float>(h_per_x * l1)),
-                                               _mm_sub_ps(m1, m0))));
-            } else {
-                alignas(16) double sum[4] = {0, 0, 0, 0};
-                integral_inside<NC>(row, x0, x1, sum);
-                lo = _mm_add_pd(lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum)));
-                hi = _mm_add_pd(hi, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum + 2)));
-            }
-            y = ynext;
-            x = xnext;
-            ++j;
-            row += stride;
-        }
-        alignas(16) double out[4];
-        _mm_store_pd(out, lo);
-        _mm_store_pd(out + 2, hi);
-        for (int c = 0; c < NC; ++c) acc[c] += out[c];
-        return;
-    }
-#endif
     while (y < q.v) {
         const double ynext = std::min(double(j + 1), q.v);
         const double xnext = ynext == q.v ? q.u : p.u + (ynext - p.v) * dxdy;
@@ -323,6 +390,7 @@ template <int NC>
         ++j;
         row += stride;
     }
+#endif
 }
 
 // Green's theorem: the area integral of T is the boundary integral of R(x,y) dy, where R is the
@@ -351,11 +419,15 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         const double h_per_x = q.u != p.u ? sign * std::abs((q.v - p.v) / (q.u - p.u)) : 0;
         edges[m++] = {p, q, sign, dxdy, h_per_x};
     }
+    auto inside = [&](const Edge& E) {
+        return E.p.v >= 0 && E.q.v <= m_h && std::min(E.p.u, E.q.u) >= 0 &&
+               std::max(E.p.u, E.q.u) < m_w;
+    };
     const bool far_rows = m_wrap_t == WrapMode::Clamp || m_wrap_t == WrapMode::Black;
     for (int e = 0; e < m; ++e) {
         const Edge& E = edges[e];
         const Vec2d p = E.p, q = E.q;
-        if (p.v >= 0 && q.v <= m_h && std::min(p.u, q.u) >= 0 && std::max(p.u, q.u) < m_w) {
+        if (inside(E)) {
             // The common case, the edge within the table: rows and knots read directly.
             edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
             continue;
@@ -540,7 +612,9 @@ struct TexelBlock {
 };
 
 // The block holding every point within es texels of the centre s along s and et along t (with
-// the texel after each, for the bilinear blend); false when it would not fit.
+// the texel after each, for the bilinear blend); false when it would not fit. NC: the image's
+// channels (a texel is one load of that width).
+template <int NC>
 bool read_block(const Image& img, double s, double t, double es, double et, TexelBlock& b) {
     b.k0 = floor_to_int(s - es);
     b.j0 = floor_to_int(t - et);
@@ -549,7 +623,6 @@ bool read_block(const Image& img, double s, double t, double es, double et, Texe
     if (nx > TexelBlock::kMax || ny > TexelBlock::kMax) return false;
     b.nx = nx;
     b.ny = ny;
-    const int nc = img.channels();
     std::ptrdiff_t col[TexelBlock::kMax];
     const float* base = img.row(0);
     const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
@@ -559,48 +632,101 @@ bool read_block(const Image& img, double s, double t, double es, double et, Texe
     }
     for (int jj = 0; jj < ny; ++jj) {
         const int64_t r = wrap_index(b.j0 + jj, img.height(), img.wrap_t());
-        for (int i = 0; i < nx; ++i) {
-            if (r < 0 || col[i] < 0) {
-                b.t[jj][i] = _mm_setzero_ps();
-            } else if (nc >= 3) {
-                b.t[jj][i] = _mm_loadu_ps(base + rows[r] + col[i]);
-            } else {
-                const float* p = base + rows[r] + col[i];
-                b.t[jj][i] = _mm_setr_ps(p[0], nc > 1 ? p[1] : 0.0f, 0.0f, 0.0f);
-            }
-        }
+        for (int i = 0; i < nx; ++i)
+            b.t[jj][i] =
+                r < 0 || col[i] < 0 ? _mm_setzero_ps() : knot4<NC>(base + rows[r] + col[i]);
     }
     return true;
 }
 
-// The N x N rule's weighted sum of the bilinear reconstruction at c + fa a + fb b, from the block;
-// N independent sums (one per fb).
+// The N x N rule's weighted sum of the bilinear reconstruction at c + fa a + fb b, from the block.
+// The points' positions, taps and weights are computed four at a time, in float relative to the
+// block (a few texels, so float keeps about 1e-6 texel); each point then adds its four texels,
+// weighted, to the sum in one vector, point after point: the same operations for every channel.
 template <int N>
 __m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, double bs,
                 double bt) {
     using R = GaussRule<N>;
-    __m128 total = _mm_setzero_ps();
-    for (int ib = 0; ib < N; ++ib) {
-        const double cs = s + R::x[ib] * bs, ct = t + R::x[ib] * bt;
-        __m128 sum = _mm_setzero_ps();
-        for (int ia = 0; ia < N; ++ia) {
-            const double ps = cs + R::x[ia] * as, pt = ct + R::x[ia] * at;
-            const int64_t i = floor_to_int(ps), j = floor_to_int(pt);
-            const float fs = static_cast<float>(ps - double(i)),
-                        ft = static_cast<float>(pt - double(j));
-            const __m128* r0 = b.t[j - b.j0] + (i - b.k0);
-            const __m128* r1 = b.t[j - b.j0 + 1] + (i - b.k0);
-            const __m128 lo = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r0[0]),
-                                         _mm_mul_ps(_mm_set1_ps(fs), r0[1]));
-            const __m128 hi = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - fs), r1[0]),
-                                         _mm_mul_ps(_mm_set1_ps(fs), r1[1]));
-            const __m128 v =
-                _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - ft), lo), _mm_mul_ps(_mm_set1_ps(ft), hi));
-            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(R::w[ia]), v));
+    constexpr int kPoints = N * N, kGroups = (kPoints + 3) / 4;
+    const float rs = static_cast<float>(s - double(b.k0)),
+                rt = static_cast<float>(t - double(b.j0));
+    const float fas = static_cast<float>(as), fat = static_cast<float>(at),
+                fbs = static_cast<float>(bs), fbt = static_cast<float>(bt);
+    alignas(16) float ps[kGroups * 4], pt[kGroups * 4], gw[kGroups * 4];
+    for (int k = 0; k < kGroups * 4; ++k) {
+        const int ia = k % N, ib = k / N;
+        if (k < kPoints) {
+            const float xa = static_cast<float>(R::x[ia]), xb = static_cast<float>(R::x[ib]);
+            ps[k] = rs + xa * fas + xb * fbs;
+            pt[k] = rt + xa * fat + xb * fbt;
+            gw[k] = R::w[ia] * R::w[ib];
+        } else {
+            ps[k] = pt[k] = gw[k] = 0;
         }
-        total = _mm_add_ps(total, _mm_mul_ps(_mm_set1_ps(R::w[ib]), sum));
+    }
+    // Tap indices are clamped into the block: rounding can put a point on the block's far edge.
+    const __m128i hi_s = _mm_set1_epi32(b.nx - 2), hi_t = _mm_set1_epi32(b.ny - 2),
+                  zero = _mm_setzero_si128();
+    const __m128 one = _mm_set1_ps(1);
+    __m128 total = _mm_setzero_ps();
+    for (int g = 0; g < kGroups; ++g) {
+        const __m128 vs = _mm_load_ps(ps + 4 * g), vt = _mm_load_ps(pt + 4 * g);
+        // Truncation is the floor here (positions are at least about -1e-6).
+        const __m128i ii = _mm_cvttps_epi32(vs), jj = _mm_cvttps_epi32(vt);
+        const __m128 fs = _mm_sub_ps(vs, _mm_cvtepi32_ps(ii)),
+                     ft = _mm_sub_ps(vt, _mm_cvtepi32_ps(jj));
+        const __m128i ic = _mm_max_epi16(_mm_min_epi16(ii, hi_s), zero),
+                      jc = _mm_max_epi16(_mm_min_epi16(jj, hi_t), zero);
+        const __m128i idx = _mm_add_epi32(
+            _mm_add_epi32(_mm_slli_epi32(jc, 3), _mm_slli_epi32(jc, 1)), ic);  // j kMax + i
+        static_assert(TexelBlock::kMax == 10);
+        alignas(16) int32_t at_[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(at_), idx);
+        const __m128 w = _mm_load_ps(gw + 4 * g), gs = _mm_sub_ps(one, fs),
+                     gt = _mm_sub_ps(one, ft);
+        const __m128 w0 = _mm_mul_ps(w, gt), w1 = _mm_mul_ps(w, ft);
+        alignas(16) float w00[4], w10[4], w01[4], w11[4];
+        _mm_store_ps(w00, _mm_mul_ps(w0, gs));
+        _mm_store_ps(w10, _mm_mul_ps(w0, fs));
+        _mm_store_ps(w01, _mm_mul_ps(w1, gs));
+        _mm_store_ps(w11, _mm_mul_ps(w1, fs));
+        for (int k = 0; k < 4 && 4 * g + k < kPoints; ++k) {
+            const __m128* r = &b.t[0][0] + at_[k];
+            const __m128 v =
+                _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(w00[k]), r[0]),
+                                                 _mm_mul_ps(_mm_set1_ps(w10[k]), r[1])),
+                                      _mm_mul_ps(_mm_set1_ps(w01[k]), r[TexelBlock::kMax])),
+                           _mm_mul_ps(_mm_set1_ps(w11[k]), r[TexelBlock::kMax + 1]));
+            total = _mm_add_ps(total, v);
+        }
     }
     return total;
+}
+
+// The 3x3 rule, the 4x4 one or their blend (w4 the 4x4 rule's weight) from a block around the
+// region; false when it would not fit in one.
+template <int NC>
+bool block_rules(const Image& img, double s, double t, double as, double at, double bs, double bt,
+                 double w4, int* texels, Texel& out) {
+    const double reach = w4 > 0 ? GaussRule<4>::x[3] : GaussRule<3>::x[2];
+    TexelBlock block;
+    if (!read_block<NC>(img, s, t, reach * (std::abs(as) + std::abs(bs)),
+                        reach * (std::abs(at) + std::abs(bt)), block))
+        return false;
+    *texels = block.nx * block.ny;
+    __m128 sum;
+    if (w4 == 0)
+        sum = rule_sum<3>(block, s, t, as, at, bs, bt);
+    else if (w4 == 1)
+        sum = rule_sum<4>(block, s, t, as, at, bs, bt);
+    else
+        sum = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - w4)),
+                                    rule_sum<3>(block, s, t, as, at, bs, bt)),
+                         _mm_mul_ps(_mm_set1_ps(static_cast<float>(w4)),
+                                    rule_sum<4>(block, s, t, as, at, bs, bt)));
+    _mm_storeu_ps(out.data(), sum);
+    if constexpr (NC == 3) out[3] = 0;
+    return true;
 }
 #endif
 
@@ -658,26 +784,23 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
     // kAreaBlendHi = 4.5.
     static_assert(kAreaBlendHi <= 4.5);
     {
-        const double reach = w4 > 0 ? GaussRule<4>::x[3] : GaussRule<3>::x[2];
-        TexelBlock block;
-        if (read_block(img, s, t, reach * (std::abs(as) + std::abs(bs)),
-                       reach * (std::abs(at) + std::abs(bt)), block)) {
-            *texels = block.nx * block.ny;
-            __m128 sum;
-            if (w4 == 0)
-                sum = rule_sum<3>(block, s, t, as, at, bs, bt);
-            else if (w4 == 1)
-                sum = rule_sum<4>(block, s, t, as, at, bs, bt);
-            else
-                sum = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - w4)),
-                                            rule_sum<3>(block, s, t, as, at, bs, bt)),
-                                 _mm_mul_ps(_mm_set1_ps(static_cast<float>(w4)),
-                                            rule_sum<4>(block, s, t, as, at, bs, bt)));
-            Texel out;
-            _mm_storeu_ps(out.data(), sum);
-            if (img.channels() == 3) out[3] = 0;
-            return out;
+        Texel out;
+        bool fits;
+        switch (img.channels()) {
+            case 1:
+                fits = block_rules<1>(img, s, t, as, at, bs, bt, w4, texels, out);
+                break;
+            case 2:
+                fits = block_rules<2>(img, s, t, as, at, bs, bt, w4, texels, out);
+                break;
+            case 3:
+                fits = block_rules<3>(img, s, t, as, at, bs, bt, w4, texels, out);
+                break;
+            default:
+                fits = block_rules<4>(img, s, t, as, at, bs, bt, w4, texels, out);
+                break;
         }
+        if (fits) return out;
     }
 #endif
     Texel out{};
