@@ -273,6 +273,46 @@ TEST(Area, SmallRegionsAreCloseToTheBilinearMean) {
     }
 }
 
+TEST(Area, GaussRuleReadsTheRightTexelsAtTheBlocksEdges) {
+    // The 3x3 rule's outermost points lie exactly on the extent of the block of texels it reads.
+    // Footprints are placed so that extent falls on a texel centre, give or take a few units in
+    // the last place: a point rounded onto the block's far edge must still take that texel. On
+    // alternating columns and rows (every neighbour differs by 1) a wrong tap is off by a
+    // point's weight, 0.08 or more; the rule itself is compared, point by point in double.
+    const int n = 16;
+    std::vector<float> px(std::size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) px[std::size_t(j) * n + i] = float((i + j) % 2);
+    const Image img(n, n, 1, px);
+    FilteredTexture t(img);
+    const double x3 = 0.38729833462074170, w3[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+    const double node[3] = {-x3, 0, x3};
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<int> cell(2, n - 5), ulps(-4, 4);
+    std::uniform_real_distribution<double> unit(0, 1);
+    double worst = 0;
+    for (int k = 0; k < 2000; ++k) {
+        // Texel-space centre s (lattice: texel centres at integers) and sides along s and t of
+        // 1.2 to 2.3 texels, so that s + x3 (|a_s| + |b_s|) is the integer `edge`.
+        const double la = 1.2 + unit(rng), lb = 1.2 + 0.5 * unit(rng);
+        const double edge = cell(rng) + 2, s = edge - x3 * la;
+        double t0 = cell(rng) + unit(rng);
+        if (k % 2) t0 = cell(rng) + 2 - x3 * lb;  // the far row edge too
+        double u = (s + 0.5) / n, v = (t0 + 0.5) / n;
+        for (int i = ulps(rng); i != 0; i += i > 0 ? -1 : 1)
+            u = std::nextafter(u, i > 0 ? 1.0 : 0.0);
+        const Vec2d a{la / n, 0}, b{0, lb / n};
+        double want = 0;
+        for (int ib = 0; ib < 3; ++ib)
+            for (int ia = 0; ia < 3; ++ia)
+                want += w3[ia] * w3[ib] * bilinear(img, u + node[ia] * a.u, v + node[ib] * b.v)[0];
+        const double got = t.lookup(u, v, Footprint::axes(a, b), {FilterKind::Area})[0];
+        worst = std::max(worst, std::abs(got - want));
+        ASSERT_NEAR(got, want, 1e-4) << "footprint " << k << " at " << u << "," << v;
+    }
+    RecordProperty("max_error", std::to_string(worst));
+}
+
 TEST(Area, StrataTileTheirPixel) {
     // At n x n samples a pixel's strata are the parallelograms of its Jacobian columns / n, at
     // the strata's centres: their exact integrals add up to the pixel's, and the filter's means

@@ -664,19 +664,22 @@ __m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, d
             ps[k] = pt[k] = gw[k] = 0;
         }
     }
-    // Tap indices are clamped into the block: rounding can put a point on the block's far edge.
+    // Tap indices are clamped into the block: rounding can put a point on the block's far edge
+    // (the points' extent along each axis is the block's own).
     const __m128i hi_s = _mm_set1_epi32(b.nx - 2), hi_t = _mm_set1_epi32(b.ny - 2),
                   zero = _mm_setzero_si128();
     const __m128 one = _mm_set1_ps(1);
     __m128 total = _mm_setzero_ps();
     for (int g = 0; g < kGroups; ++g) {
         const __m128 vs = _mm_load_ps(ps + 4 * g), vt = _mm_load_ps(pt + 4 * g);
-        // Truncation is the floor here (positions are at least about -1e-6).
+        // Truncation is the floor here (positions are at least about -1e-6). The fractions are
+        // taken from the clamped taps, so a point rounded onto the block's far edge still gets
+        // that edge's texel (weight 1 on the tap's second texel).
         const __m128i ii = _mm_cvttps_epi32(vs), jj = _mm_cvttps_epi32(vt);
-        const __m128 fs = _mm_sub_ps(vs, _mm_cvtepi32_ps(ii)),
-                     ft = _mm_sub_ps(vt, _mm_cvtepi32_ps(jj));
         const __m128i ic = _mm_max_epi16(_mm_min_epi16(ii, hi_s), zero),
                       jc = _mm_max_epi16(_mm_min_epi16(jj, hi_t), zero);
+        const __m128 fs = _mm_sub_ps(vs, _mm_cvtepi32_ps(ic)),
+                     ft = _mm_sub_ps(vt, _mm_cvtepi32_ps(jc));
         const __m128i idx = _mm_add_epi32(
             _mm_add_epi32(_mm_slli_epi32(jc, 3), _mm_slli_epi32(jc, 1)), ic);  // j kMax + i
         static_assert(TexelBlock::kMax == 10);
