@@ -263,8 +263,6 @@ struct EdgeWalk {
     // Whole rows' pieces span |dxdy| texels: at most one knot when |dxdy| < 1 (below one with a
     // margin for the rounding of xnext), and then they take no branch.
     bool steep() const { return std::abs(dxdy) < 0.999; }
-    // After first(): the whole rows left.
-    int64_t whole_rows() const { return j_last - j; }
 
     // The piece of the current row from xa to xb, of height h (hv: h as a float vector). `Short`:
     // the caller knows it spans at most one knot.
@@ -419,15 +417,11 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         const double h_per_x = q.u != p.u ? sign * std::abs((q.v - p.v) / (q.u - p.u)) : 0;
         edges[m++] = {p, q, sign, dxdy, h_per_x};
     }
-    auto inside = [&](const Edge& E) {
-        return E.p.v >= 0 && E.q.v <= m_h && std::min(E.p.u, E.q.u) >= 0 &&
-               std::max(E.p.u, E.q.u) < m_w;
-    };
     const bool far_rows = m_wrap_t == WrapMode::Clamp || m_wrap_t == WrapMode::Black;
     for (int e = 0; e < m; ++e) {
         const Edge& E = edges[e];
         const Vec2d p = E.p, q = E.q;
-        if (inside(E)) {
+        if (p.v >= 0 && q.v <= m_h && std::min(p.u, q.u) >= 0 && std::max(p.u, q.u) < m_w) {
             // The common case, the edge within the table: rows and knots read directly.
             edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
             continue;
