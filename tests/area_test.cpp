@@ -292,8 +292,8 @@ TEST(Area, GaussRuleReadsTheRightTexelsAtTheBlocksEdges) {
     std::uniform_real_distribution<double> unit(0, 1);
     double worst = 0;
     for (int k = 0; k < 2000; ++k) {
-        // Texel-space centre s (lattice: texel centres at integers) and sides along s and t of
-        // 1.2 to 2.3 texels, so that s + x3 (|a_s| + |b_s|) is the integer `edge`.
+        // Texel-space centre s (lattice: texel centres at integers), sides of 1.2 to 2.2 texels
+        // along s and 1.2 to 1.7 along t, so that s + x3 (|a_s| + |b_s|) is the integer `edge`.
         const double la = 1.2 + unit(rng), lb = 1.2 + 0.5 * unit(rng);
         const double edge = cell(rng) + 2, s = edge - x3 * la;
         double t0 = cell(rng) + unit(rng);
