@@ -86,20 +86,27 @@ class FilmTracer {
     // samples only feed the CMAM's caches (their radiance is dropped): they are what a row
     // traced whole would have put there.
     void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam) const {
-        Span sp{row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {},
-                {}};
+        Span sp{
+            row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {}, {},
+            {}};
         sp.counts.count_lookups = m_options.count_lookups;
         draw_jitter(sp);
         sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
+        Packet packet;
+        auto add = [&](int i, int sx, int sy) {
+            add_sample(sp, packet, i, sx, sy);
+            if (packet.n == Scene::kPacketSize) trace(sp, packet, cmam);
+        };
         if (m_sub_rows) {
             for (int sy = 0; sy < m_ny; ++sy)
                 for (int i = 0; i < sp.n; ++i)
-                    for (int sx = 0; sx < m_nx; ++sx) trace_sample(sp, i, sx, sy, cmam);
+                    for (int sx = 0; sx < m_nx; ++sx) add(i, sx, sy);
         } else {
             for (int i = 0; i < sp.n; ++i)
                 for (int sy = 0; sy < m_ny; ++sy)
-                    for (int sx = 0; sx < m_nx; ++sx) trace_sample(sp, i, sx, sy, cmam);
+                    for (int sx = 0; sx < m_nx; ++sx) add(i, sx, sy);
         }
+        trace(sp, packet, cmam);
         float* out = &m_fb.rgb[(static_cast<std::size_t>(row) * m_fb.width + x_begin) * 3];
         const double scale = m_options.aov == AovKind::None ? double(m_film.scale) : 1.0;
         const std::size_t skip = static_cast<std::size_t>(prime) * 3;
@@ -117,6 +124,7 @@ class FilmTracer {
         std::vector<uint64_t> seeds;
         std::vector<double> sum;  // 3 per pixel
         RayCounts counts;
+        std::vector<ShadowRay> shadow;  // trace_packet's scratch
     };
 
     // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
@@ -133,8 +141,10 @@ class FilmTracer {
         }
     }
 
-    texture::RayTag tag_of(const Span& sp, int col, int sx, int sy, const float* j) const {
-        texture::RayTag tag;
+    // Sets every member of `tag`.
+    void tag_of(const Span& sp, int col, int sx, int sy, const float* j,
+                texture::RayTag& tag) const {
+        tag = {};
         if (m_sub_rows) {
             tag.id = static_cast<uint32_t>(sp.py * m_ny + sy);
             tag.seq = static_cast<uint32_t>(col * m_nx + sx);
@@ -145,31 +155,58 @@ class FilmTracer {
             tag.id = static_cast<uint32_t>(sp.py * m_film.xres + m_film.x0 + col);
             tag.seq = static_cast<uint32_t>(sy * m_nx + sx);
         }
-        return tag;
     }
 
-    void trace_sample(Span& sp, int i, int sx, int sy, CmamRowState& cmam) const {
+    // Camera samples in the order they are traced, traced together (trace_packet): pixel i of
+    // the span and stratum sample = sy * nx + sx of each, their paths and AOV samples.
+    struct Packet {
+        int i[Scene::kPacketSize], sample[Scene::kPacketSize];
+        CameraPath paths[Scene::kPacketSize];
+        Aov aov[Scene::kPacketSize];
+        int n = 0;
+    };
+
+    // Adds the camera sample of pixel i, stratum (sx, sy), to the packet.
+    void add_sample(Span& sp, Packet& packet, int i, int sx, int sy) const {
+        const int k = packet.n++;
         const int col = sp.c0 + i, px = m_film.x0 + col, sample = sy * m_nx + sx;
         const float* j = &sp.jitter[(static_cast<std::size_t>(i) * m_spp + sample) * 2];
         const float fx = px + (sx + j[0]) / m_nx, fy = sp.py + (sy + j[1]) / m_ny;
-        const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
-        const texture::RayTag tag = tag_of(sp, col, sx, sy, j);
-        Aov aov{m_options.aov};
-        const RayFootprint fp =
-            m_footprints.camera_ray(fx, fy, ray.dir, tag, 0.5f - j[0], 0.5f - j[1]);
-        Rgb L = trace_one(m_scene, m_footprints, ray.org, ray.dir, fp,
-                          mix_seed(sp.seeds[i], uint64_t(sample) + 1),
-                          i < sp.prime ? nullptr : &sp.counts, &cmam,
-                          m_options.aov == AovKind::None ? nullptr : &aov);
-        if (m_options.aov != AovKind::None) L = Rgb(aov.v[0], aov.v[1], aov.v[2]);
-        if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) {
-            if (i >= sp.prime) ++sp.counts.non_finite_samples;
-            L = Rgb();
+        const PrimaryRay ray = m_footprints.primary(fx, fy);
+        packet.i[k] = i;
+        packet.sample[k] = sample;
+        packet.aov[k] = Aov{m_options.aov};
+        CameraPath& p = packet.paths[k];
+        p.ray.org = ray.org;
+        p.ray.dir = ray.dir;
+        m_footprints.start_camera_ray(p.ray.fp, fx, fy, ray.dir, 0.5f - j[0], 0.5f - j[1],
+                                      ray.inv_len);
+        tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
+        p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
+        p.counts = i < sp.prime ? nullptr : &sp.counts;
+        p.aov = m_options.aov == AovKind::None ? nullptr : &packet.aov[k];
+    }
+
+    // Traces the packet's samples and adds each to its pixel, in order.
+    void trace(Span& sp, Packet& packet, CmamRowState& cmam) const {
+        if (packet.n == 0) return;
+        Rgb radiance[Scene::kPacketSize];
+        trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.shadow, radiance);
+        for (int k = 0; k < packet.n; ++k) {
+            const int i = packet.i[k];
+            Rgb L = radiance[k];
+            if (m_options.aov != AovKind::None)
+                L = Rgb(packet.aov[k].v[0], packet.aov[k].v[1], packet.aov[k].v[2]);
+            if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) {
+                if (i >= sp.prime) ++sp.counts.non_finite_samples;
+                L = Rgb();
+            }
+            double* acc = &sp.sum[static_cast<std::size_t>(i) * 3];
+            acc[0] += L.r;
+            acc[1] += L.g;
+            acc[2] += L.b;
         }
-        double* acc = &sp.sum[static_cast<std::size_t>(i) * 3];
-        acc[0] += L.r;
-        acc[1] += L.g;
-        acc[2] += L.b;
+        packet.n = 0;
     }
 
     const Scene& m_scene;

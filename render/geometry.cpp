@@ -335,6 +335,37 @@ bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) c
     return ray.tfar < 0;
 }
 
+void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax, int n,
+                            bool* occluded) const {
+    alignas(64) RTCRay16 ray;
+    alignas(64) int valid[kPacketSize];
+    for (int i = 0; i < kPacketSize; ++i) {
+        // As occluded(): a ray that is not finite is occluded without tracing.
+        const bool ok = i < n && finite(org[i]) && finite(dir[i]) && !std::isnan(tmax[i]);
+        valid[i] = ok ? -1 : 0;
+        const Vec3 o = ok ? org[i] : Vec3(), d = ok ? dir[i] : Vec3(0, 0, 1);
+        ray.org_x[i] = o.x;
+        ray.org_y[i] = o.y;
+        ray.org_z[i] = o.z;
+        ray.dir_x[i] = d.x;
+        ray.dir_y[i] = d.y;
+        ray.dir_z[i] = d.z;
+        ray.tnear[i] = 0;
+        ray.tfar[i] = ok ? tmax[i] : 0;
+        ray.time[i] = 0;
+        ray.mask[i] = 0xffffffffu;
+        ray.id[i] = 0;
+        ray.flags[i] = 0;
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    // Coherent rays, Embree's hint, but not through instances: Embree 3.13's coherent packet
+    // traversal of instances did not return (an occlusion packet on an instanced sphere).
+    if (instances.empty()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded16(valid, m_scene, &ctx, &ray);
+    for (int i = 0; i < n; ++i) occluded[i] = !valid[i] || ray.tfar[i] < 0;
+}
+
 std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, float tmin,
                                            float tmax) const {
     if (!finite(org) || !finite(dir) || std::isnan(tmin) || std::isnan(tmax)) return std::nullopt;
@@ -353,28 +384,73 @@ std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, flo
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    return surface_hit(org, dir, rh.ray.tfar, rh.hit);
+}
 
-    std::optional<SurfaceHit> hit(std::in_place);
-    SurfaceHit& h = *hit;
-    h.t = rh.ray.tfar;
-    if (rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
+void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
+                             std::optional<SurfaceHit>* hits) const {
+    alignas(64) RTCRayHit16 rh;
+    alignas(64) int valid[kPacketSize];
+    for (int i = 0; i < kPacketSize; ++i) {
+        valid[i] = i < n && finite(org[i]) && finite(dir[i]) ? -1 : 0;
+        const Vec3 o = valid[i] ? org[i] : Vec3(), d = valid[i] ? dir[i] : Vec3(0, 0, 1);
+        rh.ray.org_x[i] = o.x;
+        rh.ray.org_y[i] = o.y;
+        rh.ray.org_z[i] = o.z;
+        rh.ray.dir_x[i] = d.x;
+        rh.ray.dir_y[i] = d.y;
+        rh.ray.dir_z[i] = d.z;
+        rh.ray.tnear[i] = 0;
+        rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+        rh.ray.time[i] = 0;
+        rh.ray.mask[i] = 0xffffffffu;
+        rh.ray.id[i] = 0;
+        rh.ray.flags[i] = 0;
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    // As in occluded_packet.
+    if (instances.empty()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect16(valid, m_scene, &ctx, &rh);
+    for (int i = 0; i < n; ++i) {
+        hits[i].reset();
+        if (!valid[i] || rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
+        RTCHit h{};
+        h.Ng_x = rh.hit.Ng_x[i];
+        h.Ng_y = rh.hit.Ng_y[i];
+        h.Ng_z = rh.hit.Ng_z[i];
+        h.u = rh.hit.u[i];
+        h.v = rh.hit.v[i];
+        h.primID = rh.hit.primID[i];
+        h.geomID = rh.hit.geomID[i];
+        h.instID[0] = rh.hit.instID[0][i];
+        hits[i] = surface_hit(org[i], dir[i], rh.ray.tfar[i], h);
+    }
+}
+
+SurfaceHit Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit) const {
+    SurfaceHit h;
+    h.t = t;
+    if (hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
         h.instance = nullptr;
-        h.prim = primitives[rh.hit.geomID].get();
+        h.prim = primitives[hit.geomID].get();
         h.object_id = h.prim->id;
-        local_hit(org, dir, rh.hit, &h);
-        return hit;
+        local_hit(org, dir, hit, &h);
+        return h;
     }
     // In an instance: the hit is found in the object's space, then placed in the world.
-    const Instance& in = instances[rh.hit.instID[0] - primitives.size()];
+    const Instance& in = instances[hit.instID[0] - primitives.size()];
     h.instance = &in;
-    h.prim = objects[in.object].primitives[rh.hit.geomID].get();
-    h.object_id = in.first_id + rh.hit.geomID;
-    local_hit(in.to_object_point(org), in.to_object_vector(dir), rh.hit, &h);
+    h.prim = objects[in.object].primitives[hit.geomID].get();
+    h.object_id = in.first_id + hit.geomID;
+    local_hit(in.to_object_point(org), in.to_object_vector(dir), hit, &h);
     h.p = in.to_world_point(h.p);
     h.ns_object = h.ns;
     h.ng = normalize(in.to_world_normal(h.ng));
     h.ns = normalize(in.to_world_normal(h.ns));
-    return hit;
+    return h;
 }
 
 }  // namespace cmam::render

@@ -21,7 +21,8 @@ struct Tracer {
     const FootprintProducers& footprints;
     RayCounts* counts;
     Rng& rng;
-    CmamRowState* cmam = nullptr;  // the strip's CMAM caches
+    CmamRowState* cmam;              // the strip's CMAM caches
+    std::vector<ShadowRay>& shadow;  // shadow rays being traced (direct lighting's scratch)
 
     // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
     // over the ray differential's footprint when the ray carries one.
@@ -45,24 +46,6 @@ struct Tracer {
         if (h.prim->area_light < 0) return {};
         const Light& l = scene.lights[static_cast<std::size_t>(h.prim->area_light)];
         return l.two_sided || dot(h.ng, w) > 0 ? l.intensity : Rgb();
-    }
-
-    bool visible(const SurfaceHit& h, const Vec3& wi, float dist) {
-        if (counts) ++counts->shadow;
-        Vec3 o = offset_origin(h, wi);
-        float tmax = std::isinf(dist) ? std::numeric_limits<float>::infinity() : dist * (1 - 1e-4f);
-        return !scene.occluded(o, wi, 0, tmax);
-    }
-
-    // Whether the segment from the hit (offset along wi's side) to the point p on an area
-    // light is clear, short of the light's own surface by its ray epsilon.
-    bool visible_point(const SurfaceHit& h, const Vec3& wi, const Vec3& p) {
-        if (counts) ++counts->shadow;
-        Vec3 o = offset_origin(h, wi);
-        Vec3 d = p - o;
-        float len = length(d);
-        float tmax = len - ray_epsilon(p);
-        return tmax <= 0 || !scene.occluded(o, d / len, 0, tmax);
     }
 
     /// Light arriving at a shading point from one sample of a light: its direction, its
@@ -165,23 +148,65 @@ struct Tracer {
         return std::nullopt;
     }
 
-    Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
-        Rgb L{};
-        for (const Light& light : scene.lights) {
+    // The shadow rays of the light samples at h that could add light (neither the light's
+    // radiance nor the BSDF zero), appended to `out` light by light, sample by sample. A ray
+    // towards a point on an area light stops short of the light's own surface by its ray
+    // epsilon; a positional light's by a relative 1e-4.
+    void shadow_rays(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo,
+                     std::vector<ShadowRay>& out) {
+        for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+            const Light& light = scene.lights[l];
             // Lights that are sampled (infinite, area) take light.samples shadow rays, averaged.
-            Rgb sum{};
             for (int k = 0; k < light.samples; ++k) {
                 const std::optional<LightSample> ls = sample_light(light, h, wo);
                 if (!ls || ls->li.is_black()) continue;
-                Rgb fv = bsdf.f(wo, ls->wi);
+                const Rgb fv = bsdf.f(wo, ls->wi);
                 if (fv.is_black()) continue;
-                if (light.type == Light::Type::Area ? !visible_point(h, ls->wi, ls->target)
-                                                    : !visible(h, ls->wi, ls->dist))
-                    continue;
-                sum += fv * ls->li * (absdot(ls->wi, h.ns) / ls->pdf);
+                if (counts) ++counts->shadow;
+                ShadowRay& r = out.emplace_back();  // in place: no copy of a half-written ray
+                r.light = static_cast<int>(l);
+                r.contribution = fv * ls->li * (absdot(ls->wi, h.ns) / ls->pdf);
+                r.org = offset_origin(h, ls->wi);
+                if (light.type == Light::Type::Area) {
+                    const Vec3 d = ls->target - r.org;
+                    const float len = length(d);
+                    r.dir = d / len;
+                    r.tmax = len - ray_epsilon(ls->target);
+                    if (r.tmax <= 0) {  // the hit is on the light: nothing to trace
+                        r.traced = false;
+                        r.clear = true;
+                    }
+                } else {
+                    r.dir = ls->wi;
+                    r.tmax = std::isinf(ls->dist) ? std::numeric_limits<float>::infinity()
+                                                  : ls->dist * (1 - 1e-4f);
+                }
             }
-            L += light.samples == 1 ? sum : sum / float(light.samples);
         }
+    }
+
+    // Direct lighting from one hit's shadow rays (shadow_rays' order, `clear` set): each light's
+    // clear samples summed in order and averaged over its samples.
+    Rgb direct_from(const ShadowRay* r, std::size_t n) const {
+        Rgb L{};
+        std::size_t i = 0;
+        for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+            Rgb sum{};
+            for (; i < n && r[i].light == static_cast<int>(l); ++i)
+                if (r[i].clear) sum += r[i].contribution;
+            const int samples = scene.lights[l].samples;
+            L += samples == 1 ? sum : sum / float(samples);
+        }
+        return L;
+    }
+
+    // Direct lighting at h, its shadow rays traced one by one (in `shadow`, after what it holds).
+    Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
+        const std::size_t first = shadow.size();
+        shadow_rays(h, bsdf, wo, shadow);
+        for (std::size_t i = first; i < shadow.size(); ++i) trace_shadow_ray(scene, shadow[i]);
+        const Rgb L = direct_from(shadow.data() + first, shadow.size() - first);
+        shadow.resize(first);
         return L;
     }
 
@@ -210,20 +235,40 @@ struct Tracer {
         return *cur;
     }
 
-    /// A ray with the footprint state it carries.
-    struct Ray {
-        Vec3 org, dir;
-        RayFootprint fp;
+    using Ray = TracedRay;
+
+    /// A camera ray's radiance in parts, its first hit's direct light left to its shadow rays:
+    /// li's sum is what the hit emits, plus the direct light (when the BSDF has a non-specular
+    /// lobe), plus the reflected and transmitted children (above the depth limit), in that order.
+    struct Deferred {
+        bool pending = false;              // false: `radiance` is the ray's radiance
+        Rgb radiance;                      // pending: what the hit emits
+        bool lit = false;                  // the direct light is added
+        std::size_t first = 0, count = 0;  // the hit's shadow rays in `shadow`
+        bool children = false;
+        Rgb reflected, transmitted;
     };
 
-    Rgb li(Ray ray, int depth) {
+    // The radiance along `ray`. `first`: the ray's nearest hit when it was found already (a
+    // camera ray's, in a packet). `deferred`: the first hit's shadow rays are left in `shadow`,
+    // untraced, and the radiance in parts (everything else done, in li's order: the random
+    // numbers, texture lookups and CMAM cache entries are li's).
+    Rgb li(const Ray& camera_or_child, int depth, std::optional<SurfaceHit>* first = nullptr,
+           Deferred* deferred = nullptr) {
         // A ray that is not finite (a NaN or infinite index, texel or parameter upstream) has no
         // radiance: its sample is counted as non-finite and taken as black (FilmTracer).
-        if (!finite(ray.org) || !finite(ray.dir))
+        if (!finite(camera_or_child.org) || !finite(camera_or_child.dir))
             return Rgb(std::numeric_limits<float>::quiet_NaN());
+        // The ray, or past surfaces of material "none" its continuation (not copied otherwise).
+        const Ray* cur = &camera_or_child;
+        std::optional<Ray> through;
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
+            const Ray& ray = *cur;
             std::optional<SurfaceHit> hit =
-                scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity());
+                first
+                    ? std::move(*first)
+                    : scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity());
+            first = nullptr;
             if (!hit) return escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m =
@@ -250,8 +295,10 @@ struct Tracer {
             std::optional<Bsdf> made = make_bsdf(scene, chosen, h, ctx);
             if (!made) {
                 // Continue through: the footprint state moves to the hit point.
-                ray.org = offset_origin(h, ray.dir);
-                ray.fp = footprints.passed_through(ray.fp, at, h);
+                RayFootprint fp = footprints.passed_through(ray.fp, at, h);
+                const Vec3 org = offset_origin(h, ray.dir), dir = ray.dir;
+                through = Ray{org, dir, fp};
+                cur = &*through;
                 continue;
             }
             Bsdf& bsdf = *made;
@@ -263,6 +310,21 @@ struct Tracer {
             }
             if (aov) record_aov(ctx, h, bsdf);
             Rgb L = emitted(h, wo);
+            if (deferred) {
+                Deferred& d = *deferred;
+                d.pending = true;
+                d.radiance = L;
+                d.lit = bsdf.has_nonspecular();
+                d.first = shadow.size();
+                if (d.lit) shadow_rays(h, bsdf, wo, shadow);
+                d.count = shadow.size() - d.first;
+                d.children = depth + 1 < scene.max_depth;
+                if (d.children) {
+                    d.reflected = specular_reflect(ray, h, at, bsdf, wo, depth);
+                    d.transmitted = specular_transmit(ray, h, at, bsdf, wo, depth);
+                }
+                return {};
+            }
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
                 L += specular_reflect(ray, h, at, bsdf, wo, depth);
@@ -271,6 +333,18 @@ struct Tracer {
             return L;
         }
         return {};
+    }
+
+    // The radiance of a deferred ray once its shadow rays are traced: li's sum, in li's order.
+    Rgb finish(const Deferred& d) const {
+        if (!d.pending) return d.radiance;
+        Rgb L = d.radiance;
+        if (d.lit) L += direct_from(shadow.data() + d.first, d.count);
+        if (d.children) {
+            L += d.reflected;
+            L += d.transmitted;
+        }
+        return L;
     }
 
     Rgb spawn(const SurfaceHit& h, Ray next, int depth) {
@@ -386,10 +460,76 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
               const Vec3& dir, const RayFootprint& fp, uint64_t seed, RayCounts* counts,
               CmamRowState* cmam, Aov* aov) {
     Rng rng(seed);
-    Tracer t{scene, footprints, counts, rng, cmam};
+    std::vector<ShadowRay> shadow;
+    Tracer t{scene, footprints, counts, rng, cmam, shadow};
     t.aov = aov;
     if (counts) ++counts->camera;
     return t.li({org, dir, fp}, 0);
+}
+
+void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
+                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance) {
+    constexpr int N = Scene::kPacketSize;
+    n = std::clamp(n, 0, N);
+    Vec3 org[N], dir[N];
+    for (int k = 0; k < n; ++k) {
+        org[k] = paths[k].ray.org;
+        dir[k] = paths[k].ray.dir;
+    }
+    std::optional<SurfaceHit> hits[N];
+    scene.intersect_packet(org, dir, n, hits);
+
+    // Each sample traced in order, as trace_one would, but for its first hit's shadow rays.
+    Tracer::Deferred deferred[N];
+    shadow.clear();
+    for (int k = 0; k < n; ++k) {
+        const CameraPath& p = paths[k];
+        Rng rng(p.seed);
+        Tracer t{scene, footprints, p.counts, rng, cmam, shadow};
+        t.aov = p.aov;
+        if (p.counts) ++p.counts->camera;
+        const Rgb L = t.li(p.ray, 0, &hits[k], &deferred[k]);
+        if (!deferred[k].pending) deferred[k].radiance = L;
+    }
+
+    // The shadow rays towards each delta light in packets (from neighbouring points to one
+    // point or along one direction); those of sampled lights (area, infinite), which scatter,
+    // one by one.
+    for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+        const Light::Type type = scene.lights[l].type;
+        const bool packets = type != Light::Type::Area && type != Light::Type::Infinite;
+        std::size_t idx[N];
+        int m = 0;
+        auto flush = [&] {
+            Vec3 o[N], d[N];
+            float tmax[N];
+            bool occluded[N];
+            for (int i = 0; i < m; ++i) {
+                o[i] = shadow[idx[i]].org;
+                d[i] = shadow[idx[i]].dir;
+                tmax[i] = shadow[idx[i]].tmax;
+            }
+            scene.occluded_packet(o, d, tmax, m, occluded);
+            for (int i = 0; i < m; ++i) shadow[idx[i]].clear = !occluded[i];
+            m = 0;
+        };
+        for (std::size_t i = 0; i < shadow.size(); ++i) {
+            ShadowRay& r = shadow[i];
+            if (r.light != static_cast<int>(l) || !r.traced) continue;
+            if (!packets) {
+                trace_shadow_ray(scene, r);
+                continue;
+            }
+            idx[m++] = i;
+            if (m == N) flush();
+        }
+        if (m > 0) flush();
+    }
+
+    // Then each sample's sum.
+    Rng unused(0);
+    const Tracer sum{scene, footprints, nullptr, unused, cmam, shadow};
+    for (int k = 0; k < n; ++k) radiance[k] = sum.finish(deferred[k]);
 }
 
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,

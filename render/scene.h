@@ -322,12 +322,26 @@ class Scene {
     /// is never given to Embree: it hits nothing here and is occluded below.
     std::optional<SurfaceHit> intersect(const Vec3& org, const Vec3& dir, float tmin,
                                         float tmax) const;
+    /// The nearest hits of up to kPacketSize rays along org[i] + t dir[i], t in (0, infinity),
+    /// found together (Embree's packet traversal: a node's test is shared by the rays that reach
+    /// it, which pays for coherent rays such as a camera's). hits[i] is what intersect(org[i],
+    /// dir[i], 0, infinity) would give, not finite rays included.
+    static constexpr int kPacketSize = 16;
+    void intersect_packet(const Vec3* org, const Vec3* dir, int n,
+                          std::optional<SurfaceHit>* hits) const;
     /// True when anything lies along org + t dir, t in (tmin, tmax).
     bool occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const;
+    /// occluded(org[i], dir[i], 0, tmax[i]) into occluded[i] for up to kPacketSize rays, traced
+    /// together as one packet.
+    void occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax, int n,
+                         bool* occluded) const;
     RTCScene embree_scene() const { return m_scene; }
     std::size_t texture_memory_bytes() const;
 
   private:
+    // The surface hit of a ray from Embree's hit record and distance.
+    SurfaceHit surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit) const;
+
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
     std::vector<RTCScene> m_object_scenes;

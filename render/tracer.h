@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "render/footprint/footprint.h"
 #include "render/integrator.h"
@@ -64,6 +65,46 @@ inline uint64_t mix_seed(uint64_t a, uint64_t b) {
     z = (z ^ (z >> 33)) * 0xc4ceb9fe1a85ec53ull;
     return z ^ (z >> 33);
 }
+
+/// A shadow ray of one light sample at a hit, traced one by one or in packets: the segment
+/// org + t dir, t in (0, tmax), and what the sample adds to direct lighting when nothing lies
+/// along it (`clear`; set directly when there is nothing to trace, `traced` false).
+struct ShadowRay {
+    Vec3 org, dir;
+    float tmax = 0;
+    int light = 0;  // the light's index in Scene::lights
+    Rgb contribution;
+    bool traced = true;
+    bool clear = false;
+};
+
+/// Sets r.clear by tracing r (when it is to be traced).
+inline void trace_shadow_ray(const Scene& scene, ShadowRay& r) {
+    if (r.traced) r.clear = !scene.occluded(r.org, r.dir, 0, r.tmax);
+}
+
+/// A ray with the footprint state it carries.
+struct TracedRay {
+    Vec3 org, dir;
+    RayFootprint fp;
+};
+
+/// One camera sample as trace_packet takes it: its ray and random seed, and where its counts
+/// (may be null) and AOV sample (null: radiance) go.
+struct CameraPath {
+    TracedRay ray;
+    uint64_t seed = 0;
+    RayCounts* counts = nullptr;
+    Aov* aov = nullptr;
+};
+
+/// What trace_one gives for each of n <= Scene::kPacketSize camera samples, into radiance[i],
+/// the samples shaded in order, with their camera rays intersected as one packet and the shadow
+/// rays of their first hits towards each delta light (point, spot, distant, ...) traced in
+/// packets (coherent rays: Embree's packet traversal shares node tests between them). `shadow` is
+/// scratch, reused between calls.
+void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
+                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance);
 
 /// Radiance (or, with `aov`, the AOV sample) along one camera ray with footprint state `fp`;
 /// `counts` and `cmam` may be null.

@@ -14,7 +14,8 @@ Vec3 world_vector(const Camera& c, const Vec3& v) {
 
 CameraSteps camera_steps(const Camera& c) {
     return {world_vector(c, Vec3((c.screen[1] - c.screen[0]) / c.xres * c.tan_half_fov, 0, 0)),
-            world_vector(c, Vec3(0, -(c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov, 0))};
+            world_vector(c, Vec3(0, -(c.screen[3] - c.screen[2]) / c.yres * c.tan_half_fov, 0)),
+            world_vector(c, Vec3(c.screen[0] * c.tan_half_fov, c.screen[3] * c.tan_half_fov, 1))};
 }
 
 RayDifferential camera_differential(const Camera& c, float px, float py, float scale) {

@@ -4,6 +4,8 @@
 // reflection and refraction. Non-finite values or grazing hits drop the differentials.
 #pragma once
 
+#include <cmath>
+
 #include "render/scene.h"
 
 namespace cmam::render {
@@ -19,13 +21,50 @@ RayDifferential camera_differential(const Camera& camera, float px, float py, fl
 
 /// The camera's one-pixel steps of the unnormalised ray direction along x and y, in world space:
 /// the same for every ray, so a renderer computes them once (camera_differential's result is
-/// the same bit for bit).
+/// the same bit for bit). For the perspective camera the unnormalised direction through raster
+/// (px, py) is affine in them: corner + px right + py down.
 struct CameraSteps {
     Vec3 right, down;
+    Vec3 corner;  // the unnormalised direction through raster (0, 0)
 };
 CameraSteps camera_steps(const Camera& camera);
 RayDifferential camera_differential(const Camera& camera, const CameraSteps& steps, float px,
                                     float py, float scale);
+
+/// A camera ray and, for the perspective camera, 1/|d| of its unnormalised direction d (0 for the
+/// other cameras), which its differential needs.
+struct PrimaryRay {
+    Vec3 org, dir;
+    float inv_len = 0;
+};
+
+/// The ray through raster (px, py): for the perspective camera from the affine form (three
+/// multiply-adds a component and one normalisation, where generate_ray maps the raster position
+/// to the screen and through the camera's matrix), equal to generate_ray's to rounding; the other
+/// cameras' by generate_ray.
+inline PrimaryRay primary_ray(const Camera& c, const CameraSteps& s, float px, float py) {
+    if (c.orthographic || c.environment) {
+        const CameraRay r = c.generate_ray(px, py);
+        return {r.org, r.dir, 0};
+    }
+    const Vec3 d = s.corner + px * s.right + py * s.down;
+    const float inv_len = 1 / std::sqrt(dot(d, d));
+    const auto& m = c.world_from_camera;
+    return {Vec3(m[3], m[7], m[11]), d * inv_len, inv_len};
+}
+
+/// Camera differentials of a perspective ray from its unit direction n and 1/|d| (primary_ray):
+/// dn/dx = (right - (n.right) n) / |d|, likewise down, times `scale`; camera_differential's up to
+/// rounding, without recomputing the direction.
+inline RayDifferential camera_differential(const CameraSteps& s, const Vec3& n, float inv_len,
+                                           float scale) {
+    RayDifferential rd;
+    rd.valid = true;
+    const float k = inv_len * scale;
+    rd.dddx = (s.right - dot(n, s.right) * n) * k;
+    rd.dddy = (s.down - dot(n, s.down) * n) * k;
+    return rd;
+}
 
 /// Differential geometry at a hit: dP/dx, dP/dy and the (u,v) derivatives.
 struct HitDifferential {

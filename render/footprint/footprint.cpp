@@ -54,16 +54,28 @@ FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& c
 
 RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
                                             texture::RayTag tag, float to_stratum_x,
-                                            float to_stratum_y) const {
+                                            float to_stratum_y, float inv_len) const {
     RayFootprint r;
-    if (m_differentials)
-        r.diff = m_camera.environment ? environment_differential(m_camera, fx, fy, dir, m_scale)
-                                      : camera_differential(m_camera, m_steps, fx, fy, m_scale);
-    r.cone = m_camera_cone;
+    start_camera_ray(r, fx, fy, dir, to_stratum_x, to_stratum_y, inv_len);
     r.tag = tag;
+    return r;
+}
+
+void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir,
+                                          float to_stratum_x, float to_stratum_y,
+                                          float inv_len) const {
+    if (!m_differentials)
+        r.diff = {};
+    else if (m_camera.environment)
+        r.diff = environment_differential(m_camera, fx, fy, dir, m_scale);
+    else if (inv_len > 0)
+        r.diff = camera_differential(m_steps, dir, inv_len, m_scale);
+    else
+        r.diff = camera_differential(m_camera, m_steps, fx, fy, m_scale);
+    r.cone = m_camera_cone;
+    r.path = 1;
     r.to_stratum_x = to_stratum_x;
     r.to_stratum_y = to_stratum_y;
-    return r;
 }
 
 HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir,

@@ -70,9 +70,17 @@ class FootprintProducers {
     /// footprint by 1/sqrt(spp)).
     FootprintProducers(FootprintMethods methods, const Camera& camera, int spp);
 
-    /// The state of the camera ray through raster position (fx, fy), direction `dir`.
+    /// The state of the camera ray through raster position (fx, fy), direction `dir`; `inv_len`
+    /// is primary_ray's 1/|d| when the ray came from there (its differential then reuses the
+    /// direction), else 0.
     RayFootprint camera_ray(float fx, float fy, const Vec3& dir, texture::RayTag tag,
-                            float to_stratum_x, float to_stratum_y) const;
+                            float to_stratum_x, float to_stratum_y, float inv_len = 0) const;
+    /// The same written into `r` (every member but the tag, which is the caller's): a render
+    /// loop's slot, without a copy of the state.
+    void start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir, float to_stratum_x,
+                          float to_stratum_y, float inv_len) const;
+    /// The camera ray through raster position (fx, fy) (primary_ray with this render's steps).
+    PrimaryRay primary(float fx, float fy) const { return primary_ray(m_camera, m_steps, fx, fy); }
     /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`. Without `uv`
     /// (a hit whose shading reads no texture) only what the ray's children need: dP/dx, dP/dy.
     HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit,
