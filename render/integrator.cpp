@@ -1,5 +1,7 @@
 #include "render/integrator.h"
 
+#include <memory>
+
 #include "render/footprint/footprint.h"
 #include "render/shading.h"
 #include "render/tracer.h"
@@ -261,31 +263,38 @@ struct Tracer {
             return Rgb(std::numeric_limits<float>::quiet_NaN());
         // The ray, or past surfaces of material "none" its continuation (not copied otherwise).
         const Ray* cur = &camera_or_child;
-        std::optional<Ray> through;
+        std::unique_ptr<Ray> through;                // allocated only then: most rays need none
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             const Ray& ray = *cur;
-            std::optional<SurfaceHit> hit =
+            // The hit found already, or traced (each initialised in place, not copied).
+            std::optional<SurfaceHit> traced =
                 first
-                    ? std::move(*first)
+                    ? std::nullopt
                     : scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity());
+            std::optional<SurfaceHit>& hit = first ? *first : traced;
             first = nullptr;
             if (!hit) return escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-            TexContext ctx{h.u, h.v, h.p,
-                           // A hit whose shading reads no texture needs no (u,v) footprint;
-                           // the footprint AOV records it wherever it is.
-                           footprints.at_hit(ray.fp, ray.dir, h, aov || m.reads_textures()),
+            TexContext ctx{h.u,
+                           h.v,
+                           h.p,
+                           {},
                            counts && counts->count_lookups ? &counts->lookups : nullptr,
-                           h.object_id, cmam, nullptr};
+                           h.object_id,
+                           cmam,
+                           nullptr};
+            // A hit whose shading reads no texture needs no (u,v) footprint; the footprint AOV
+            // records it wherever it is.
+            footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, aov || m.reads_textures());
             const HitFootprint& at = ctx.footprints;
             const HitDifferential& hd = at.diff;
             if (counts && at.dropped) ++counts->dropped_differentials;
-            CmamRecord cmam_record;  // the footprint AOV of a CMAM texture
+            std::optional<CmamRecord> cmam_record;  // the footprint AOV of a CMAM texture
             if (aov && !aov->recorded && aov->kind == AovKind::Footprint &&
                 footprints.uses(FootprintMethod::Cmam))
-                ctx.cmam_record = record_cmam_of(m, &cmam_record);
+                ctx.cmam_record = record_cmam_of(m, &cmam_record.emplace());
             Vec3 wo = -ray.dir;
             const Material& chosen = pick_mixed(m, ctx);
             if (chosen.bump.node >= 0)  // pbrt-v3's bump map: the shading normal only
@@ -297,8 +306,9 @@ struct Tracer {
                 // Continue through: the footprint state moves to the hit point.
                 RayFootprint fp = footprints.passed_through(ray.fp, at, h);
                 const Vec3 org = offset_origin(h, ray.dir), dir = ray.dir;
-                through = Ray{org, dir, fp};
-                cur = &*through;
+                if (!through) through = std::make_unique<Ray>();
+                *through = Ray{org, dir, fp};
+                cur = through.get();
                 continue;
             }
             Bsdf& bsdf = *made;

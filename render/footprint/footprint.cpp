@@ -81,6 +81,12 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, c
 HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir,
                                         const SurfaceHit& hit, bool uv) const {
     HitFootprint f;
+    at_hit(f, ray, dir, hit, uv);
+    return f;
+}
+
+void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const Vec3& dir,
+                                const SurfaceHit& hit, bool uv) const {
     f.tag = ray.tag;
     f.path = ray.path;
     if (m_differentials) {
@@ -97,7 +103,7 @@ HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir
         } else
             f.dropped = ray.diff.valid;
     }
-    if (!uv) return f;
+    if (!uv) return;
     if (m_cones) {
         const float w = cone_uv_width(ray.cone, dir, hit);
         f.cone = {{w, 0}, {0, w}, true};
@@ -106,7 +112,6 @@ HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir
         const texture::Footprint ax = cone_uv_axes(ray.cone, dir, hit);
         f.cone_aniso = {ax.axis_a, ax.axis_b, ax.kind == texture::Footprint::Kind::Axes};
     }
-    return f;
 }
 
 namespace {

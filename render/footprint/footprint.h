@@ -85,6 +85,9 @@ class FootprintProducers {
     /// (a hit whose shading reads no texture) only what the ray's children need: dP/dx, dP/dy.
     HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit,
                         bool uv = true) const;
+    /// The same written into `f`, a default HitFootprint (a texture context's, without a copy).
+    void at_hit(HitFootprint& f, const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit,
+                bool uv) const;
     /// The child ray's state after a perfect reflection at `hit`.
     RayFootprint reflected(const RayFootprint& ray, const HitFootprint& at, const Vec3& dir,
                            const SurfaceHit& hit) const;
