@@ -153,7 +153,7 @@ void embree_error(void*, RTCError code, const char* str) {
 }
 
 // The hit on h.prim in the primitive's own space (the world, or an instance's object space).
-void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit* out) {
+void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, bool uv, SurfaceHit* out) {
     const Primitive& prim = *out->prim;
     SurfaceHit& h = *out;
     if (prim.kind == Primitive::Kind::Triangles) {
@@ -198,21 +198,16 @@ void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit* 
         double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
         for (double& x : p) x *= prim.radius / len;
         if (p[0] == 0 && p[1] == 0) p[0] = 1e-5 * prim.radius;
-        double phi = phi_of(p[0], p[1]);
-        double theta = std::acos(std::clamp(p[2] / prim.radius, -1.0, 1.0));
-        h.u = static_cast<float>(phi / prim.phi_max);
-        h.v = static_cast<float>((theta - prim.theta_zmin) / (prim.theta_zmax - prim.theta_zmin));
         n_obj = p;  // cross(dpdu, dpdv) points outwards
     } else {
         p[2] = prim.height;
-        double r = std::sqrt(p[0] * p[0] + p[1] * p[1]);
-        h.u = static_cast<float>(phi_of(p[0], p[1]) / prim.phi_max);
-        h.v = static_cast<float>((prim.radius - r) / (prim.radius - prim.inner_radius));
         n_obj = {0, 0, 1};
     }
     if (prim.flip)
         for (double& x : n_obj) x = -x;
     h.p_object = p;
+    h.uv_pending = true;
+    if (uv) h.compute_quadric_uv();
     h.p = to_vec(xform_point(prim.world_from_object, p));
     Vec3 n = normalize(to_vec(xform_normal(prim.object_from_world, n_obj)));
     h.ng = n;
@@ -220,6 +215,22 @@ void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit* 
 }
 
 }  // namespace
+
+void SurfaceHit::compute_quadric_uv() {
+    const Primitive& pr = *prim;
+    const D3& p = p_object;
+    if (pr.kind == Primitive::Kind::Sphere) {
+        double phi = phi_of(p[0], p[1]);
+        double theta = std::acos(std::clamp(p[2] / pr.radius, -1.0, 1.0));
+        u = static_cast<float>(phi / pr.phi_max);
+        v = static_cast<float>((theta - pr.theta_zmin) / (pr.theta_zmax - pr.theta_zmin));
+    } else {
+        double r = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        u = static_cast<float>(phi_of(p[0], p[1]) / pr.phi_max);
+        v = static_cast<float>((pr.radius - r) / (pr.radius - pr.inner_radius));
+    }
+    uv_pending = false;
+}
 
 Scene::Scene() {
 #ifdef CMAM_STD_THREADS
@@ -366,8 +377,8 @@ void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax,
     for (int i = 0; i < n; ++i) occluded[i] = !valid[i] || ray.tfar[i] < 0;
 }
 
-std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, float tmin,
-                                           float tmax) const {
+std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
+                                           bool uv) const {
     if (!finite(org) || !finite(dir) || std::isnan(tmin) || std::isnan(tmax)) return std::nullopt;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -384,11 +395,11 @@ std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, flo
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-    return surface_hit(org, dir, rh.ray.tfar, rh.hit);
+    return surface_hit(org, dir, rh.ray.tfar, rh.hit, uv);
 }
 
 void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
-                             std::optional<SurfaceHit>* hits) const {
+                             std::optional<SurfaceHit>* hits, bool uv) const {
     alignas(64) RTCRayHit16 rh;
     alignas(64) int valid[kPacketSize];
     for (int i = 0; i < kPacketSize; ++i) {
@@ -426,18 +437,19 @@ void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
         h.primID = rh.hit.primID[i];
         h.geomID = rh.hit.geomID[i];
         h.instID[0] = rh.hit.instID[0][i];
-        hits[i] = surface_hit(org[i], dir[i], rh.ray.tfar[i], h);
+        hits[i] = surface_hit(org[i], dir[i], rh.ray.tfar[i], h, uv);
     }
 }
 
-SurfaceHit Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit) const {
+SurfaceHit Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit,
+                              bool uv) const {
     SurfaceHit h;
     h.t = t;
     if (hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
         h.instance = nullptr;
         h.prim = primitives[hit.geomID].get();
         h.object_id = h.prim->id;
-        local_hit(org, dir, hit, &h);
+        local_hit(org, dir, hit, uv, &h);
         return h;
     }
     // In an instance: the hit is found in the object's space, then placed in the world.
@@ -445,7 +457,7 @@ SurfaceHit Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const R
     h.instance = &in;
     h.prim = objects[in.object].primitives[hit.geomID].get();
     h.object_id = in.first_id + hit.geomID;
-    local_hit(in.to_object_point(org), in.to_object_vector(dir), hit, &h);
+    local_hit(in.to_object_point(org), in.to_object_vector(dir), hit, uv, &h);
     h.p = in.to_world_point(h.p);
     h.ns_object = h.ns;
     h.ng = normalize(in.to_world_normal(h.ng));

@@ -268,15 +268,19 @@ struct Tracer {
             const Ray& ray = *cur;
             // The hit found already, or traced (each initialised in place, not copied).
             std::optional<SurfaceHit> traced =
-                first
-                    ? std::nullopt
-                    : scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity());
+                first ? std::nullopt
+                      : scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(),
+                                        false);
             std::optional<SurfaceHit>& hit = first ? *first : traced;
             first = nullptr;
             if (!hit) return escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
+            // A hit whose shading reads no texture needs no (u,v) (nor footprints in it below);
+            // the footprint AOV records it wherever it is.
+            const bool uv = aov || m.reads_textures();
+            if (uv) h.ensure_uv();
             TexContext ctx{h.u,
                            h.v,
                            h.p,
@@ -285,9 +289,7 @@ struct Tracer {
                            h.object_id,
                            cmam,
                            nullptr};
-            // A hit whose shading reads no texture needs no (u,v) footprint; the footprint AOV
-            // records it wherever it is.
-            footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, aov || m.reads_textures());
+            footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, uv);
             const HitFootprint& at = ctx.footprints;
             const HitDifferential& hd = at.diff;
             if (counts && at.dropped) ++counts->dropped_differentials;
@@ -487,7 +489,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         dir[k] = paths[k].ray.dir;
     }
     std::optional<SurfaceHit> hits[N];
-    scene.intersect_packet(org, dir, n, hits);
+    scene.intersect_packet(org, dir, n, hits, false);  // (u,v) as li needs them
 
     // Each sample traced in order, as trace_one would, but for its first hit's shadow rays.
     Tracer::Deferred deferred[N];

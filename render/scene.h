@@ -258,6 +258,14 @@ struct SurfaceHit {
     uint32_t triangle = 0;               // triangles: the triangle index
     float b1 = 0, b2 = 0;                // triangles: barycentrics of vertices 1 and 2
     std::array<double, 3> p_object{};    // quadrics: the hit in object space
+    bool uv_pending = false;             // quadrics: u, v not computed yet (ensure_uv)
+
+    /// Computes u and v when the hit was found without them (a quadric's cost an atan2 and an
+    /// acos, which a hit whose shading reads no texture does without).
+    void ensure_uv() {
+        if (uv_pending) compute_quadric_uv();
+    }
+    void compute_quadric_uv();
 
     /// Surface partial derivatives dP/du and dP/dv in world space.
     Partials partials() const;
@@ -320,15 +328,15 @@ class Scene {
     /// Nearest hit along org + t dir, t in (tmin, tmax); nothing when the ray hits nothing. A
     /// ray whose origin or direction is not finite (NaN or infinite parameters or texels upstream)
     /// is never given to Embree: it hits nothing here and is occluded below.
-    std::optional<SurfaceHit> intersect(const Vec3& org, const Vec3& dir, float tmin,
-                                        float tmax) const;
+    std::optional<SurfaceHit> intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
+                                        bool uv = true) const;
     /// The nearest hits of up to kPacketSize rays along org[i] + t dir[i], t in (0, infinity),
     /// found together (Embree's packet traversal: a node's test is shared by the rays that reach
     /// it, which pays for coherent rays such as a camera's). hits[i] is what intersect(org[i],
     /// dir[i], 0, infinity) would give, not finite rays included.
     static constexpr int kPacketSize = 16;
-    void intersect_packet(const Vec3* org, const Vec3* dir, int n,
-                          std::optional<SurfaceHit>* hits) const;
+    void intersect_packet(const Vec3* org, const Vec3* dir, int n, std::optional<SurfaceHit>* hits,
+                          bool uv = true) const;
     /// True when anything lies along org + t dir, t in (tmin, tmax).
     bool occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const;
     /// occluded(org[i], dir[i], 0, tmax[i]) into occluded[i] for up to kPacketSize rays, traced
@@ -340,7 +348,9 @@ class Scene {
 
   private:
     // The surface hit of a ray from Embree's hit record and distance.
-    SurfaceHit surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit) const;
+    // Without `uv` a quadric's u and v are left to SurfaceHit::ensure_uv.
+    SurfaceHit surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit,
+                           bool uv) const;
 
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;

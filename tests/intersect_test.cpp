@@ -115,3 +115,122 @@ TEST(Occlusion, ShadowRaysRespectTheirInterval) {
     EXPECT_FALSE(s->occluded(Vec3(0, 0, -5), Vec3(0, 0, 1), 0, 3.9f));
     EXPECT_FALSE(s->occluded(Vec3(0, 0, -5), Vec3(0, 1, 0), 0, 100));
 }
+
+// Packets of rays (the render loop's camera rays and shadow rays) give what the same rays give
+// one by one, through every kind of shape, inside and outside instances (Embree's coherent
+// packet traversal of an instanced sphere did not return), and for rays that are not finite.
+namespace {
+const char* kPacketWorld = R"(
+  Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point P" [-4 -4 0 4 -4 0 4 4 0 -4 4 0]
+      "point2 uv" [0 0 1 0 1 1 0 1]
+  AttributeBegin Translate 0 0 1 Shape "sphere" "float radius" 0.6 AttributeEnd
+  AttributeBegin Translate 1.5 0 0.5 Shape "disk" "float radius" 0.5 AttributeEnd
+  ObjectBegin "ball" Shape "sphere" "float radius" 0.4 ObjectEnd
+  AttributeBegin Translate -1.5 1 0.5 ObjectInstance "ball" AttributeEnd
+  AttributeBegin Translate -1.5 -1 0.5 Rotate 30 1 0 0 ObjectInstance "ball" AttributeEnd
+)";
+
+// Rays from above towards points around each shape (the sphere, the disk, the two instances,
+// the plane) and past the plane's edge, spread by `seed`; ray 5 has a NaN direction.
+void packet_rays(Vec3* org, Vec3* dir, int seed) {
+    const Vec3 aim[] = {Vec3(0, 0, 1),         Vec3(1.5f, 0, 0.5f), Vec3(-1.5f, 1, 0.5f),
+                        Vec3(-1.5f, -1, 0.5f), Vec3(2, 2.5f, 0),    Vec3(5, -5, 0)};
+    for (int i = 0; i < render::Scene::kPacketSize; ++i) {
+        org[i] = Vec3(0.3f * seed, -0.2f * seed, 6);
+        const float a = 0.7f * i + 1.3f * seed, r = 0.12f * ((i + seed) % 5);
+        const Vec3 target = aim[(i + seed) % 6] + Vec3(r * std::cos(a), r * std::sin(a), 0);
+        dir[i] = render::normalize(target - org[i]);
+    }
+    dir[5].y = std::numeric_limits<float>::quiet_NaN();
+}
+
+void expect_same_hit(const std::optional<SurfaceHit>& a, const std::optional<SurfaceHit>& b,
+                     int i) {
+    ASSERT_EQ(a.has_value(), b.has_value()) << "ray " << i;
+    if (!a) return;
+    EXPECT_EQ(a->t, b->t) << "ray " << i;
+    EXPECT_EQ(a->prim, b->prim) << "ray " << i;
+    EXPECT_EQ(a->instance, b->instance) << "ray " << i;
+    EXPECT_EQ(a->object_id, b->object_id) << "ray " << i;
+    EXPECT_EQ(a->u, b->u) << "ray " << i;
+    EXPECT_EQ(a->v, b->v) << "ray " << i;
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ((&a->p.x)[c], (&b->p.x)[c]) << "ray " << i;
+        EXPECT_EQ((&a->ns.x)[c], (&b->ns.x)[c]) << "ray " << i;
+        EXPECT_EQ((&a->ng.x)[c], (&b->ng.x)[c]) << "ray " << i;
+    }
+}
+}  // namespace
+
+TEST(Packets, IntersectPacketGivesTheSingleRaysHits) {
+    auto s = world(kPacketWorld);
+    constexpr int N = render::Scene::kPacketSize;
+    int hits = 0, quadrics = 0, instanced = 0;
+    for (int seed = 0; seed < 8; ++seed) {
+        Vec3 org[N], dir[N];
+        packet_rays(org, dir, seed);
+        for (int n : {N, 11}) {  // a full packet and a partial one
+            std::optional<SurfaceHit> packet[N];
+            s->intersect_packet(org, dir, n, packet);
+            for (int i = 0; i < n; ++i) {
+                const auto single =
+                    s->intersect(org[i], dir[i], 0, std::numeric_limits<float>::infinity());
+                expect_same_hit(packet[i], single, i);
+                hits += single.has_value();
+                quadrics += single && single->prim->kind != render::Primitive::Kind::Triangles;
+                instanced += single && single->instance;
+            }
+            EXPECT_FALSE(packet[5].has_value());  // the NaN ray
+        }
+    }
+    // The rays reach every kind of shape (else the comparison would prove little).
+    EXPECT_GT(hits, 100);
+    EXPECT_GT(quadrics, 10);
+    EXPECT_GT(instanced, 2);
+}
+
+TEST(Packets, OccludedPacketGivesTheSingleRaysAnswers) {
+    auto s = world(kPacketWorld);
+    constexpr int N = render::Scene::kPacketSize;
+    int blocked = 0, clear = 0;
+    for (int seed = 0; seed < 8; ++seed) {
+        Vec3 org[N], dir[N];
+        packet_rays(org, dir, seed);
+        float tmax[N];
+        for (int i = 0; i < N; ++i) tmax[i] = i % 3 == 0 ? 4.5f : 1e30f;  // some stop short
+        tmax[7] = std::numeric_limits<float>::quiet_NaN();
+        bool occluded[N];
+        s->occluded_packet(org, dir, tmax, N, occluded);
+        for (int i = 0; i < N; ++i) {
+            EXPECT_EQ(occluded[i], s->occluded(org[i], dir[i], 0, tmax[i])) << "ray " << i;
+            (occluded[i] ? blocked : clear) += 1;
+        }
+        EXPECT_TRUE(occluded[5]);  // not finite: occluded, as occluded() has it
+        EXPECT_TRUE(occluded[7]);
+    }
+    EXPECT_GT(blocked, 30);
+    EXPECT_GT(clear, 10);
+}
+
+// A quadric's (u,v) left for later and then computed equal the ones computed at once.
+TEST(Packets, QuadricUvOnDemandEqualsUvAtOnce) {
+    auto s = world(kPacketWorld);
+    int quadrics = 0;
+    for (int seed = 0; seed < 8; ++seed) {
+        Vec3 org[render::Scene::kPacketSize], dir[render::Scene::kPacketSize];
+        packet_rays(org, dir, seed);
+        for (int i = 0; i < render::Scene::kPacketSize; ++i) {
+            const auto now = s->intersect(org[i], dir[i], 0, 1e30f);
+            auto later = s->intersect(org[i], dir[i], 0, 1e30f, false);
+            ASSERT_EQ(now.has_value(), later.has_value());
+            if (!now) continue;
+            const bool quadric = now->prim->kind != render::Primitive::Kind::Triangles;
+            EXPECT_EQ(later->uv_pending, quadric);
+            quadrics += quadric;
+            later->ensure_uv();
+            EXPECT_FALSE(later->uv_pending);
+            expect_same_hit(later, now, i);
+        }
+    }
+    EXPECT_GT(quadrics, 10);
+}
