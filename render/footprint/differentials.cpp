@@ -45,17 +45,24 @@ RayDifferential camera_differential(const Camera& c, const CameraSteps& steps, f
 HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit,
                          bool uv) {
     HitDifferential h;
-    if (!ray.valid) return h;
+    transfer(ray, d, hit, uv, h);
+    return h;
+}
+
+void transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit, bool uv,
+              HitDifferential& h) {
+    h = {};
+    if (!ray.valid) return;
     const Vec3& n = hit.ng;
     const float dn = dot(d, n);
-    if (std::abs(dn) < 1e-6f) return h;  // grazing: the plane of the hit gives no footprint
+    if (std::abs(dn) < 1e-6f) return;  // grazing: the plane of the hit gives no footprint
     const float t = hit.t;
     Vec3 ox = ray.dodx + t * ray.dddx, oy = ray.dody + t * ray.dddy;
     h.dpdx = ox + (-dot(ox, n) / dn) * d;
     h.dpdy = oy + (-dot(oy, n) / dn) * d;
     if (!uv) {
         h.valid = finite(h.dpdx) && finite(h.dpdy);
-        return h;
+        return;
     }
     const auto [x, y] = hit.uv_offsets(h.dpdx, h.dpdy);
     h.dudx = x.du;
@@ -64,7 +71,6 @@ HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const Surfac
     h.dvdy = y.dv;
     h.valid = finite(h.dpdx) && finite(h.dpdy) && std::isfinite(h.dudx) && std::isfinite(h.dvdx) &&
               std::isfinite(h.dudy) && std::isfinite(h.dvdy);
-    return h;
 }
 
 RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,

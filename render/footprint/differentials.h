@@ -53,17 +53,17 @@ inline PrimaryRay primary_ray(const Camera& c, const CameraSteps& s, float px, f
     return {Vec3(m[3], m[7], m[11]), d * inv_len, inv_len};
 }
 
-/// Camera differentials of a perspective ray from its unit direction n and 1/|d| (primary_ray):
-/// dn/dx = (right - (n.right) n) / |d|, likewise down, times `scale`; camera_differential's up to
-/// rounding, without recomputing the direction.
-inline RayDifferential camera_differential(const CameraSteps& s, const Vec3& n, float inv_len,
-                                           float scale) {
-    RayDifferential rd;
-    rd.valid = true;
+/// Camera differentials of a perspective ray from its unit direction n and 1/|d| (primary_ray),
+/// into `rd`: dn/dx = (right - (n.right) n) / |d|, likewise down, times `scale`;
+/// camera_differential's up to rounding, without recomputing the direction.
+inline void camera_differential(const CameraSteps& s, const Vec3& n, float inv_len, float scale,
+                                RayDifferential& rd) {
     const float k = inv_len * scale;
+    rd.valid = true;
+    rd.dodx = {};
+    rd.dody = {};
     rd.dddx = (s.right - dot(n, s.right) * n) * k;
     rd.dddy = (s.down - dot(n, s.down) * n) * k;
-    return rd;
 }
 
 /// Differential geometry at a hit: dP/dx, dP/dy and the (u,v) derivatives.
@@ -78,6 +78,9 @@ struct HitDifferential {
 /// derivatives stay zero.
 HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit,
                          bool uv = true);
+/// The same written into `h` (a hit footprint's, without a copy).
+void transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit, bool uv,
+              HitDifferential& h);
 
 /// Differentials of the perfectly reflected ray wi = -wo + 2 (wo.n) n (n the shading normal).
 RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,

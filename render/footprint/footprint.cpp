@@ -68,8 +68,8 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, c
         r.diff = {};
     else if (m_camera.environment)
         r.diff = environment_differential(m_camera, fx, fy, dir, m_scale);
-    else if (inv_len > 0)
-        r.diff = camera_differential(m_steps, dir, inv_len, m_scale);
+    else if (inv_len > 0)  // written in place (a returned copy stalled on its stores)
+        camera_differential(m_steps, dir, inv_len, m_scale, r.diff);
     else
         r.diff = camera_differential(m_camera, m_steps, fx, fy, m_scale);
     r.cone = m_camera_cone;
@@ -90,7 +90,7 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
     f.tag = ray.tag;
     f.path = ray.path;
     if (m_differentials) {
-        f.diff = transfer(ray.diff, dir, hit, uv);
+        transfer(ray.diff, dir, hit, uv, f.diff);
         const HitDifferential& hd = f.diff;
         if (hd.valid) {
             f.dpdx = hd.dpdx;
