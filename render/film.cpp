@@ -172,15 +172,13 @@ class FilmTracer {
         const int col = sp.c0 + i, px = m_film.x0 + col, sample = sy * m_nx + sx;
         const float* j = &sp.jitter[(static_cast<std::size_t>(i) * m_spp + sample) * 2];
         const float fx = px + (sx + j[0]) / m_nx, fy = sp.py + (sy + j[1]) / m_ny;
-        const PrimaryRay ray = m_footprints.primary(fx, fy);
         packet.i[k] = i;
         packet.sample[k] = sample;
         packet.aov[k] = Aov{m_options.aov};
         CameraPath& p = packet.paths[k];
-        p.ray.org = ray.org;
-        p.ray.dir = ray.dir;
-        m_footprints.start_camera_ray(p.ray.fp, fx, fy, ray.dir, 0.5f - j[0], 0.5f - j[1],
-                                      ray.inv_len);
+        const float inv_len = m_footprints.primary(fx, fy, p.ray.org, p.ray.dir);
+        m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1],
+                                      inv_len);
         tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
         p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
         p.counts = i < sp.prime ? nullptr : &sp.counts;

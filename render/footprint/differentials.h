@@ -31,26 +31,30 @@ CameraSteps camera_steps(const Camera& camera);
 RayDifferential camera_differential(const Camera& camera, const CameraSteps& steps, float px,
                                     float py, float scale);
 
-/// A camera ray and, for the perspective camera, 1/|d| of its unnormalised direction d (0 for the
-/// other cameras), which its differential needs.
-struct PrimaryRay {
-    Vec3 org, dir;
-    float inv_len = 0;
-};
-
-/// The ray through raster (px, py): for the perspective camera from the affine form (three
-/// multiply-adds a component and one normalisation, where generate_ray maps the raster position
-/// to the screen and through the camera's matrix), equal to generate_ray's to rounding; the other
-/// cameras' by generate_ray.
-inline PrimaryRay primary_ray(const Camera& c, const CameraSteps& s, float px, float py) {
+/// The ray through raster (px, py) into `org` and `dir`, returning 1/|d| of its unnormalised
+/// direction d for the perspective camera (its differential needs it), else 0: for the
+/// perspective camera from the affine form (three multiply-adds a component and one
+/// normalisation, where generate_ray maps the raster position to the screen and through the
+/// camera's matrix), equal to generate_ray's to rounding; the other cameras' by generate_ray.
+/// Written in place: a returned ray copied on stalled on its stores.
+inline float primary_ray(const Camera& c, const CameraSteps& s, float px, float py, Vec3& org,
+                         Vec3& dir) {
     if (c.orthographic || c.environment) {
         const CameraRay r = c.generate_ray(px, py);
-        return {r.org, r.dir, 0};
+        org = r.org;
+        dir = r.dir;
+        return 0;
     }
     const Vec3 d = s.corner + px * s.right + py * s.down;
     const float inv_len = 1 / std::sqrt(dot(d, d));
     const auto& m = c.world_from_camera;
-    return {Vec3(m[3], m[7], m[11]), d * inv_len, inv_len};
+    org.x = m[3];
+    org.y = m[7];
+    org.z = m[11];
+    dir.x = d.x * inv_len;
+    dir.y = d.y * inv_len;
+    dir.z = d.z * inv_len;
+    return inv_len;
 }
 
 /// Camera differentials of a perspective ray from its unit direction n and 1/|d| (primary_ray),

@@ -80,7 +80,9 @@ class FootprintProducers {
     void start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir, float to_stratum_x,
                           float to_stratum_y, float inv_len) const;
     /// The camera ray through raster position (fx, fy) (primary_ray with this render's steps).
-    PrimaryRay primary(float fx, float fy) const { return primary_ray(m_camera, m_steps, fx, fy); }
+    float primary(float fx, float fy, Vec3& org, Vec3& dir) const {
+        return primary_ray(m_camera, m_steps, fx, fy, org, dir);
+    }
     /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`. Without `uv`
     /// (a hit whose shading reads no texture) only what the ray's children need: dP/dx, dP/dy.
     HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit,
