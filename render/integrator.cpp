@@ -480,7 +480,8 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
 }
 
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
-                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance) {
+                  int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance) {
+    std::vector<ShadowRay>& shadow = scratch.shadow;
     constexpr int N = Scene::kPacketSize;
     n = std::clamp(n, 0, N);
     Vec3 org[N], dir[N];
@@ -505,9 +506,20 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     }
 
     // The shadow rays towards each delta light in packets (from neighbouring points to one
-    // point or along one direction); those of sampled lights (area, infinite), which scatter,
-    // one by one.
-    for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+    // point or along one direction), light by light in the order they were made (a counting
+    // sort by light: one pass, however many lights); those of sampled lights (area, infinite),
+    // which scatter, one by one.
+    const std::size_t lights = scene.lights.size();
+    std::vector<std::size_t>& start = scratch.light_start;
+    std::vector<std::size_t>& order = scratch.by_light;
+    start.assign(lights + 1, 0);
+    for (const ShadowRay& r : shadow) ++start[static_cast<std::size_t>(r.light) + 1];
+    for (std::size_t l = 0; l < lights; ++l) start[l + 1] += start[l];
+    order.resize(shadow.size());
+    scratch.light_next.assign(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < shadow.size(); ++i)
+        order[scratch.light_next[static_cast<std::size_t>(shadow[i].light)]++] = i;
+    for (std::size_t l = 0; l < lights; ++l) {
         const Light::Type type = scene.lights[l].type;
         const bool packets = type != Light::Type::Area && type != Light::Type::Infinite;
         std::size_t idx[N];
@@ -525,14 +537,14 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
             for (int i = 0; i < m; ++i) shadow[idx[i]].clear = !occluded[i];
             m = 0;
         };
-        for (std::size_t i = 0; i < shadow.size(); ++i) {
-            ShadowRay& r = shadow[i];
-            if (r.light != static_cast<int>(l) || !r.traced) continue;
+        for (std::size_t k = start[l]; k < start[l + 1]; ++k) {
+            ShadowRay& r = shadow[order[k]];
+            if (!r.traced) continue;
             if (!packets) {
                 trace_shadow_ray(scene, r);
                 continue;
             }
-            idx[m++] = i;
+            idx[m++] = order[k];
             if (m == N) flush();
         }
         if (m > 0) flush();
