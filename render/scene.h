@@ -327,7 +327,8 @@ class Scene {
     void commit();
     /// Nearest hit along org + t dir, t in (tmin, tmax); nothing when the ray hits nothing. A
     /// ray whose origin or direction is not finite (NaN or infinite parameters or texels upstream)
-    /// is never given to Embree: it hits nothing here and is occluded below.
+    /// is never given to Embree: it hits nothing here and is occluded below. Without `uv` a
+    /// quadric's (u,v) is left to SurfaceHit::ensure_uv.
     std::optional<SurfaceHit> intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
                                         bool uv = true) const;
     /// The nearest hits of up to kPacketSize rays along org[i] + t dir[i], t in (0, infinity),

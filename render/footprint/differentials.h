@@ -36,7 +36,7 @@ RayDifferential camera_differential(const Camera& camera, const CameraSteps& ste
 /// perspective camera from the affine form (three multiply-adds a component and one
 /// normalisation, where generate_ray maps the raster position to the screen and through the
 /// camera's matrix), equal to generate_ray's to rounding; the other cameras' by generate_ray.
-/// Written in place: a returned ray copied on stalled on its stores.
+/// Written in place: a ray returned and then copied stalled on its stores.
 inline float primary_ray(const Camera& c, const CameraSteps& s, float px, float py, Vec3& org,
                          Vec3& dir) {
     if (c.orthographic || c.environment) {
