@@ -124,7 +124,7 @@ class FilmTracer {
         std::vector<uint64_t> seeds;
         std::vector<double> sum;  // 3 per pixel
         RayCounts counts;
-        PacketScratch scratch;  // trace_packet's lists
+        std::vector<ShadowRay> shadow;  // trace_packet's scratch
     };
 
     // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
@@ -189,7 +189,7 @@ class FilmTracer {
     void trace(Span& sp, Packet& packet, CmamRowState& cmam) const {
         if (packet.n == 0) return;
         Rgb radiance[Scene::kPacketSize];
-        trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.scratch, radiance);
+        trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.shadow, radiance);
         for (int k = 0; k < packet.n; ++k) {
             const int i = packet.i[k];
             Rgb L = radiance[k];

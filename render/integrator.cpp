@@ -480,8 +480,7 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
 }
 
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
-                  int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance) {
-    std::vector<ShadowRay>& shadow = scratch.shadow;
+                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance) {
     constexpr int N = Scene::kPacketSize;
     n = std::clamp(n, 0, N);
     Vec3 org[N], dir[N];
@@ -506,20 +505,15 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     }
 
     // The shadow rays towards each delta light in packets (from neighbouring points to one
-    // point or along one direction), light by light in the order they were made (a counting
-    // sort by light: one pass, however many lights); those of sampled lights (area, infinite),
-    // which scatter, one by one.
-    const std::size_t lights = scene.lights.size();
-    std::vector<std::size_t>& start = scratch.light_start;
-    std::vector<std::size_t>& order = scratch.by_light;
-    start.assign(lights + 1, 0);
-    for (const ShadowRay& r : shadow) ++start[static_cast<std::size_t>(r.light) + 1];
-    for (std::size_t l = 0; l < lights; ++l) start[l + 1] += start[l];
-    order.resize(shadow.size());
-    scratch.light_next.assign(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < shadow.size(); ++i)
-        order[scratch.light_next[static_cast<std::size_t>(shadow[i].light)]++] = i;
-    for (std::size_t l = 0; l < lights; ++l) {
+    // point or along one direction), light by light, sample by sample: each sample's rays are in
+    // light order already, so a cursor per sample walks them (one pass, however many lights).
+    // Those of sampled lights (area, infinite), which scatter, one by one.
+    std::size_t cursor[N], end[N];
+    for (int k = 0; k < n; ++k) {
+        cursor[k] = deferred[k].first;
+        end[k] = deferred[k].first + deferred[k].count;
+    }
+    for (std::size_t l = 0; l < scene.lights.size(); ++l) {
         const Light::Type type = scene.lights[l].type;
         const bool packets = type != Light::Type::Area && type != Light::Type::Infinite;
         std::size_t idx[N];
@@ -537,16 +531,18 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
             for (int i = 0; i < m; ++i) shadow[idx[i]].clear = !occluded[i];
             m = 0;
         };
-        for (std::size_t k = start[l]; k < start[l + 1]; ++k) {
-            ShadowRay& r = shadow[order[k]];
-            if (!r.traced) continue;
-            if (!packets) {
-                trace_shadow_ray(scene, r);
-                continue;
+        for (int k = 0; k < n; ++k)
+            for (; cursor[k] < end[k] && shadow[cursor[k]].light == static_cast<int>(l);
+                 ++cursor[k]) {
+                ShadowRay& r = shadow[cursor[k]];
+                if (!r.traced) continue;
+                if (!packets) {
+                    trace_shadow_ray(scene, r);
+                    continue;
+                }
+                idx[m++] = cursor[k];
+                if (m == N) flush();
             }
-            idx[m++] = order[k];
-            if (m == N) flush();
-        }
         if (m > 0) flush();
     }
 

@@ -98,18 +98,13 @@ struct CameraPath {
     Aov* aov = nullptr;
 };
 
-/// The lists trace_packet fills, kept between its calls (no allocation per packet).
-struct PacketScratch {
-    std::vector<ShadowRay> shadow;                               // the first hits' shadow rays
-    std::vector<std::size_t> light_start, light_next, by_light;  // their indices by light
-};
-
 /// What trace_one gives for each of n <= Scene::kPacketSize camera samples, into radiance[i],
 /// the samples shaded in order, with their camera rays intersected as one packet and the shadow
 /// rays of their first hits towards each delta light (point, spot, distant, ...) traced in
-/// packets (coherent rays: Embree's packet traversal shares node tests between them).
+/// packets (coherent rays: Embree's packet traversal shares node tests between them). `shadow`
+/// is scratch, reused between calls (no allocation per packet).
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
-                  int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance);
+                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance);
 
 /// Radiance (or, with `aov`, the AOV sample) along one camera ray with footprint state `fp`;
 /// `counts` and `cmam` may be null.
