@@ -346,6 +346,24 @@ bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) c
     return ray.tfar < 0;
 }
 
+namespace {
+// Lane i of a packet: the ray o + t d, t in (0, tfar).
+void set_lane(RTCRay16& r, int i, const Vec3& o, const Vec3& d, float tfar) {
+    r.org_x[i] = o.x;
+    r.org_y[i] = o.y;
+    r.org_z[i] = o.z;
+    r.dir_x[i] = d.x;
+    r.dir_y[i] = d.y;
+    r.dir_z[i] = d.z;
+    r.tnear[i] = 0;
+    r.tfar[i] = tfar;
+    r.time[i] = 0;
+    r.mask[i] = 0xffffffffu;
+    r.id[i] = 0;
+    r.flags[i] = 0;
+}
+}  // namespace
+
 void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax, int n,
                             bool* occluded) const {
     alignas(64) RTCRay16 ray;
@@ -354,19 +372,7 @@ void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax,
         // As occluded(): a ray that is not finite is occluded without tracing.
         const bool ok = i < n && finite(org[i]) && finite(dir[i]) && !std::isnan(tmax[i]);
         valid[i] = ok ? -1 : 0;
-        const Vec3 o = ok ? org[i] : Vec3(), d = ok ? dir[i] : Vec3(0, 0, 1);
-        ray.org_x[i] = o.x;
-        ray.org_y[i] = o.y;
-        ray.org_z[i] = o.z;
-        ray.dir_x[i] = d.x;
-        ray.dir_y[i] = d.y;
-        ray.dir_z[i] = d.z;
-        ray.tnear[i] = 0;
-        ray.tfar[i] = ok ? tmax[i] : 0;
-        ray.time[i] = 0;
-        ray.mask[i] = 0xffffffffu;
-        ray.id[i] = 0;
-        ray.flags[i] = 0;
+        set_lane(ray, i, ok ? org[i] : Vec3(), ok ? dir[i] : Vec3(0, 0, 1), ok ? tmax[i] : 0);
     }
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -404,19 +410,8 @@ void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
     alignas(64) int valid[kPacketSize];
     for (int i = 0; i < kPacketSize; ++i) {
         valid[i] = i < n && finite(org[i]) && finite(dir[i]) ? -1 : 0;
-        const Vec3 o = valid[i] ? org[i] : Vec3(), d = valid[i] ? dir[i] : Vec3(0, 0, 1);
-        rh.ray.org_x[i] = o.x;
-        rh.ray.org_y[i] = o.y;
-        rh.ray.org_z[i] = o.z;
-        rh.ray.dir_x[i] = d.x;
-        rh.ray.dir_y[i] = d.y;
-        rh.ray.dir_z[i] = d.z;
-        rh.ray.tnear[i] = 0;
-        rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-        rh.ray.time[i] = 0;
-        rh.ray.mask[i] = 0xffffffffu;
-        rh.ray.id[i] = 0;
-        rh.ray.flags[i] = 0;
+        set_lane(rh.ray, i, valid[i] ? org[i] : Vec3(), valid[i] ? dir[i] : Vec3(0, 0, 1),
+                 std::numeric_limits<float>::infinity());
         rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     }

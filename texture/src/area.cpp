@@ -670,6 +670,8 @@ __m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, d
         // taken from the clamped taps, so a point rounded onto the block's far edge still gets
         // that edge's texel (weight 1 on the tap's second texel).
         const __m128i ii = _mm_cvttps_epi32(vs), jj = _mm_cvttps_epi32(vt);
+        // (SSE2 has no 32-bit min and max; the 16-bit ones are exact for these small non-negative
+        // indices, whose upper halves are zero.)
         const __m128i ic = _mm_max_epi16(_mm_min_epi16(ii, hi_s), zero),
                       jc = _mm_max_epi16(_mm_min_epi16(jj, hi_t), zero);
         const __m128 fs = _mm_sub_ps(vs, _mm_cvtepi32_ps(ic)),
