@@ -156,13 +156,14 @@ struct Tracer {
     // epsilon; a positional light's by a relative 1e-4.
     void shadow_rays(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo,
                      std::vector<ShadowRay>& out) {
+        const Bsdf::Outgoing o = bsdf.outgoing(wo);
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
             // Lights that are sampled (infinite, area) take light.samples shadow rays, averaged.
             for (int k = 0; k < light.samples; ++k) {
                 const std::optional<LightSample> ls = sample_light(light, h, wo);
                 if (!ls || ls->li.is_black()) continue;
-                const Rgb fv = bsdf.f(wo, ls->wi);
+                const Rgb fv = bsdf.f(o, ls->wi);
                 if (fv.is_black()) continue;
                 if (counts) ++counts->shadow;
                 ShadowRay& r = out.emplace_back();  // in place: no copy of a half-written ray

@@ -279,6 +279,10 @@ struct SurfaceHit {
     /// once. The results equal the single calls' bit for bit.
     std::array<UvDelta, 2> uv_offsets(const Vec3& dp1, const Vec3& dp2) const;
     std::array<Vec3, 2> normal_offsets(const Vec3& dp1, const Vec3& dp2) const;
+    /// The same written into `o1`, `o2` (a returned pair, stored by the caller as two halves and
+    /// read back whole, stalled on its stores).
+    void uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const;
+    void normal_offsets(const Vec3& dp1, const Vec3& dp2, Vec3& o1, Vec3& o2) const;
 
     // The same in the primitive's own space (an instance's object space; else the world).
     Partials local_partials() const;

@@ -326,10 +326,23 @@ float roughness_to_alpha(float r) {
 
 }  // namespace
 
+Bsdf::Outgoing Bsdf::outgoing(const Vec3& wo_w) const {
+    Outgoing o;
+    o.local = frame.to_local(wo_w);
+    o.w_ng = dot(wo_w, ng);
+    o.lambda = has_glossy() ? tr_lambda(o.local, alpha) : 0;
+    return o;
+}
+
 Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
-    Vec3 wo = frame.to_local(wo_w), wi = frame.to_local(wi_w);
+    return f(outgoing(wo_w), wi_w);
+}
+
+Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
+    const Vec3& wo = o.local;
+    const Vec3 wi = frame.to_local(wi_w);
     if (wo.z == 0) return {};
-    bool reflect = dot(wi_w, ng) * dot(wo_w, ng) > 0;
+    bool reflect = dot(wi_w, ng) * o.w_ng > 0;
     if (!reflect) return {};  // no non-specular transmission lobes in the supported materials
     Rgb out{};
     if (has_diffuse()) {
@@ -364,7 +377,7 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
         if (cos_i != 0 && cos_o != 0 && (wh.x != 0 || wh.y != 0 || wh.z != 0)) {
             wh = normalize(wh);
             const float c = dot(wi, faceforward(wh, Vec3(0, 0, 1)));
-            float g = 1 / (1 + tr_lambda(wo, alpha) + tr_lambda(wi, alpha));
+            float g = 1 / (1 + o.lambda + tr_lambda(wi, alpha));
             const float common = tr_d(wh, alpha) * g / (4 * cos_i * cos_o);
             if (conductor) {
                 const float m = 1 - std::clamp(c, 0.0f, 1.0f), m5 = (m * m) * (m * m) * m;

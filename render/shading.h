@@ -78,6 +78,16 @@ struct Bsdf {
 
     /// BSDF value for world directions (pbrt-v3 BSDF::f: only non-specular lobes).
     Rgb f(const Vec3& wo, const Vec3& wi) const;
+
+    /// What f computes of the outgoing direction alone, computed once for a shading point's
+    /// light samples (f(out, wi) equals f(wo, wi) bit for bit).
+    struct Outgoing {
+        Vec3 local;    // in the shading frame
+        float w_ng;    // w . ng
+        float lambda;  // the microfacet lobe's Smith Lambda(wo) (glossy BSDFs only)
+    };
+    Outgoing outgoing(const Vec3& wo) const;
+    Rgb f(const Outgoing& wo, const Vec3& wi) const;
 };
 
 /// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose

@@ -271,12 +271,34 @@ std::array<UvDelta, 2> SurfaceHit::uv_offsets(const Vec3& dp1, const Vec3& dp2) 
 }
 
 std::array<Vec3, 2> SurfaceHit::normal_offsets(const Vec3& dp1, const Vec3& dp2) const {
-    if (!instance) return local_normal_offsets<2>({dp1, dp2});
+    std::array<Vec3, 2> out;
+    normal_offsets(dp1, dp2, out[0], out[1]);
+    return out;
+}
+
+void SurfaceHit::uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const {
+    const std::array<UvDelta, 2> d = instance
+                                         ? local_uv_offsets<2>({instance->to_object_vector(dp1),
+                                                                instance->to_object_vector(dp2)})
+                                         : local_uv_offsets<2>({dp1, dp2});
+    o1.du = d[0].du;
+    o1.dv = d[0].dv;
+    o2.du = d[1].du;
+    o2.dv = d[1].dv;
+}
+
+void SurfaceHit::normal_offsets(const Vec3& dp1, const Vec3& dp2, Vec3& o1, Vec3& o2) const {
+    if (!instance) {
+        const std::array<Vec3, 2> dn = local_normal_offsets<2>({dp1, dp2});
+        o1 = dn[0];
+        o2 = dn[1];
+        return;
+    }
     const std::array<Vec3, 2> dn =
         local_normal_offsets<2>({instance->to_object_vector(dp1), instance->to_object_vector(dp2)});
     const Vec3 n = instance->to_world_normal(ns_object);
-    return {unit_derivative(n, instance->to_world_normal(dn[0])),
-            unit_derivative(n, instance->to_world_normal(dn[1]))};
+    o1 = unit_derivative(n, instance->to_world_normal(dn[0]));
+    o2 = unit_derivative(n, instance->to_world_normal(dn[1]));
 }
 
 Vec3 SurfaceHit::normal_offset(const Vec3& dp) const {

@@ -64,7 +64,8 @@ void transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit, 
         h.valid = finite(h.dpdx) && finite(h.dpdy);
         return;
     }
-    const auto [x, y] = hit.uv_offsets(h.dpdx, h.dpdy);
+    UvDelta x, y;
+    hit.uv_offsets(h.dpdx, h.dpdy, x, y);
     h.dudx = x.du;
     h.dvdx = x.dv;
     h.dudy = y.du;
@@ -75,6 +76,14 @@ void transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit, 
 
 RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
                         const SurfaceHit& hit) {
+    if (!ray.valid || !hd.valid) return {};
+    Vec3 dnx, dny;
+    hit.normal_offsets(hd.dpdx, hd.dpdy, dnx, dny);
+    return reflect(ray, hd, d, hit, dnx, dny);
+}
+
+RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
+                        const SurfaceHit& hit, const Vec3& dnx, const Vec3& dny) {
     RayDifferential out;
     if (!ray.valid || !hd.valid) return out;
     const Vec3& n = hit.ns;
@@ -83,7 +92,6 @@ RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, c
         float ddn = dot(dd, n) + dot(d, dnrm);
         return dd - 2 * (dn * dnrm + ddn * n);
     };
-    const auto [dnx, dny] = hit.normal_offsets(hd.dpdx, hd.dpdy);
     out.dodx = hd.dpdx;
     out.dody = hd.dpdy;
     out.dddx = one(dnx, ray.dddx);
@@ -94,6 +102,14 @@ RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, c
 
 RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
                         const SurfaceHit& hit, float eta) {
+    if (!ray.valid || !hd.valid) return {};
+    Vec3 dnx, dny;
+    hit.normal_offsets(hd.dpdx, hd.dpdy, dnx, dny);
+    return refract(ray, hd, d, hit, eta, dnx, dny);
+}
+
+RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
+                        const SurfaceHit& hit, float eta, const Vec3& dnx, const Vec3& dny) {
     RayDifferential out;
     if (!ray.valid || !hd.valid) return out;
     // N oriented against D (D.N < 0), as is its derivative.
@@ -101,8 +117,8 @@ RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, c
     const Vec3 n = side * hit.ns;
     const float dn = dot(d, n);
     const float k = 1 - eta * eta * (1 - dn * dn);
-    if (k < 0) return reflect(ray, hd, d, hit);  // total internal reflection
-    const float tn = -std::sqrt(k);              // T.N
+    if (k < 0) return reflect(ray, hd, d, hit, dnx, dny);  // total internal reflection
+    const float tn = -std::sqrt(k);                        // T.N
     const float mu = eta * dn - tn;
     auto one = [&](const Vec3& dn_hit, const Vec3& dd) {
         Vec3 dnrm = side * dn_hit;
@@ -110,7 +126,6 @@ RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, c
         float dmu = (eta - eta * eta * dn / tn) * ddn;
         return eta * dd - (mu * dnrm + dmu * n);
     };
-    const auto [dnx, dny] = hit.normal_offsets(hd.dpdx, hd.dpdy);
     out.dodx = hd.dpdx;
     out.dody = hd.dpdy;
     out.dddx = one(dnx, ray.dddx);

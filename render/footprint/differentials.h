@@ -93,5 +93,11 @@ RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, c
 /// (total internal reflection falls back to reflection).
 RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
                         const SurfaceHit& hit, float eta);
+/// The same given the shading normal's derivatives along hd.dpdx and hd.dpdy
+/// (hit.normal_offsets), which a hit with both children computes once for the two.
+RayDifferential reflect(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
+                        const SurfaceHit& hit, const Vec3& dnx, const Vec3& dny);
+RayDifferential refract(const RayDifferential& ray, const HitDifferential& hd, const Vec3& d,
+                        const SurfaceHit& hit, float eta, const Vec3& dnx, const Vec3& dny);
 
 }  // namespace cmam::render

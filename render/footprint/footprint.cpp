@@ -115,6 +115,13 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
 }
 
 namespace {
+// The hit's normal derivatives, computed on first use (see HitFootprint::dn_ready).
+void ensure_normal_derivatives(const HitFootprint& at, const SurfaceHit& hit) {
+    if (at.dn_ready) return;
+    hit.normal_offsets(at.diff.dpdx, at.diff.dpdy, at.dndx, at.dndy);
+    at.dn_ready = true;
+}
+
 RayFootprint child_of(const RayFootprint& ray, uint64_t path) {
     RayFootprint c;
     c.tag = ray.tag;
@@ -129,7 +136,10 @@ RayFootprint child_of(const RayFootprint& ray, uint64_t path) {
 RayFootprint FootprintProducers::reflected(const RayFootprint& ray, const HitFootprint& at,
                                            const Vec3& dir, const SurfaceHit& hit) const {
     RayFootprint c = child_of(ray, ray.path * 2);
-    if (m_differentials) c.diff = reflect(ray.diff, at.diff, dir, hit);
+    if (m_differentials && ray.diff.valid && at.diff.valid) {
+        ensure_normal_derivatives(at, hit);
+        c.diff = reflect(ray.diff, at.diff, dir, hit, at.dndx, at.dndy);
+    }
     if (m_cones) c.cone = reflect_cone(ray.cone, dir, hit);
     return c;
 }
@@ -138,7 +148,10 @@ RayFootprint FootprintProducers::refracted(const RayFootprint& ray, const HitFoo
                                            const Vec3& dir, const SurfaceHit& hit,
                                            float eta) const {
     RayFootprint c = child_of(ray, ray.path * 2 + 1);
-    if (m_differentials) c.diff = refract(ray.diff, at.diff, dir, hit, eta);
+    if (m_differentials && ray.diff.valid && at.diff.valid) {
+        ensure_normal_derivatives(at, hit);
+        c.diff = refract(ray.diff, at.diff, dir, hit, eta, at.dndx, at.dndy);
+    }
     if (m_cones) c.cone = refract_cone(ray.cone, dir, hit, eta);
     return c;
 }

@@ -57,6 +57,10 @@ struct HitFootprint {
     texture::RayTag tag;  // the ray's tag at this depth
     uint64_t path = 1;
     bool dropped = false;  // the ray carried differentials, but they failed at this hit
+    // The shading normal's derivatives along dP/dx and dP/dy, computed by the first child
+    // (reflected or refracted) that needs them and kept for the other: a glass hit has both.
+    mutable bool dn_ready = false;
+    mutable Vec3 dndx, dndy;
 
     /// The footprint `method` gives here (None for point sampling and for the CMAM, which
     /// builds its own from its cache).
