@@ -360,7 +360,8 @@ struct Tracer {
         return L;
     }
 
-    Rgb spawn(const SurfaceHit& h, Ray next, int depth) {
+    // The child ray `next` (its direction and footprint set) leaves from h.
+    Rgb spawn(const SurfaceHit& h, Ray& next, int depth) {
         if (counts) ++counts->secondary;
         next.org = offset_origin(h, next.dir);
         return li(next, depth + 1);
@@ -375,7 +376,9 @@ struct Tracer {
         if (dot(wi, n) == 0) return {};
         float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
         if (fr == 0) return {};
-        Ray next{{}, wi, footprints.reflected(ray.fp, at, ray.dir, h)};
+        Ray next;  // its footprint written in place (a returned one was copied twice)
+        next.dir = wi;
+        footprints.reflected(next.fp, ray.fp, at, ray.dir, h);
         return b.kr * fr * spawn(h, next, depth);
     }
 
@@ -393,7 +396,9 @@ struct Tracer {
         float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};
-        Ray next{{}, wt, footprints.refracted(ray.fp, at, ray.dir, h, eta_i / eta_t)};
+        Ray next;
+        next.dir = wt;
+        footprints.refracted(next.fp, ray.fp, at, ray.dir, h, eta_i / eta_t);
         return b.kt * ft * spawn(h, next, depth);
     }
 

@@ -122,38 +122,51 @@ void ensure_normal_derivatives(const HitFootprint& at, const SurfaceHit& hit) {
     at.dn_ready = true;
 }
 
-RayFootprint child_of(const RayFootprint& ray, uint64_t path) {
-    RayFootprint c;
+// A child's state but for its differential and cone, written into `c`.
+void start_child(RayFootprint& c, const RayFootprint& ray, uint64_t path) {
     c.tag = ray.tag;
     ++c.tag.level;
     c.path = path;
     c.to_stratum_x = ray.to_stratum_x;
     c.to_stratum_y = ray.to_stratum_y;
-    return c;
 }
 }  // namespace
 
 RayFootprint FootprintProducers::reflected(const RayFootprint& ray, const HitFootprint& at,
                                            const Vec3& dir, const SurfaceHit& hit) const {
-    RayFootprint c = child_of(ray, ray.path * 2);
-    if (m_differentials && ray.diff.valid && at.diff.valid) {
-        ensure_normal_derivatives(at, hit);
-        c.diff = reflect(ray.diff, at.diff, dir, hit, at.dndx, at.dndy);
-    }
-    if (m_cones) c.cone = reflect_cone(ray.cone, dir, hit);
+    RayFootprint c;
+    reflected(c, ray, at, dir, hit);
     return c;
 }
 
 RayFootprint FootprintProducers::refracted(const RayFootprint& ray, const HitFootprint& at,
                                            const Vec3& dir, const SurfaceHit& hit,
                                            float eta) const {
-    RayFootprint c = child_of(ray, ray.path * 2 + 1);
+    RayFootprint c;
+    refracted(c, ray, at, dir, hit, eta);
+    return c;
+}
+
+void FootprintProducers::reflected(RayFootprint& c, const RayFootprint& ray, const HitFootprint& at,
+                                   const Vec3& dir, const SurfaceHit& hit) const {
+    start_child(c, ray, ray.path * 2);
+    c.diff = {};
+    if (m_differentials && ray.diff.valid && at.diff.valid) {
+        ensure_normal_derivatives(at, hit);
+        c.diff = reflect(ray.diff, at.diff, dir, hit, at.dndx, at.dndy);
+    }
+    c.cone = m_cones ? reflect_cone(ray.cone, dir, hit) : RayCone{};
+}
+
+void FootprintProducers::refracted(RayFootprint& c, const RayFootprint& ray, const HitFootprint& at,
+                                   const Vec3& dir, const SurfaceHit& hit, float eta) const {
+    start_child(c, ray, ray.path * 2 + 1);
+    c.diff = {};
     if (m_differentials && ray.diff.valid && at.diff.valid) {
         ensure_normal_derivatives(at, hit);
         c.diff = refract(ray.diff, at.diff, dir, hit, eta, at.dndx, at.dndy);
     }
-    if (m_cones) c.cone = refract_cone(ray.cone, dir, hit, eta);
-    return c;
+    c.cone = m_cones ? refract_cone(ray.cone, dir, hit, eta) : RayCone{};
 }
 
 RayFootprint FootprintProducers::passed_through(const RayFootprint& ray, const HitFootprint& at,

@@ -100,6 +100,11 @@ class FootprintProducers {
     /// The child ray's state after refraction at `hit`, relative index eta = n_i / n_t.
     RayFootprint refracted(const RayFootprint& ray, const HitFootprint& at, const Vec3& dir,
                            const SurfaceHit& hit, float eta) const;
+    /// The same written into `child` (a child ray's slot, without a copy of the state).
+    void reflected(RayFootprint& child, const RayFootprint& ray, const HitFootprint& at,
+                   const Vec3& dir, const SurfaceHit& hit) const;
+    void refracted(RayFootprint& child, const RayFootprint& ray, const HitFootprint& at,
+                   const Vec3& dir, const SurfaceHit& hit, float eta) const;
     /// The same ray's state after it passes through `hit` (a surface without a material).
     RayFootprint passed_through(const RayFootprint& ray, const HitFootprint& at,
                                 const SurfaceHit& hit) const;

@@ -151,15 +151,22 @@ inline int64_t floor_to_int(double x) {
 inline int64_t wrap_index(int64_t i, int64_t n, WrapMode mode) {
     if (i >= 0 && i < n) return i;
     switch (mode) {
-        case WrapMode::Repeat:
-            return ((i % n) + n) % n;
+        case WrapMode::Repeat: {
+            // A mask for power-of-two sizes (two's complement: exact for negative i too), else
+            // one division (a 64-bit one costs tens of cycles; a texture coordinate far off the
+            // base period, as on any tiled texture, takes this path on every lookup).
+            if ((n & (n - 1)) == 0) return i & (n - 1);
+            const int64_t r = i % n;
+            return r < 0 ? r + n : r;
+        }
         case WrapMode::Clamp:
             return i < 0 ? 0 : n - 1;
         case WrapMode::Black:
             return -1;
         case WrapMode::Mirror: {
-            int64_t period = 2 * n;
-            int64_t k = ((i % period) + period) % period;
+            const int64_t period = 2 * n;
+            int64_t k = i % period;
+            if (k < 0) k += period;
             return k < n ? k : period - 1 - k;
         }
     }
