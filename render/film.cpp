@@ -161,6 +161,9 @@ class FilmTracer {
     // the span and stratum sample = sy * nx + sx of each, their paths and AOV samples.
     struct Packet {
         int i[Scene::kPacketSize], sample[Scene::kPacketSize];
+        // Raster positions and offsets to the strata's centres, for the rays made together.
+        float fx[Scene::kPacketSize], fy[Scene::kPacketSize];
+        float to_stratum_x[Scene::kPacketSize], to_stratum_y[Scene::kPacketSize];
         CameraPath paths[Scene::kPacketSize];
         Aov aov[Scene::kPacketSize];
         int n = 0;
@@ -176,9 +179,16 @@ class FilmTracer {
         packet.sample[k] = sample;
         packet.aov[k] = Aov{m_options.aov};
         CameraPath& p = packet.paths[k];
-        const float inv_len = m_footprints.primary(fx, fy, p.ray.org, p.ray.dir);
-        m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1],
-                                      inv_len);
+        if (m_footprints.batches_camera_rays()) {  // made with the packet's others (trace)
+            packet.fx[k] = fx;
+            packet.fy[k] = fy;
+            packet.to_stratum_x[k] = 0.5f - j[0];
+            packet.to_stratum_y[k] = 0.5f - j[1];
+        } else {
+            const float inv_len = m_footprints.primary(fx, fy, p.ray.org, p.ray.dir);
+            m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1],
+                                          inv_len);
+        }
         tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
         p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
         p.counts = i < sp.prime ? nullptr : &sp.counts;
@@ -188,6 +198,15 @@ class FilmTracer {
     // Traces the packet's samples and adds each to its pixel, in order.
     void trace(Span& sp, Packet& packet, CmamRowState& cmam) const {
         if (packet.n == 0) return;
+        if (m_footprints.batches_camera_rays()) {
+            CameraRayBatch batch;
+            m_footprints.camera_rays(packet.fx, packet.fy, packet.n, batch);
+            for (int k = 0; k < packet.n; ++k) {
+                TracedRay& r = packet.paths[k].ray;
+                m_footprints.start_camera_ray(r.fp, r.org, r.dir, batch, k, packet.to_stratum_x[k],
+                                              packet.to_stratum_y[k]);
+            }
+        }
         Rgb radiance[Scene::kPacketSize];
         trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.shadow, radiance);
         for (int k = 0; k < packet.n; ++k) {

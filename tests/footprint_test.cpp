@@ -53,6 +53,43 @@ TEST(Differentials, TRd1CameraDerivativeAndFrontoParallelTransfer) {
     }
 }
 
+// The packet's camera rays, made four at a time (perspective_rays), against primary_ray and
+// camera_differential ray by ray: every component bit for bit, for every batch size up to 16
+// (whole groups of four and the rest), on an oblique camera with a non-square film.
+TEST(Differentials, CameraRaysMadeTogetherEqualOneByOne) {
+    auto s = test::scene_from(
+        "LookAt 0.3 1.6 -6  0.5 0.8 4  0.1 1 0 Camera \"perspective\" \"float fov\" 37 "
+        "Film \"image\" \"integer xresolution\" 641 \"integer yresolution\" 397 WorldBegin "
+        "WorldEnd");
+    const CameraSteps steps = camera_steps(s->camera);
+    const float scale = 0.25f;
+    uint32_t state = 12345;
+    auto next = [&state] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1u << 24);
+    };
+    for (int n = 1; n <= CameraRayBatch::kMax; ++n) {
+        float fx[CameraRayBatch::kMax], fy[CameraRayBatch::kMax];
+        for (int i = 0; i < n; ++i) {
+            fx[i] = next() * 641;
+            fy[i] = next() * 397;
+        }
+        CameraRayBatch batch;
+        perspective_rays(steps, fx, fy, n, scale, batch);
+        for (int i = 0; i < n; ++i) {
+            Vec3 org, dir;
+            const float inv_len = primary_ray(s->camera, steps, fx[i], fy[i], org, dir);
+            RayDifferential rd;
+            camera_differential(steps, dir, inv_len, scale, rd);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_EQ(batch.dir[c][i], dir[c]) << "n " << n << " ray " << i;
+                EXPECT_EQ(batch.dddx[c][i], rd.dddx[c]) << "n " << n << " ray " << i;
+                EXPECT_EQ(batch.dddy[c][i], rd.dddy[c]) << "n " << n << " ray " << i;
+            }
+        }
+    }
+}
+
 TEST(Differentials, UvDerivativesMatchFiniteDifferencesOnATiltedPlaneAndASphere) {
     for (const char* shape :
          {"Translate 0 0 10 Rotate 60 1 0 0 Shape \"trianglemesh\" \"point3 P\" [-8 -8 0  8 -8 0  "

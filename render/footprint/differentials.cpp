@@ -1,6 +1,11 @@
 #include "render/footprint/differentials.h"
 
+#include <algorithm>
 #include <cmath>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace cmam::render {
 
@@ -40,6 +45,62 @@ RayDifferential camera_differential(const Camera& c, const CameraSteps& steps, f
     rd.dddx = (dd * r - dot(d, r) * d) * (k * scale);
     rd.dddy = (dd * u - dot(d, u) * d) * (k * scale);
     return rd;
+}
+
+void perspective_rays(const CameraSteps& s, const float* fx, const float* fy, int n, float scale,
+                      CameraRayBatch& out) {
+    n = std::clamp(n, 0, CameraRayBatch::kMax);
+    int i = 0;
+#if defined(__SSE2__)
+    // Lane by lane: d = (corner + x right) + y down; 1 / sqrt((dx dx + dy dy) + dz dz); the
+    // direction d / |d| as d times that; k = inv_len scale; dD/dx = (right - (n . right) n) k.
+    const __m128 one = _mm_set1_ps(1), vscale = _mm_set1_ps(scale);
+    auto splat = [](const Vec3& v, __m128* o) {
+        o[0] = _mm_set1_ps(v.x);
+        o[1] = _mm_set1_ps(v.y);
+        o[2] = _mm_set1_ps(v.z);
+    };
+    __m128 corner[3], right[3], down[3];
+    splat(s.corner, corner);
+    splat(s.right, right);
+    splat(s.down, down);
+    auto dot4 = [](const __m128* a, const __m128* b) {
+        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])),
+                          _mm_mul_ps(a[2], b[2]));
+    };
+    for (; i + 4 <= n; i += 4) {
+        const __m128 x = _mm_loadu_ps(fx + i), y = _mm_loadu_ps(fy + i);
+        __m128 d[3];
+        for (int c = 0; c < 3; ++c)
+            d[c] =
+                _mm_add_ps(_mm_add_ps(corner[c], _mm_mul_ps(x, right[c])), _mm_mul_ps(y, down[c]));
+        const __m128 inv_len = _mm_div_ps(one, _mm_sqrt_ps(dot4(d, d)));
+        __m128 u[3];
+        for (int c = 0; c < 3; ++c) {
+            u[c] = _mm_mul_ps(d[c], inv_len);
+            _mm_store_ps(out.dir[c] + i, u[c]);
+        }
+        const __m128 k = _mm_mul_ps(inv_len, vscale);
+        const __m128 ur = dot4(u, right), ud = dot4(u, down);
+        for (int c = 0; c < 3; ++c) {
+            _mm_store_ps(out.dddx[c] + i,
+                         _mm_mul_ps(_mm_sub_ps(right[c], _mm_mul_ps(ur, u[c])), k));
+            _mm_store_ps(out.dddy[c] + i, _mm_mul_ps(_mm_sub_ps(down[c], _mm_mul_ps(ud, u[c])), k));
+        }
+    }
+#endif
+    for (; i < n; ++i) {  // the rest (and without SSE2): primary_ray's and the differential's own
+        const Vec3 d = s.corner + fx[i] * s.right + fy[i] * s.down;
+        const float inv_len = 1 / std::sqrt(dot(d, d));
+        const Vec3 u(d.x * inv_len, d.y * inv_len, d.z * inv_len);
+        RayDifferential rd;
+        camera_differential(s, u, inv_len, scale, rd);
+        for (int c = 0; c < 3; ++c) {
+            out.dir[c][i] = u[c];
+            out.dddx[c][i] = rd.dddx[c];
+            out.dddy[c][i] = rd.dddy[c];
+        }
+    }
 }
 
 HitDifferential transfer(const RayDifferential& ray, const Vec3& d, const SurfaceHit& hit,

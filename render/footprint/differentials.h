@@ -70,6 +70,20 @@ inline void camera_differential(const CameraSteps& s, const Vec3& n, float inv_l
     rd.dddy = (s.down - dot(n, s.down) * n) * k;
 }
 
+/// The perspective camera's rays through raster positions (fx[i], fy[i]), i < n <= 16, and
+/// their differentials, computed together: per ray the operations of primary_ray and of the
+/// camera_differential above in their order (the same values bit for bit), with SSE four rays
+/// an instruction. A sample's chain of a square root and two divisions is long, and one ray
+/// after another left most of it waiting; side by side the rays overlap.
+struct CameraRayBatch {
+    static constexpr int kMax = 16;
+    alignas(16) float dir[3][kMax];   // unit directions, per component
+    alignas(16) float dddx[3][kMax];  // dD/dx, dD/dy times the scale
+    alignas(16) float dddy[3][kMax];
+};
+void perspective_rays(const CameraSteps& s, const float* fx, const float* fy, int n, float scale,
+                      CameraRayBatch& out);
+
 /// Differential geometry at a hit: dP/dx, dP/dy and the (u,v) derivatives.
 struct HitDifferential {
     bool valid = false;

@@ -78,6 +78,27 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, c
     r.to_stratum_y = to_stratum_y;
 }
 
+void FootprintProducers::start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir,
+                                          const CameraRayBatch& batch, int i, float to_stratum_x,
+                                          float to_stratum_y) const {
+    const auto& m = m_camera.world_from_camera;
+    org = {m[3], m[7], m[11]};
+    dir = {batch.dir[0][i], batch.dir[1][i], batch.dir[2][i]};
+    if (m_differentials) {
+        r.diff.valid = true;
+        r.diff.dodx = {};
+        r.diff.dody = {};
+        r.diff.dddx = {batch.dddx[0][i], batch.dddx[1][i], batch.dddx[2][i]};
+        r.diff.dddy = {batch.dddy[0][i], batch.dddy[1][i], batch.dddy[2][i]};
+    } else {
+        r.diff = {};
+    }
+    r.cone = m_camera_cone;
+    r.path = 1;
+    r.to_stratum_x = to_stratum_x;
+    r.to_stratum_y = to_stratum_y;
+}
+
 HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir,
                                         const SurfaceHit& hit, bool uv) const {
     HitFootprint f;

@@ -87,6 +87,17 @@ class FootprintProducers {
     float primary(float fx, float fy, Vec3& org, Vec3& dir) const {
         return primary_ray(m_camera, m_steps, fx, fy, org, dir);
     }
+    /// Whether camera rays can be made together (camera_rays): the perspective camera's.
+    bool batches_camera_rays() const { return !m_camera.orthographic && !m_camera.environment; }
+    /// The perspective camera's rays through (fx[i], fy[i]), i < n <= 16, together
+    /// (perspective_rays); start_camera_ray then takes ray i from `batch`.
+    void camera_rays(const float* fx, const float* fy, int n, CameraRayBatch& batch) const {
+        perspective_rays(m_steps, fx, fy, n, m_scale, batch);
+    }
+    /// Ray i of `batch` into `org`, `dir` and `r` (every member of r but the tag): what primary
+    /// and the other start_camera_ray give for the same raster position, bit for bit.
+    void start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir, const CameraRayBatch& batch, int i,
+                          float to_stratum_x, float to_stratum_y) const;
     /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`. Without `uv`
     /// (a hit whose shading reads no texture) only what the ray's children need: dP/dx, dP/dy.
     HitFootprint at_hit(const RayFootprint& ray, const Vec3& dir, const SurfaceHit& hit,
