@@ -340,10 +340,11 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
 
 Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
-    const Vec3 wi = frame.to_local(wi_w);
     if (wo.z == 0) return {};
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
     if (!reflect) return {};  // no non-specular transmission lobes in the supported materials
+    if (on_b == 0 && !has_glossy()) return kd * kInvPi;  // Lambertian: wi's local frame unused
+    const Vec3 wi = frame.to_local(wi_w);
     Rgb out{};
     if (has_diffuse()) {
         if (on_b == 0) {
