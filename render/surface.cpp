@@ -277,10 +277,7 @@ std::array<Vec3, 2> SurfaceHit::normal_offsets(const Vec3& dp1, const Vec3& dp2)
 }
 
 void SurfaceHit::uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const {
-    const std::array<UvDelta, 2> d = instance
-                                         ? local_uv_offsets<2>({instance->to_object_vector(dp1),
-                                                                instance->to_object_vector(dp2)})
-                                         : local_uv_offsets<2>({dp1, dp2});
+    const std::array<UvDelta, 2> d = uv_offsets(dp1, dp2);
     o1.du = d[0].du;
     o1.dv = d[0].dv;
     o2.du = d[1].du;
