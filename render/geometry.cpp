@@ -385,7 +385,8 @@ void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax,
 
 std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, float tmin, float tmax,
                                            bool uv) const {
-    if (!finite(org) || !finite(dir) || std::isnan(tmin) || std::isnan(tmax)) return std::nullopt;
+    std::optional<SurfaceHit> out;  // every return is this one, constructed in the caller's slot
+    if (!finite(org) || !finite(dir) || std::isnan(tmin) || std::isnan(tmax)) return out;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};
@@ -400,8 +401,9 @@ std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, flo
     rh.ray.mask = 0xffffffffu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_scene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-    return surface_hit(org, dir, rh.ray.tfar, rh.hit, uv);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return out;
+    surface_hit(org, dir, rh.ray.tfar, rh.hit, uv, out.emplace());
+    return out;
 }
 
 void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
@@ -432,20 +434,19 @@ void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
         h.primID = rh.hit.primID[i];
         h.geomID = rh.hit.geomID[i];
         h.instID[0] = rh.hit.instID[0][i];
-        hits[i] = surface_hit(org[i], dir[i], rh.ray.tfar[i], h, uv);
+        surface_hit(org[i], dir[i], rh.ray.tfar[i], h, uv, hits[i].emplace());
     }
 }
 
-SurfaceHit Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit,
-                              bool uv) const {
-    SurfaceHit h;
+void Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit, bool uv,
+                        SurfaceHit& h) const {
     h.t = t;
     if (hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
         h.instance = nullptr;
         h.prim = primitives[hit.geomID].get();
         h.object_id = h.prim->id;
         local_hit(org, dir, hit, uv, &h);
-        return h;
+        return;
     }
     // In an instance: the hit is found in the object's space, then placed in the world.
     const Instance& in = instances[hit.instID[0] - primitives.size()];
@@ -457,7 +458,6 @@ SurfaceHit Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const R
     h.ns_object = h.ns;
     h.ng = normalize(in.to_world_normal(h.ng));
     h.ns = normalize(in.to_world_normal(h.ns));
-    return h;
 }
 
 }  // namespace cmam::render

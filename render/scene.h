@@ -352,10 +352,12 @@ class Scene {
     std::size_t texture_memory_bytes() const;
 
   private:
-    // The surface hit of a ray from Embree's hit record and distance.
-    // Without `uv` a quadric's u and v are left to SurfaceHit::ensure_uv.
-    SurfaceHit surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit,
-                           bool uv) const;
+    // The surface hit of a ray from Embree's hit record and distance, written into `h`, a
+    // default SurfaceHit in the caller's slot (a returned hit was copied there, and the copy
+    // waited on the stores that had just written it). Without `uv` a quadric's u and v are left
+    // to SurfaceHit::ensure_uv.
+    void surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit, bool uv,
+                     SurfaceHit& h) const;
 
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
