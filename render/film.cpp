@@ -184,10 +184,11 @@ class FilmTracer {
             packet.fy[k] = fy;
             packet.to_stratum_x[k] = 0.5f - j[0];
             packet.to_stratum_y[k] = 0.5f - j[1];
-        } else {
-            const float inv_len = m_footprints.primary(fx, fy, p.ray.org, p.ray.dir);
-            m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1],
-                                          inv_len);
+        } else {  // orthographic and environment cameras, one ray at a time
+            const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
+            p.ray.org = ray.org;
+            p.ray.dir = ray.dir;
+            m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1]);
         }
         tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
         p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);

@@ -53,9 +53,10 @@ TEST(Differentials, TRd1CameraDerivativeAndFrontoParallelTransfer) {
     }
 }
 
-// The packet's camera rays, made four at a time (perspective_rays), against primary_ray and
-// camera_differential ray by ray: every component bit for bit, for every batch size up to 16
-// (whole groups of four and the rest), on an oblique camera with a non-square film.
+// The packet's camera rays, made four at a time (perspective_rays), against
+// perspective_direction and camera_differential ray by ray: every component bit for bit, for every
+// batch size up to 16 (whole groups of four and the rest), on an oblique camera with a non-square
+// film.
 TEST(Differentials, CameraRaysMadeTogetherEqualOneByOne) {
     auto s = test::scene_from(
         "LookAt 0.3 1.6 -6  0.5 0.8 4  0.1 1 0 Camera \"perspective\" \"float fov\" 37 "
@@ -77,8 +78,8 @@ TEST(Differentials, CameraRaysMadeTogetherEqualOneByOne) {
         CameraRayBatch batch;
         perspective_rays(steps, fx, fy, n, scale, batch);
         for (int i = 0; i < n; ++i) {
-            Vec3 org, dir;
-            const float inv_len = primary_ray(s->camera, steps, fx[i], fy[i], org, dir);
+            Vec3 dir;
+            const float inv_len = perspective_direction(steps, fx[i], fy[i], dir);
             RayDifferential rd;
             camera_differential(steps, dir, inv_len, scale, rd);
             for (int c = 0; c < 3; ++c) {

@@ -89,10 +89,9 @@ void perspective_rays(const CameraSteps& s, const float* fx, const float* fy, in
         }
     }
 #endif
-    for (; i < n; ++i) {  // the rest (and without SSE2): primary_ray's and the differential's own
-        const Vec3 d = s.corner + fx[i] * s.right + fy[i] * s.down;
-        const float inv_len = 1 / std::sqrt(dot(d, d));
-        const Vec3 u(d.x * inv_len, d.y * inv_len, d.z * inv_len);
+    for (; i < n; ++i) {  // the rest (and without SSE2): the single ray's functions
+        Vec3 u;
+        const float inv_len = perspective_direction(s, fx[i], fy[i], u);
         RayDifferential rd;
         camera_differential(s, u, inv_len, scale, rd);
         for (int c = 0; c < 3; ++c) {

@@ -31,33 +31,22 @@ CameraSteps camera_steps(const Camera& camera);
 RayDifferential camera_differential(const Camera& camera, const CameraSteps& steps, float px,
                                     float py, float scale);
 
-/// The ray through raster (px, py) into `org` and `dir`, returning 1/|d| of its unnormalised
-/// direction d for the perspective camera (its differential needs it), else 0: for the
-/// perspective camera from the affine form (three multiply-adds a component and one
+/// The unit direction of the perspective camera's ray through raster (px, py) into `dir`, from
+/// the affine form corner + px right + py down (three multiply-adds a component and one
 /// normalisation, where generate_ray maps the raster position to the screen and through the
-/// camera's matrix), equal to generate_ray's to rounding; the other cameras' by generate_ray.
-/// Written in place: a ray returned and then copied stalled on its stores.
-inline float primary_ray(const Camera& c, const CameraSteps& s, float px, float py, Vec3& org,
-                         Vec3& dir) {
-    if (c.orthographic || c.environment) {
-        const CameraRay r = c.generate_ray(px, py);
-        org = r.org;
-        dir = r.dir;
-        return 0;
-    }
+/// camera's matrix; its direction to rounding), returning 1/|d| of the unnormalised direction d
+/// (the ray's differential needs it). The ray starts at the camera's origin.
+inline float perspective_direction(const CameraSteps& s, float px, float py, Vec3& dir) {
     const Vec3 d = s.corner + px * s.right + py * s.down;
     const float inv_len = 1 / std::sqrt(dot(d, d));
-    const auto& m = c.world_from_camera;
-    org.x = m[3];
-    org.y = m[7];
-    org.z = m[11];
     dir.x = d.x * inv_len;
     dir.y = d.y * inv_len;
     dir.z = d.z * inv_len;
     return inv_len;
 }
 
-/// Camera differentials of a perspective ray from its unit direction n and 1/|d| (primary_ray),
+/// Camera differentials of a perspective ray from its unit direction n and 1/|d|
+/// (perspective_direction),
 /// into `rd`: dn/dx = (right - (n.right) n) / |d|, likewise down, times `scale`;
 /// camera_differential's up to rounding, without recomputing the direction.
 inline void camera_differential(const CameraSteps& s, const Vec3& n, float inv_len, float scale,
@@ -71,9 +60,9 @@ inline void camera_differential(const CameraSteps& s, const Vec3& n, float inv_l
 }
 
 /// The perspective camera's rays through raster positions (fx[i], fy[i]), i < n <= 16, and
-/// their differentials, computed together: per ray the operations of primary_ray and of the
-/// camera_differential above in their order (the same values bit for bit), with SSE four rays
-/// an instruction. A sample's chain of a square root and two divisions is long, and one ray
+/// their differentials, computed together: per ray the operations of perspective_direction and
+/// of the camera_differential above in their order (the same values bit for bit), with SSE four
+/// rays an instruction. A sample's chain of a square root and two divisions is long, and one ray
 /// after another left most of it waiting; side by side the rays overlap.
 struct CameraRayBatch {
     static constexpr int kMax = 16;

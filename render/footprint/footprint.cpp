@@ -54,28 +54,30 @@ FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& c
 
 RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
                                             texture::RayTag tag, float to_stratum_x,
-                                            float to_stratum_y, float inv_len) const {
+                                            float to_stratum_y) const {
     RayFootprint r;
-    start_camera_ray(r, fx, fy, dir, to_stratum_x, to_stratum_y, inv_len);
+    start_camera_ray(r, fx, fy, dir, to_stratum_x, to_stratum_y);
     r.tag = tag;
     return r;
 }
 
-void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir,
-                                          float to_stratum_x, float to_stratum_y,
-                                          float inv_len) const {
-    if (!m_differentials)
-        r.diff = {};
-    else if (m_camera.environment)
-        r.diff = environment_differential(m_camera, fx, fy, dir, m_scale);
-    else if (inv_len > 0)  // written in place (a returned copy stalled on its stores)
-        camera_differential(m_steps, dir, inv_len, m_scale, r.diff);
-    else
-        r.diff = camera_differential(m_camera, m_steps, fx, fy, m_scale);
+void FootprintProducers::start_camera_state(RayFootprint& r, float to_stratum_x,
+                                            float to_stratum_y) const {
     r.cone = m_camera_cone;
     r.path = 1;
     r.to_stratum_x = to_stratum_x;
     r.to_stratum_y = to_stratum_y;
+}
+
+void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir,
+                                          float to_stratum_x, float to_stratum_y) const {
+    if (!m_differentials)
+        r.diff = {};
+    else if (m_camera.environment)
+        r.diff = environment_differential(m_camera, fx, fy, dir, m_scale);
+    else
+        r.diff = camera_differential(m_camera, m_steps, fx, fy, m_scale);
+    start_camera_state(r, to_stratum_x, to_stratum_y);
 }
 
 void FootprintProducers::start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir,
@@ -93,10 +95,7 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir,
     } else {
         r.diff = {};
     }
-    r.cone = m_camera_cone;
-    r.path = 1;
-    r.to_stratum_x = to_stratum_x;
-    r.to_stratum_y = to_stratum_y;
+    start_camera_state(r, to_stratum_x, to_stratum_y);
 }
 
 HitFootprint FootprintProducers::at_hit(const RayFootprint& ray, const Vec3& dir,

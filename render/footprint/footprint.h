@@ -74,19 +74,13 @@ class FootprintProducers {
     /// footprint by 1/sqrt(spp)).
     FootprintProducers(FootprintMethods methods, const Camera& camera, int spp);
 
-    /// The state of the camera ray through raster position (fx, fy), direction `dir`; `inv_len`
-    /// is primary_ray's 1/|d| when the ray came from there (its differential then reuses the
-    /// direction), else 0.
+    /// The state of the camera ray through raster position (fx, fy), direction `dir`.
     RayFootprint camera_ray(float fx, float fy, const Vec3& dir, texture::RayTag tag,
-                            float to_stratum_x, float to_stratum_y, float inv_len = 0) const;
+                            float to_stratum_x, float to_stratum_y) const;
     /// The same written into `r` (every member but the tag, which is the caller's): a render
     /// loop's slot, without a copy of the state.
     void start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir, float to_stratum_x,
-                          float to_stratum_y, float inv_len) const;
-    /// The camera ray through raster position (fx, fy) (primary_ray with this render's steps).
-    float primary(float fx, float fy, Vec3& org, Vec3& dir) const {
-        return primary_ray(m_camera, m_steps, fx, fy, org, dir);
-    }
+                          float to_stratum_y) const;
     /// Whether camera rays can be made together (camera_rays): the perspective camera's.
     bool batches_camera_rays() const { return !m_camera.orthographic && !m_camera.environment; }
     /// The perspective camera's rays through (fx[i], fy[i]), i < n <= 16, together
@@ -94,8 +88,9 @@ class FootprintProducers {
     void camera_rays(const float* fx, const float* fy, int n, CameraRayBatch& batch) const {
         perspective_rays(m_steps, fx, fy, n, m_scale, batch);
     }
-    /// Ray i of `batch` into `org`, `dir` and `r` (every member of r but the tag): what primary
-    /// and the other start_camera_ray give for the same raster position, bit for bit.
+    /// Ray i of `batch` into `org`, `dir` and `r` (every member of r but the tag): the camera's
+    /// origin and the single-ray functions' direction and differential (perspective_direction,
+    /// camera_differential) for the same raster position, bit for bit.
     void start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir, const CameraRayBatch& batch, int i,
                           float to_stratum_x, float to_stratum_y) const;
     /// The footprints at `hit` of a ray with state `ray` and unit direction `dir`. Without `uv`
@@ -123,6 +118,9 @@ class FootprintProducers {
     bool uses(FootprintMethod m) const { return m_methods.has(m); }
 
   private:
+    // What every camera ray's state has but its differential: the cone, the path, the offset.
+    void start_camera_state(RayFootprint& r, float to_stratum_x, float to_stratum_y) const;
+
     FootprintMethods m_methods;
     const Camera& m_camera;
     CameraSteps m_steps;    // the camera's one-pixel direction steps
