@@ -237,6 +237,28 @@ TEST(Mip, TrilinearLookupMatchesThePyramid) {
     }
 }
 
+TEST(Mip, TrilinearFromTheSquaredWidthMatchesTheWidth) {
+    // trilinear_width2 takes the level from width^2's exponent, with no square root: the same
+    // texels and weight as trilinear(width) up to the logarithm's last bit, on and either side
+    // of every power of two (where the root can round onto the next level), for magnification
+    // (level 0, lambda 0) and for a NaN width (bilinear at level 0, as trilinear()).
+    MipPyramid p(random_rgb(50, 37, 9));
+    std::vector<double> widths = {0.3, 1.0, std::nextafter(1.0, 2.0), 1e6};
+    for (int k = 0; k <= 7; ++k)
+        for (double d : {-1e-15, 0.0, 1e-15, 0.37}) widths.push_back(std::ldexp(1.0, k) * (1 + d));
+    for (double w : widths) {
+        double lambda = -1;
+        const Texel a = p.trilinear_width2(0.63, 0.21, w * w, &lambda),
+                    b = p.trilinear(0.63, 0.21, w);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 1e-6) << "width " << w;
+        EXPECT_NEAR(lambda, p.trilinear_lambda(w), 1e-12) << "width " << w;
+    }
+    double lambda = -1;
+    const Texel n = p.trilinear_width2(0.63, 0.21, std::nan(""), &lambda);
+    EXPECT_EQ(n[0], p.bilinear(0, 0.63, 0.21)[0]);
+    EXPECT_EQ(lambda, 0);
+}
+
 TEST(Mip, TrilinearIsContinuousAtLambdaOneAndLevelMonotonic) {
     MipPyramid p(tmip1());
     double below = p.trilinear(0.3, 0.6, 2 - 1e-9)[0], at = p.trilinear(0.3, 0.6, 2)[0];

@@ -28,13 +28,17 @@ std::string_view to_string(CmamSatMiss m) {
     return kCmamSatMissNames.name(m);
 }
 
-double cmam_width(Vec2d p0, const Vec2d* p, int matches) {
+double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches) {
     if (matches <= 0) return 0;
     const double du = p[0].u - p0.u, dv = p[0].v - p0.v;
-    if (matches == 1) return std::sqrt(du * du + dv * dv);
+    if (matches == 1) return du * du + dv * dv;
     const double lo_u = std::min({p0.u, p[0].u, p[1].u}), hi_u = std::max({p0.u, p[0].u, p[1].u}),
                  lo_v = std::min({p0.v, p[0].v, p[1].v}), hi_v = std::max({p0.v, p[0].v, p[1].v});
-    return std::sqrt((hi_u - lo_u) * (hi_u - lo_u) + (hi_v - lo_v) * (hi_v - lo_v));
+    return (hi_u - lo_u) * (hi_u - lo_u) + (hi_v - lo_v) * (hi_v - lo_v);
+}
+
+double cmam_width(Vec2d p0, const Vec2d* p, int matches) {
+    return std::sqrt(cmam_width_squared(p0, p, matches));
 }
 
 CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int matches,
@@ -159,7 +163,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     const bool in_range =
         std::abs(s0) < detail::kMaxTexelCoord && std::abs(t0) < detail::kMaxTexelCoord;
     cache.second_last = cache.last;
-    cache.last = {tag, s0, t0, in_range};
+    cache.last = {tag, s0, t0, in_range, u, v};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
     const CmamCache::Entry* above = nullptr;  // in the row buffer, which the lookup keeps
     if (o.two_d) {
@@ -298,7 +302,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         fp.point_count = 1 + std::min(matches, 2);
         fp.points[0] = {u, v};
         for (int k = 0; k + 1 < fp.point_count; ++k)
-            fp.points[k + 1] = {cached[k].s / W, cached[k].t / H};
+            fp.points[k + 1] = {cached[k].u, cached[k].v};  // s = u W exactly as cached
     }
     if (!info) return tex.lookup(u, v, fp, fo);
     const LookupResult filtered = tex.lookup_with_info(u, v, fp, fo);

@@ -158,20 +158,7 @@ Texel FilteredTexture::lookup_into(double u, double v, const Footprint& fp,
             }
             const MipPyramid& pyr = pyramid();
             double lambda = 0;
-            Texel t;
-            if (width2 > 1) {
-                // lambda = log2(width^2) / 2, with no square root. With width^2 = m 2^e
-                // (1 <= m < 2), lambda = (e + log2 m) / 2 lies in [floor(e/2), floor(e/2) + 1):
-                // the level comes from the exponent alone, so the texel reads need not wait
-                // for the logarithm; only the blend weight does.
-                const int l = detail::floor_log2(width2) >> 1;
-                lambda = 0.5 * std::log2(width2);
-                t = pyr.trilinear_levels(u, v, l,
-                                         static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));
-                lambda = std::min(lambda, double(pyr.levels() - 1));
-            } else {
-                t = pyr.bilinear(0, u, v);
-            }
+            const Texel t = pyr.trilinear_width2(u, v, width2, &lambda);
             if (info) {
                 info->width = std::sqrt(width2);
                 info->lambda = lambda;
@@ -249,17 +236,18 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
         opts.kind != FilterKind::Area) {  // MIP: the region's width is all it reads
         const Vec2d others[2] = {{fp.points[1].u * W, fp.points[1].v * H},
                                  {fp.points[2].u * W, fp.points[2].v * H}};
-        const double width = cmam_width({s0, t0}, others, matches);
+        // The width squared: its square root would delay the level (trilinear_width2).
+        const double width2 = cmam_width_squared({s0, t0}, others, matches);
         const MipPyramid& pyr = pyramid();
         if (info) {
-            const double lambda = pyr.trilinear_lambda(width);
+            const double width = std::sqrt(width2), lambda = pyr.trilinear_lambda(width);
             info->width = width;
             info->lambda = lambda;
             info->level_lo = static_cast<int>(std::floor(lambda));
             info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
             info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
         }
-        return pyr.trilinear(u, v, width);
+        return pyr.trilinear_width2(u, v, width2);
     }
     CmamCache::Entry cached[2];
     for (int k = 0; k < matches; ++k) {

@@ -123,6 +123,17 @@ Texel MipPyramid::trilinear(double u, double v, double width) const {
     return trilinear_levels(u, v, l, static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));
 }
 
+Texel MipPyramid::trilinear_width2(double u, double v, double width2, double* lambda_out) const {
+    if (lambda_out) *lambda_out = 0;
+    if (!(width2 > 1)) return bilinear(0, u, v);  // magnification (or NaN)
+    // With width2 = m 2^e (1 <= m < 2), lambda = (e + log2 m) / 2 lies in
+    // [floor(e/2), floor(e/2) + 1): the level is floor(e/2).
+    const int l = detail::floor_log2(width2) >> 1;
+    const double lambda = 0.5 * std::log2(width2);
+    if (lambda_out) *lambda_out = std::min(lambda, double(levels() - 1));
+    return trilinear_levels(u, v, l, static_cast<float>(std::clamp(lambda - l, 0.0, 1.0)));
+}
+
 double MipPyramid::trilinear_lambda(double width) const {
     return width > 1 ? std::min(std::log2(width), double(levels() - 1)) : 0;
 }

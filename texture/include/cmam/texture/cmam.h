@@ -81,8 +81,9 @@ struct CmamOptions {
 struct CmamCache {
     struct Entry {
         RayTag tag{};
-        double s = 0, t = 0;
+        double s = 0, t = 0;  // texels (u W, v H)
         bool valid = false;
+        double u = 0, v = 0;  // the texture coordinates s and t were made from
     };
     Entry last, second_last;
     // 2-D CMAM: this ID's and the previous ID's samples by sequence number (a row buffer).
@@ -133,6 +134,8 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
 /// `matches` matching samples p[0..]: the distance to the one, or the diagonal of the three
 /// samples' bounding box for two (0 for none).
 double cmam_width(Vec2d p0, const Vec2d* p, int matches);
+/// Its square (cmam_width() is the square root of exactly this).
+double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches);
 
 /// Region for the current sample p0 and the `matches` cached samples that match it
 /// (cached[0] is the most recent). Pure geometry, no texture access.

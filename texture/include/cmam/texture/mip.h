@@ -33,6 +33,11 @@ class MipPyramid {
     Texel trilinear(double u, double v, double width) const;
     /// The fractional level trilinear() reads for `width`: log2(width) clamped to [0, L-1].
     double trilinear_lambda(double width) const;
+    /// trilinear() for a footprint whose width squared is `width2` (lambda = log2(width2) / 2):
+    /// no square root, and the level comes from width2's binary exponent, so the texel reads
+    /// wait for neither the root nor the logarithm. `lambda`, when not null, receives the level
+    /// read, clamped to [0, L-1] (0 for magnification or NaN).
+    Texel trilinear_width2(double u, double v, double width2, double* lambda = nullptr) const;
     /// The same at a given level of detail `lambda` (log2 of the width in level-0 texels):
     /// lambda <= 0 (or NaN) is bilinear at level 0, lambda >= L-1 the coarsest level's mean.
     /// For callers that have the width squared: lambda = log2(width^2) / 2 needs no square root.
