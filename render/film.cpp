@@ -124,7 +124,7 @@ class FilmTracer {
         std::vector<uint64_t> seeds;
         std::vector<double> sum;  // 3 per pixel
         RayCounts counts;
-        std::vector<ShadowRay> shadow;  // trace_packet's scratch
+        PacketScratch scratch;  // trace_packet's
     };
 
     // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
@@ -209,7 +209,7 @@ class FilmTracer {
             }
         }
         Rgb radiance[Scene::kPacketSize];
-        trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.shadow, radiance);
+        trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.scratch, radiance);
         for (int k = 0; k < packet.n; ++k) {
             const int i = packet.i[k];
             Rgb L = radiance[k];

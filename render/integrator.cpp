@@ -240,24 +240,19 @@ struct Tracer {
 
     using Ray = TracedRay;
 
-    /// A camera ray's radiance in parts, its first hit's direct light left to its shadow rays:
-    /// li's sum is what the hit emits, plus the direct light (when the BSDF has a non-specular
-    /// lobe), plus the reflected and transmitted children (above the depth limit), in that order.
-    struct Deferred {
-        bool pending = false;              // false: `radiance` is the ray's radiance
-        Rgb radiance;                      // pending: what the hit emits
-        bool lit = false;                  // the direct light is added
-        std::size_t first = 0, count = 0;  // the hit's shadow rays in `shadow`
-        bool children = false;
-        Rgb reflected, transmitted;
-    };
+    // Deferred hits (trace_packet): where they are kept, and where the first hits' children
+    // rays are left untraced (two per first hit, reflected and transmitted).
+    std::vector<DeferredHit>* deferred_hits = nullptr;
+    Ray* made_rays = nullptr;
 
     // The radiance along `ray`. `first`: the ray's nearest hit when it was found already (a
-    // camera ray's, in a packet). `deferred`: the first hit's shadow rays are left in `shadow`,
-    // untraced, and the radiance in parts (everything else done, in li's order: the random
-    // numbers, texture lookups and CMAM cache entries are li's).
+    // camera ray's, in a packet). `deferred` (an index in deferred_hits): the hit's shadow rays
+    // are left in `shadow`, untraced, and its radiance kept in parts; a first hit's (depth 0)
+    // reflected and transmitted rays are made and left in made_rays, deeper hits' are traced on
+    // at once, deferred in turn. Everything else is done in li's order: the random numbers,
+    // texture lookups and CMAM cache entries are li's.
     Rgb li(const Ray& camera_or_child, int depth, std::optional<SurfaceHit>* first = nullptr,
-           Deferred* deferred = nullptr) {
+           int deferred = -1) {
         // A ray that is not finite (a NaN or infinite index, texel or parameter upstream) has no
         // radiance: its sample is counted as non-finite and taken as black (FilmTracer).
         if (!finite(camera_or_child.org) || !finite(camera_or_child.dir))
@@ -323,18 +318,19 @@ struct Tracer {
             }
             if (aov) record_aov(ctx, h, bsdf);
             Rgb L = emitted(h, wo);
-            if (deferred) {
-                Deferred& d = *deferred;
+            if (deferred >= 0) {
+                // (Children add deferred hits: `d` is not kept across them.)
+                DeferredHit& d = (*deferred_hits)[static_cast<std::size_t>(deferred)];
                 d.pending = true;
                 d.radiance = L;
                 d.lit = bsdf.has_nonspecular();
-                d.first = shadow.size();
+                d.first = d.cursor = shadow.size();
                 if (d.lit) shadow_rays(h, bsdf, wo, shadow);
                 d.count = shadow.size() - d.first;
                 d.children = depth + 1 < scene.max_depth;
                 if (d.children) {
-                    d.reflected = specular_reflect(ray, h, at, bsdf, wo, depth);
-                    d.transmitted = specular_transmit(ray, h, at, bsdf, wo, depth);
+                    specular_reflect(ray, h, at, bsdf, wo, depth, deferred);
+                    specular_transmit(ray, h, at, bsdf, wo, depth, deferred);
                 }
                 return {};
             }
@@ -348,27 +344,46 @@ struct Tracer {
         return {};
     }
 
-    // The radiance of a deferred ray once its shadow rays are traced: li's sum, in li's order.
-    Rgb finish(const Deferred& d) const {
+    // The radiance of a deferred hit once every shadow ray is traced: li's sum, in li's order.
+    Rgb finish(int index) const {
+        const DeferredHit& d = (*deferred_hits)[static_cast<std::size_t>(index)];
         if (!d.pending) return d.radiance;
         Rgb L = d.radiance;
         if (d.lit) L += direct_from(shadow.data() + d.first, d.count);
-        if (d.children) {
-            L += d.reflected;
-            L += d.transmitted;
-        }
+        if (d.children)
+            for (const DeferredHit::Child& c : d.child)
+                L += c.made ? c.weight * finish(c.hit) : Rgb();
         return L;
     }
 
-    // The child ray `next` (its direction and footprint set) leaves from h.
-    Rgb spawn(const SurfaceHit& h, Ray& next, int depth) {
-        if (counts) ++counts->secondary;
-        next.org = offset_origin(h, next.dir);
-        return li(next, depth + 1);
+    // The deferred hit of a ray traced from here on (li with `first` its hit, when found).
+    Rgb li_deferred(const Ray& ray, int depth, std::optional<SurfaceHit>* first, int index) {
+        const Rgb L = li(ray, depth, first, index);
+        DeferredHit& d = (*deferred_hits)[static_cast<std::size_t>(index)];
+        if (!d.pending) d.radiance = L;
+        return L;
     }
 
+    // The child ray `next` (its direction and footprint set) of a hit at `depth` leaves from h
+    // with `weight`: its weighted radiance, or with a deferred parent (`parent` >= 0) nothing,
+    // the child being kept as the parent's child `lobe` (0 reflected, 1 transmitted): made and
+    // left in made_rays at depth 0, a deferred hit traced on at once deeper.
+    Rgb spawn(const SurfaceHit& h, Ray& next, int depth, const Rgb& weight, int parent, int lobe) {
+        if (counts) ++counts->secondary;
+        next.org = offset_origin(h, next.dir);
+        if (parent < 0) return weight * li(next, depth + 1);
+        (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe] = {true, weight, -1};
+        if (depth == 0) return {};  // made_rays[2 parent + lobe] holds it
+        const int index = static_cast<int>(deferred_hits->size());
+        deferred_hits->emplace_back();
+        (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe].hit = index;
+        li_deferred(next, depth + 1, nullptr, index);
+        return {};
+    }
+
+    // The specular children: their weighted radiance, or with a deferred parent nothing (spawn).
     Rgb specular_reflect(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
-                         const Vec3& wo, int depth) {
+                         const Vec3& wo, int depth, int parent = -1) {
         if (b.kr.is_black()) return {};
         const Vec3& n = h.ns;
         float cos_o = dot(wo, n);
@@ -376,14 +391,15 @@ struct Tracer {
         if (dot(wi, n) == 0) return {};
         float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
         if (fr == 0) return {};
-        Ray next;  // its footprint written in place (a returned one was copied twice)
+        Ray own;  // its footprint written in place (a returned one was copied twice)
+        Ray& next = parent >= 0 && depth == 0 ? *std::construct_at(made_rays + 2 * parent) : own;
         next.dir = wi;
         footprints.reflected(next.fp, ray.fp, at, ray.dir, h);
-        return b.kr * fr * spawn(h, next, depth);
+        return spawn(h, next, depth, b.kr * fr, parent, 0);
     }
 
     Rgb specular_transmit(const Ray& ray, const SurfaceHit& h, const HitFootprint& at,
-                          const Bsdf& b, const Vec3& wo, int depth) {
+                          const Bsdf& b, const Vec3& wo, int depth, int parent = -1) {
         if (b.kt.is_black()) return {};
         const Vec3& n = h.ns;
         float cos_o = dot(wo, n);
@@ -396,10 +412,12 @@ struct Tracer {
         float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};
-        Ray next;
+        Ray own;
+        Ray& next =
+            parent >= 0 && depth == 0 ? *std::construct_at(made_rays + 2 * parent + 1) : own;
         next.dir = wt;
         footprints.refracted(next.fp, ray.fp, at, ray.dir, h, eta_i / eta_t);
-        return b.kt * ft * spawn(h, next, depth);
+        return spawn(h, next, depth, b.kt * ft, parent, 1);
     }
 
     // --- AOVs: the first non-specular hit along the specular chain ---
@@ -486,7 +504,7 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
 }
 
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
-                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance) {
+                  int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance) {
     constexpr int N = Scene::kPacketSize;
     n = std::clamp(n, 0, N);
     Vec3 org[N], dir[N];
@@ -497,28 +515,64 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     std::optional<SurfaceHit> hits[N];
     scene.intersect_packet(org, dir, n, hits, false);  // (u,v) as li needs them
 
-    // Each sample traced in order, as trace_one would, but for its first hit's shadow rays.
-    Tracer::Deferred deferred[N];
+    // Each sample's first hit shaded in order, as trace_one would, but with its shadow rays left
+    // for the packets below and its reflected and transmitted rays made but not traced. Sample
+    // k's first hit is deferred hit k; each sample's random numbers go on in its children.
+    std::vector<ShadowRay>& shadow = scratch.shadow;
+    std::vector<DeferredHit>& deferred = scratch.hits;
     shadow.clear();
-    for (int k = 0; k < n; ++k) {
+    deferred.clear();
+    deferred.resize(static_cast<std::size_t>(n));  // in place (a copied one waits on its stores)
+    union Made {  // constructed where a child is made (most hits make none)
+        Tracer::Ray ray[2 * N];
+        Made() {}
+    } made_storage;
+    Tracer::Ray* made = made_storage.ray;
+    std::optional<Rng> rng[N];
+    auto tracer = [&](int k) {
         const CameraPath& p = paths[k];
-        Rng rng(p.seed);
-        Tracer t{scene, footprints, p.counts, rng, cmam, shadow};
+        Tracer t{scene, footprints, p.counts, *rng[k], cmam, shadow};
         t.aov = p.aov;
-        if (p.counts) ++p.counts->camera;
-        const Rgb L = t.li(p.ray, 0, &hits[k], &deferred[k]);
-        if (!deferred[k].pending) deferred[k].radiance = L;
+        t.deferred_hits = &deferred;
+        t.made_rays = made;
+        return t;
+    };
+    for (int k = 0; k < n; ++k) {
+        rng[k].emplace(paths[k].seed);
+        if (paths[k].counts) ++paths[k].counts->camera;
+        tracer(k).li_deferred(paths[k].ray, 0, &hits[k], k);
+    }
+
+    // The first hits' children, sample by sample (reflected first), intersected in packets;
+    // then each sample's children traced on from those hits in that order, as li would have,
+    // their own hits deferred in turn (their children traced at once, depth first). Each CMAM
+    // cache sees its lookups in li's order: a cache is a path's, and a sample has one ray per
+    // path.
+    int kid[2 * N], nk = 0;  // made_rays' indices
+    for (int k = 0; k < n; ++k)
+        for (int lobe = 0; lobe < 2; ++lobe)
+            if (deferred[k].children && deferred[k].child[lobe].made) kid[nk++] = 2 * k + lobe;
+    std::optional<SurfaceHit> kid_hits[2 * N];
+    for (int i = 0; i < nk; i += N) {
+        const int m = std::min(N, nk - i);
+        for (int j = 0; j < m; ++j) {
+            org[j] = made[kid[i + j]].org;
+            dir[j] = made[kid[i + j]].dir;
+        }
+        scene.intersect_packet(org, dir, m, kid_hits + i, false);
+    }
+    for (int i = 0; i < nk; ++i) {
+        const int k = kid[i] / 2, lobe = kid[i] % 2;
+        const int index = static_cast<int>(deferred.size());
+        deferred.emplace_back();
+        deferred[static_cast<std::size_t>(k)].child[lobe].hit = index;
+        tracer(k).li_deferred(made[kid[i]], 1, &kid_hits[i], index);
     }
 
     // The shadow rays towards each delta light in packets (from neighbouring points to one
-    // point or along one direction), light by light, sample by sample: each sample's rays are in
-    // light order already, so a cursor per sample walks them (one pass, however many lights).
-    // Those of sampled lights (area, infinite), which scatter, one by one.
-    std::size_t cursor[N], end[N];
-    for (int k = 0; k < n; ++k) {
-        cursor[k] = deferred[k].first;
-        end[k] = deferred[k].first + deferred[k].count;
-    }
+    // point or along one direction), light by light, hit by hit: each hit's rays are in light
+    // order already, so a cursor per hit walks them (one pass, however many lights). Those of
+    // sampled lights (area, infinite), which scatter, one by one.
     for (std::size_t l = 0; l < scene.lights.size(); ++l) {
         const Light::Type type = scene.lights[l].type;
         const bool packets = type != Light::Type::Area && type != Light::Type::Infinite;
@@ -537,16 +591,16 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
             for (int i = 0; i < m; ++i) shadow[idx[i]].clear = !occluded[i];
             m = 0;
         };
-        for (int k = 0; k < n; ++k)
-            for (; cursor[k] < end[k] && shadow[cursor[k]].light == static_cast<int>(l);
-                 ++cursor[k]) {
-                ShadowRay& r = shadow[cursor[k]];
+        for (DeferredHit& h : deferred)
+            for (const std::size_t end = h.first + h.count;
+                 h.cursor < end && shadow[h.cursor].light == static_cast<int>(l); ++h.cursor) {
+                ShadowRay& r = shadow[h.cursor];
                 if (!r.traced) continue;
                 if (!packets) {
                     trace_shadow_ray(scene, r);
                     continue;
                 }
-                idx[m++] = cursor[k];
+                idx[m++] = h.cursor;
                 if (m == N) flush();
             }
         if (m > 0) flush();
@@ -554,8 +608,9 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
 
     // Then each sample's sum.
     Rng unused(0);
-    const Tracer sum{scene, footprints, nullptr, unused, cmam, shadow};
-    for (int k = 0; k < n; ++k) radiance[k] = sum.finish(deferred[k]);
+    Tracer sum{scene, footprints, nullptr, unused, cmam, shadow};
+    sum.deferred_hits = &deferred;
+    for (int k = 0; k < n; ++k) radiance[k] = sum.finish(k);
 }
 
 Rgb trace_radiance(const Scene& scene, const Vec3& org, const Vec3& dir, uint64_t seed,

@@ -89,6 +89,31 @@ struct TracedRay {
     RayFootprint fp;
 };
 
+/// A hit's radiance in parts, as trace_packet keeps it until every shadow ray of its packet is
+/// traced: what the hit emits, its direct light (its shadow rays), and its reflected and
+/// transmitted children's radiance (other deferred hits) times their weights, summed in li's
+/// order once those are known.
+struct DeferredHit {
+    bool pending = false;              // false: `radiance` is the ray's whole radiance
+    Rgb radiance;                      // pending: what the hit emits
+    bool lit = false;                  // the direct light is added
+    std::size_t first = 0, count = 0;  // the hit's shadow rays in the scratch's `shadow`
+    std::size_t cursor = 0;            // the next of them to trace (light by light)
+    bool children = false;             // under the depth limit: the children are added
+    struct Child {
+        bool made = false;  // false: no child along this lobe (its radiance is zero)
+        Rgb weight;         // the lobe's reflectance times its Fresnel term
+        int hit = -1;       // the child ray's deferred hit
+    };
+    Child child[2];  // reflected, transmitted
+};
+
+/// trace_packet's scratch, reused between calls (no allocation per packet once grown).
+struct PacketScratch {
+    std::vector<ShadowRay> shadow;
+    std::vector<DeferredHit> hits;
+};
+
 /// One camera sample as trace_packet takes it: its ray and random seed, and where its counts
 /// (may be null) and AOV sample (null: radiance) go.
 struct CameraPath {
@@ -99,12 +124,12 @@ struct CameraPath {
 };
 
 /// What trace_one gives for each of n <= Scene::kPacketSize camera samples, into radiance[i],
-/// the samples shaded in order, with their camera rays intersected as one packet and the shadow
-/// rays of their first hits towards each delta light (point, spot, distant, ...) traced in
-/// packets (coherent rays: Embree's packet traversal shares node tests between them). `shadow`
-/// is scratch, reused between calls (no allocation per packet).
+/// bit for bit: each sample shaded in trace_one's order, but with its camera ray, and then the
+/// first hits' reflected and transmitted rays, intersected as packets, and the shadow rays of
+/// every hit towards each delta light (point, spot, distant, ...) traced in packets (coherent
+/// rays: Embree's packet traversal shares node tests between them).
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
-                  int n, CmamRowState* cmam, std::vector<ShadowRay>& shadow, Rgb* radiance);
+                  int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance);
 
 /// Radiance (or, with `aov`, the AOV sample) along one camera ray with footprint state `fp`;
 /// `counts` and `cmam` may be null.
