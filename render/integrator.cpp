@@ -1,6 +1,7 @@
 #include "render/integrator.h"
 
 #include <memory>
+#include <type_traits>
 
 #include "render/footprint/footprint.h"
 #include "render/shading.h"
@@ -552,7 +553,15 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     for (int k = 0; k < n; ++k)
         for (int lobe = 0; lobe < 2; ++lobe)
             if (deferred[k].children && deferred[k].child[lobe].made) kid[nk++] = 2 * k + lobe;
-    std::optional<SurfaceHit> kid_hits[2 * N];
+    // Only the hits of the children made are constructed (most packets make none, and clearing
+    // 32 empty hits cost 2% of a render without mirrors or glass).
+    static_assert(std::is_trivially_destructible_v<std::optional<SurfaceHit>>);
+    union KidHits {
+        std::optional<SurfaceHit> hit[2 * N];
+        KidHits() {}
+    } kid_storage;
+    std::optional<SurfaceHit>* kid_hits = kid_storage.hit;
+    for (int i = 0; i < nk; ++i) std::construct_at(kid_hits + i);
     for (int i = 0; i < nk; i += N) {
         const int m = std::min(N, nk - i);
         for (int j = 0; j < m; ++j) {
