@@ -241,17 +241,18 @@ struct Tracer {
 
     using Ray = TracedRay;
 
-    // Deferred hits (trace_packet): where they are kept, and where the first hits' children
-    // rays are left untraced (two per first hit, reflected and transmitted).
+    // Deferred hits (trace_packet): where they are kept, and where a deferred hit's reflected
+    // and transmitted rays are made and left untraced (two slots, reflected and transmitted);
+    // without it they are traced at once, deferred in turn.
     std::vector<DeferredHit>* deferred_hits = nullptr;
     Ray* made_rays = nullptr;
 
     // The radiance along `ray`. `first`: the ray's nearest hit when it was found already (a
     // camera ray's, in a packet). `deferred` (an index in deferred_hits): the hit's shadow rays
-    // are left in `shadow`, untraced, and its radiance kept in parts; a first hit's (depth 0)
-    // reflected and transmitted rays are made and left in made_rays, deeper hits' are traced on
-    // at once, deferred in turn. Everything else is done in li's order: the random numbers,
-    // texture lookups and CMAM cache entries are li's.
+    // are left in `shadow`, untraced, and its radiance kept in parts; its reflected and
+    // transmitted rays are made and left in made_rays, or without made_rays traced on at once,
+    // deferred in turn. Everything else is done in li's order: the random numbers, texture
+    // lookups and CMAM cache entries are li's.
     Rgb li(const Ray& camera_or_child, int depth, std::optional<SurfaceHit>* first = nullptr,
            int deferred = -1) {
         // A ray that is not finite (a NaN or infinite index, texel or parameter upstream) has no
@@ -329,9 +330,11 @@ struct Tracer {
                 if (d.lit) shadow_rays(h, bsdf, wo, shadow);
                 d.count = shadow.size() - d.first;
                 d.children = depth + 1 < scene.max_depth;
-                if (d.children) {
-                    specular_reflect(ray, h, at, bsdf, wo, depth, deferred);
-                    specular_transmit(ray, h, at, bsdf, wo, depth, deferred);
+                if (d.children) {  // (a call each when a lobe is black cost 2% on matte scenes)
+                    if (!bsdf.kr.is_black())
+                        specular_reflect(ray, h, at, bsdf, wo, depth, deferred);
+                    if (!bsdf.kt.is_black())
+                        specular_transmit(ray, h, at, bsdf, wo, depth, deferred);
                 }
                 return {};
             }
@@ -368,13 +371,13 @@ struct Tracer {
     // The child ray `next` (its direction and footprint set) of a hit at `depth` leaves from h
     // with `weight`: its weighted radiance, or with a deferred parent (`parent` >= 0) nothing,
     // the child being kept as the parent's child `lobe` (0 reflected, 1 transmitted): made and
-    // left in made_rays at depth 0, a deferred hit traced on at once deeper.
+    // left in made_rays[lobe], or without made_rays a deferred hit traced on at once.
     Rgb spawn(const SurfaceHit& h, Ray& next, int depth, const Rgb& weight, int parent, int lobe) {
         if (counts) ++counts->secondary;
         next.org = offset_origin(h, next.dir);
         if (parent < 0) return weight * li(next, depth + 1);
         (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe] = {true, weight, -1};
-        if (depth == 0) return {};  // made_rays[2 parent + lobe] holds it
+        if (made_rays) return {};  // made_rays[lobe] holds it
         const int index = static_cast<int>(deferred_hits->size());
         deferred_hits->emplace_back();
         (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe].hit = index;
@@ -393,7 +396,7 @@ struct Tracer {
         float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
         if (fr == 0) return {};
         Ray own;  // its footprint written in place (a returned one was copied twice)
-        Ray& next = parent >= 0 && depth == 0 ? *std::construct_at(made_rays + 2 * parent) : own;
+        Ray& next = parent >= 0 && made_rays ? *std::construct_at(made_rays) : own;
         next.dir = wi;
         footprints.reflected(next.fp, ray.fp, at, ray.dir, h);
         return spawn(h, next, depth, b.kr * fr, parent, 0);
@@ -414,8 +417,7 @@ struct Tracer {
         ft *= (eta_i * eta_i) / (eta_t * eta_t);
         if (ft == 0 || dot(wt, n) == 0) return {};
         Ray own;
-        Ray& next =
-            parent >= 0 && depth == 0 ? *std::construct_at(made_rays + 2 * parent + 1) : own;
+        Ray& next = parent >= 0 && made_rays ? *std::construct_at(made_rays + 1) : own;
         next.dir = wt;
         footprints.refracted(next.fp, ray.fp, at, ray.dir, h, eta_i / eta_t);
         return spawn(h, next, depth, b.kt * ft, parent, 1);
@@ -525,57 +527,112 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     deferred.clear();
     deferred.resize(static_cast<std::size_t>(n));  // in place (a copied one waits on its stores)
     union Made {  // constructed where a child is made (most hits make none)
-        Tracer::Ray ray[2 * N];
+        Tracer::Ray ray[N][2];
         Made() {}
-    } made_storage;
-    Tracer::Ray* made = made_storage.ray;
+    } made;
     std::optional<Rng> rng[N];
-    auto tracer = [&](int k) {
+    // Sample k's tracer; `make`: the children of its deferred hits are made in made.ray[k].
+    auto tracer = [&](int k, bool make) {
         const CameraPath& p = paths[k];
         Tracer t{scene, footprints, p.counts, *rng[k], cmam, shadow};
         t.aov = p.aov;
         t.deferred_hits = &deferred;
-        t.made_rays = made;
+        t.made_rays = make ? made.ray[k] : nullptr;
         return t;
     };
     for (int k = 0; k < n; ++k) {
         rng[k].emplace(paths[k].seed);
         if (paths[k].counts) ++paths[k].counts->camera;
-        tracer(k).li_deferred(paths[k].ray, 0, &hits[k], k);
+        tracer(k, true).li_deferred(paths[k].ray, 0, &hits[k], k);
     }
-
-    // The first hits' children, sample by sample (reflected first), intersected in packets;
-    // then each sample's children traced on from those hits in that order, as li would have,
-    // their own hits deferred in turn (their children traced at once, depth first). Each CMAM
-    // cache sees its lookups in li's order: a cache is a path's, and a sample has one ray per
-    // path.
-    int kid[2 * N], nk = 0;  // made_rays' indices
-    for (int k = 0; k < n; ++k)
-        for (int lobe = 0; lobe < 2; ++lobe)
-            if (deferred[k].children && deferred[k].child[lobe].made) kid[nk++] = 2 * k + lobe;
-    // Only the hits of the children made are constructed (most packets make none, and clearing
-    // 32 empty hits cost 2% of a render without mirrors or glass).
+    // The hits of the children, constructed only for those made (most packets make none, and
+    // clearing 16 or 32 empty hits cost 2% of a render without mirrors or glass).
     static_assert(std::is_trivially_destructible_v<std::optional<SurfaceHit>>);
     union KidHits {
         std::optional<SurfaceHit> hit[2 * N];
         KidHits() {}
     } kid_storage;
     std::optional<SurfaceHit>* kid_hits = kid_storage.hit;
-    for (int i = 0; i < nk; ++i) std::construct_at(kid_hits + i);
-    for (int i = 0; i < nk; i += N) {
-        const int m = std::min(N, nk - i);
-        for (int j = 0; j < m; ++j) {
-            org[j] = made[kid[i + j]].org;
-            dir[j] = made[kid[i + j]].dir;
+    // Intersects rays ray(0..m-1) in packets into kid_hits.
+    auto intersect = [&](int m, auto&& ray) {
+        for (int i = 0; i < m; ++i) std::construct_at(kid_hits + i);
+        for (int i = 0; i < m; i += N) {
+            const int c = std::min(N, m - i);
+            for (int j = 0; j < c; ++j) {
+                org[j] = ray(i + j).org;
+                dir[j] = ray(i + j).dir;
+            }
+            scene.intersect_packet(org, dir, c, kid_hits + i, false);
         }
-        scene.intersect_packet(org, dir, m, kid_hits + i, false);
-    }
-    for (int i = 0; i < nk; ++i) {
-        const int k = kid[i] / 2, lobe = kid[i] % 2;
+    };
+    // A new deferred hit for child `lobe` of deferred hit `parent`.
+    auto child_hit = [&](int parent, int lobe) {
         const int index = static_cast<int>(deferred.size());
         deferred.emplace_back();
-        deferred[static_cast<std::size_t>(k)].child[lobe].hit = index;
-        tracer(k).li_deferred(made[kid[i]], 1, &kid_hits[i], index);
+        deferred[static_cast<std::size_t>(parent)].child[lobe].hit = index;
+        return index;
+    };
+    auto made_child = [&](int hit, int lobe) {
+        const DeferredHit& d = deferred[static_cast<std::size_t>(hit)];
+        return d.children && d.child[lobe].made;
+    };
+
+    if (!footprints.uses(FootprintMethod::Cmam)) {
+        // The samples' paths in lock step, each depth first as li traces it: each sample's
+        // rays wait on its own stack (a hit's transmitted ray below its reflected one, so the
+        // reflected ray's whole subtree comes first), and each step takes the top ray of every
+        // sample's stack, intersects them as one packet, then shades their hits in sample order,
+        // whose children go on the stacks. Every sample's hits are shaded in li's order, so its
+        // random numbers are a single ray's; nothing else depends on the order across samples
+        // (the CMAM's caches would: see below).
+        std::vector<PendingRay>* stack = scratch.pending;
+        auto push_children = [&](int k, int hit, int depth) {
+            for (int lobe = 1; lobe >= 0; --lobe)
+                if (made_child(hit, lobe))
+                    stack[k].push_back({made.ray[k][lobe], depth + 1, child_hit(hit, lobe)});
+        };
+        for (int k = 0; k < n; ++k) {
+            stack[k].clear();
+            push_children(k, k, 0);
+        }
+        union Step {  // copied into before each use
+            PendingRay ray[N];
+            Step() {}
+        } taken;
+        PendingRay* step = taken.ray;
+        int who[N];
+        for (;;) {
+            int m = 0;
+            for (int k = 0; k < n; ++k)
+                if (!stack[k].empty()) {
+                    std::construct_at(step + m, stack[k].back());
+                    stack[k].pop_back();
+                    who[m++] = k;
+                }
+            if (m == 0) break;
+            intersect(m, [&](int i) -> const Tracer::Ray& { return step[i].ray; });
+            for (int i = 0; i < m; ++i) {
+                const int k = who[i];
+                tracer(k, true).li_deferred(step[i].ray, step[i].depth, &kid_hits[i], step[i].hit);
+                push_children(k, step[i].hit, step[i].depth);
+            }
+        }
+    } else {
+        // With the CMAM, whose caches (one per path) must see their lookups in sample order:
+        // the first hits' children, sample by sample (reflected first), intersected in packets;
+        // then each sample's children traced on from those hits in that order, as li would
+        // have, their own hits deferred in turn (their children traced at once, depth first).
+        // A sample has one ray per path, so each cache sees its samples in order.
+        int kid[2 * N], nk = 0;  // 2 k + lobe
+        for (int k = 0; k < n; ++k)
+            for (int lobe = 0; lobe < 2; ++lobe)
+                if (made_child(k, lobe)) kid[nk++] = 2 * k + lobe;
+        intersect(nk,
+                  [&](int i) -> const Tracer::Ray& { return made.ray[kid[i] / 2][kid[i] % 2]; });
+        for (int i = 0; i < nk; ++i) {
+            const int k = kid[i] / 2, lobe = kid[i] % 2;
+            tracer(k, false).li_deferred(made.ray[k][lobe], 1, &kid_hits[i], child_hit(k, lobe));
+        }
     }
 
     // The shadow rays towards each delta light in packets (from neighbouring points to one

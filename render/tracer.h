@@ -108,10 +108,19 @@ struct DeferredHit {
     Child child[2];  // reflected, transmitted
 };
 
+/// A ray made at a deferred hit and waiting to be traced: the ray, its depth and its own
+/// deferred hit.
+struct PendingRay {
+    TracedRay ray;
+    int depth = 0;
+    int hit = -1;
+};
+
 /// trace_packet's scratch, reused between calls (no allocation per packet once grown).
 struct PacketScratch {
     std::vector<ShadowRay> shadow;
     std::vector<DeferredHit> hits;
+    std::vector<PendingRay> pending[16];  // per sample (Scene::kPacketSize), a stack
 };
 
 /// One camera sample as trace_packet takes it: its ray and random seed, and where its counts
@@ -124,8 +133,9 @@ struct CameraPath {
 };
 
 /// What trace_one gives for each of n <= Scene::kPacketSize camera samples, into radiance[i],
-/// bit for bit: each sample shaded in trace_one's order, but with its camera ray, and then the
-/// first hits' reflected and transmitted rays, intersected as packets, and the shadow rays of
+/// bit for bit: each sample's hits shaded in trace_one's order, but with the samples' camera
+/// rays, then their reflected and transmitted rays (the samples' paths in lock step; with a
+/// CMAM texture the first hits' children only), intersected as packets, and the shadow rays of
 /// every hit towards each delta light (point, spot, distant, ...) traced in packets (coherent
 /// rays: Embree's packet traversal shares node tests between them).
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,

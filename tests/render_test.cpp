@@ -410,12 +410,13 @@ TEST(Cmam, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
     }
 }
 
-// trace_packet shades each sample as trace_one does, only intersecting its camera ray and its
-// first hit's children in packets and tracing every hit's shadow rays towards delta lights in
-// packets: the radiance is trace_one's bit for bit. The scene has both children at every glass
-// hit (to depth 5), a mirror, an infinite light (random numbers at every lit hit) and textures
-// filtered by each footprint method, the CMAM's caches included (their lookups keep their
-// order per path).
+// trace_packet shades each sample's hits in trace_one's order, only intersecting the samples'
+// rays in packets (their paths in lock step; with the CMAM the first hits' children only) and
+// tracing every hit's shadow rays towards delta lights in packets: the radiance is trace_one's
+// bit for bit. The scene has both children at every glass hit (to depth 5), so the samples'
+// trees differ in shape, a mirror, an infinite light (random numbers at every lit hit) and
+// textures filtered by each footprint method, the CMAM's caches included (their lookups keep
+// their order per path).
 TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
     for (const char* lod : {"differentials", "cmam", "cones-aniso"}) {
         SCOPED_TRACE(lod);
