@@ -585,6 +585,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         // whose children go on the stacks. Every sample's hits are shaded in li's order, so its
         // random numbers are a single ray's; nothing else depends on the order across samples
         // (the CMAM's caches would: see below).
+        static_assert(std::extent_v<decltype(PacketScratch::pending)> >= N);
         std::vector<PendingRay>* stack = scratch.pending;
         auto push_children = [&](int k, int hit, int depth) {
             for (int lobe = 1; lobe >= 0; --lobe)
