@@ -515,15 +515,11 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         org[k] = paths[k].ray.org;
         dir[k] = paths[k].ray.dir;
     }
-    // The camera rays' hits: n slots constructed, not 16 cleared whole (GCC clears an array of
-    // empty optionals with a memset of all their storage, 2% of a render's instructions).
-    static_assert(std::is_trivially_destructible_v<std::optional<SurfaceHit>>);
-    union Hits {
-        std::optional<SurfaceHit> hit[N];
-        Hits() {}
-    } hit_storage;
-    std::optional<SurfaceHit>* hits = hit_storage.hit;
-    for (int k = 0; k < n; ++k) std::construct_at(hits + k);
+    // (The slots below are the scratch's, made once: an array of 16 empty optionals on the
+    // stack was cleared whole, 4 KB per packet, and the packet's slots on the stack made the
+    // functions below it slower.)
+    static_assert(PacketScratch::kSamples == N);
+    std::optional<SurfaceHit>* hits = scratch.camera_hits.data();
     scene.intersect_packet(org, dir, n, hits, false);  // (u,v) as li needs them
 
     // Each sample's first hit shaded in order, as trace_one would, but with its shadow rays left
@@ -534,18 +530,15 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     shadow.clear();
     deferred.clear();
     deferred.resize(static_cast<std::size_t>(n));  // in place (a copied one waits on its stores)
-    union Made {  // constructed where a child is made (most hits make none)
-        Tracer::Ray ray[N][2];
-        Made() {}
-    } made;
+    Tracer::Ray* made = scratch.made.data();       // sample k's children: made[2 k], made[2 k + 1]
     std::optional<Rng> rng[N];
-    // Sample k's tracer; `make`: the children of its deferred hits are made in made.ray[k].
+    // Sample k's tracer; `make`: the children of its deferred hits are made in made[2 k ...].
     auto tracer = [&](int k, bool make) {
         const CameraPath& p = paths[k];
         Tracer t{scene, footprints, p.counts, *rng[k], cmam, shadow};
         t.aov = p.aov;
         t.deferred_hits = &deferred;
-        t.made_rays = make ? made.ray[k] : nullptr;
+        t.made_rays = make ? made + 2 * k : nullptr;
         return t;
     };
     for (int k = 0; k < n; ++k) {
@@ -553,15 +546,9 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         if (paths[k].counts) ++paths[k].counts->camera;
         tracer(k, true).li_deferred(paths[k].ray, 0, &hits[k], k);
     }
-    // The hits of the children, constructed only for those made (most packets make none).
-    union KidHits {
-        std::optional<SurfaceHit> hit[2 * N];
-        KidHits() {}
-    } kid_storage;
-    std::optional<SurfaceHit>* kid_hits = kid_storage.hit;
-    // Intersects rays ray(0..m-1) in packets into kid_hits.
+    std::optional<SurfaceHit>* kid_hits = scratch.step_hits.data();
+    // Intersects rays ray(0..m-1), m <= 2N, in packets into kid_hits.
     auto intersect = [&](int m, auto&& ray) {
-        for (int i = 0; i < m; ++i) std::construct_at(kid_hits + i);
         for (int i = 0; i < m; i += N) {
             const int c = std::min(N, m - i);
             for (int j = 0; j < c; ++j) {
@@ -591,28 +578,23 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         // whose children go on the stacks. Every sample's hits are shaded in li's order, so its
         // random numbers are a single ray's; nothing else depends on the order across samples
         // (the CMAM's caches would: see below).
-        static_assert(std::extent_v<decltype(PacketScratch::pending)> >= N);
         std::vector<PendingRay>* stack = scratch.pending;
         auto push_children = [&](int k, int hit, int depth) {
             for (int lobe = 1; lobe >= 0; --lobe)
                 if (made_child(hit, lobe))
-                    stack[k].push_back({made.ray[k][lobe], depth + 1, child_hit(hit, lobe)});
+                    stack[k].push_back({made[2 * k + lobe], depth + 1, child_hit(hit, lobe)});
         };
         for (int k = 0; k < n; ++k) {
             stack[k].clear();
             push_children(k, k, 0);
         }
-        union Step {  // copied into before each use
-            PendingRay ray[N];
-            Step() {}
-        } taken;
-        PendingRay* step = taken.ray;
+        PendingRay* step = scratch.step.data();
         int who[N];
         for (;;) {
             int m = 0;
             for (int k = 0; k < n; ++k)
                 if (!stack[k].empty()) {
-                    std::construct_at(step + m, stack[k].back());
+                    step[m] = stack[k].back();
                     stack[k].pop_back();
                     who[m++] = k;
                 }
@@ -634,11 +616,10 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         for (int k = 0; k < n; ++k)
             for (int lobe = 0; lobe < 2; ++lobe)
                 if (made_child(k, lobe)) kid[nk++] = 2 * k + lobe;
-        intersect(nk,
-                  [&](int i) -> const Tracer::Ray& { return made.ray[kid[i] / 2][kid[i] % 2]; });
+        intersect(nk, [&](int i) -> const Tracer::Ray& { return made[kid[i]]; });
         for (int i = 0; i < nk; ++i) {
             const int k = kid[i] / 2, lobe = kid[i] % 2;
-            tracer(k, false).li_deferred(made.ray[k][lobe], 1, &kid_hits[i], child_hit(k, lobe));
+            tracer(k, false).li_deferred(made[kid[i]], 1, &kid_hits[i], child_hit(k, lobe));
         }
     }
 
