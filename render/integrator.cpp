@@ -246,6 +246,7 @@ struct Tracer {
     // without it they are traced at once, deferred in turn.
     std::vector<DeferredHit>* deferred_hits = nullptr;
     Ray* made_rays = nullptr;
+    int* made_count = nullptr;  // counts the children made in made_rays
 
     // The radiance along `ray`. `first`: the ray's nearest hit when it was found already (a
     // camera ray's, in a packet). `deferred` (an index in deferred_hits): the hit's shadow rays
@@ -377,7 +378,10 @@ struct Tracer {
         next.org = offset_origin(h, next.dir);
         if (parent < 0) return weight * li(next, depth + 1);
         (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe] = {true, weight, -1};
-        if (made_rays) return {};  // made_rays[lobe] holds it
+        if (made_rays) {  // made_rays[lobe] holds it
+            ++*made_count;
+            return {};
+        }
         const int index = static_cast<int>(deferred_hits->size());
         deferred_hits->emplace_back();
         (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe].hit = index;
@@ -531,6 +535,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     deferred.clear();
     deferred.resize(static_cast<std::size_t>(n));  // in place (a copied one waits on its stores)
     Tracer::Ray* made = scratch.made.data();       // sample k's children: made[2 k], made[2 k + 1]
+    int children = 0;                              // made so far
     std::optional<Rng> rng[N];
     // Sample k's tracer; `make`: the children of its deferred hits are made in made[2 k ...].
     auto tracer = [&](int k, bool make) {
@@ -539,6 +544,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         t.aov = p.aov;
         t.deferred_hits = &deferred;
         t.made_rays = make ? made + 2 * k : nullptr;
+        t.made_count = &children;
         return t;
     };
     for (int k = 0; k < n; ++k) {
@@ -570,7 +576,9 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         return d.children && d.child[lobe].made;
     };
 
-    if (!footprints.uses(FootprintMethod::Cmam)) {
+    if (children == 0) {
+        // No first hit made a child (a packet of matte surfaces or misses): nothing more to trace.
+    } else if (!footprints.uses(FootprintMethod::Cmam)) {
         // The samples' paths in lock step, each depth first as li traces it: each sample's
         // rays wait on its own stack (a hit's transmitted ray below its reflected one, so the
         // reflected ray's whole subtree comes first), and each step takes the top ray of every
@@ -584,10 +592,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
                 if (made_child(hit, lobe))
                     stack[k].push_back({made[2 * k + lobe], depth + 1, child_hit(hit, lobe)});
         };
-        for (int k = 0; k < n; ++k) {
-            stack[k].clear();
-            push_children(k, k, 0);
-        }
+        for (int k = 0; k < n; ++k) push_children(k, k, 0);  // (each stack ends empty)
         PendingRay* step = scratch.step.data();
         int who[N];
         for (;;) {
