@@ -124,13 +124,13 @@ struct PacketScratch {
     std::vector<ShadowRay> shadow;
     std::vector<DeferredHit> hits;
     std::vector<PendingRay> pending[kSamples];  // per sample, a stack
-    // Hit slots of the camera rays (kSamples) and of a step's rays (2 kSamples), each written
-    // by Scene::intersect_packet; the rays made at each sample's hit (2 per sample); a step's
-    // rays taken from the stacks.
+    // Hit slots of the camera rays and of a step's rays, each written by
+    // Scene::intersect_packet; the rays made at each sample's hit (2 per sample); a step's rays
+    // taken from the stacks.
     std::vector<std::optional<SurfaceHit>> camera_hits =
         std::vector<std::optional<SurfaceHit>>(kSamples);
     std::vector<std::optional<SurfaceHit>> step_hits =
-        std::vector<std::optional<SurfaceHit>>(2 * kSamples);
+        std::vector<std::optional<SurfaceHit>>(kSamples);
     std::vector<TracedRay> made = std::vector<TracedRay>(2 * kSamples);
     std::vector<PendingRay> step = std::vector<PendingRay>(kSamples);
 };
@@ -146,10 +146,10 @@ struct CameraPath {
 
 /// What trace_one gives for each of n <= Scene::kPacketSize camera samples, into radiance[i],
 /// bit for bit: each sample's hits shaded in trace_one's order, but with the samples' camera
-/// rays, then their reflected and transmitted rays (the samples' paths in lock step; with a
-/// CMAM texture the first hits' children only), intersected as packets, and the shadow rays of
-/// every hit towards each delta light (point, spot, distant, ...) traced in packets (coherent
-/// rays: Embree's packet traversal shares node tests between them).
+/// rays, then their reflected and transmitted rays (the samples' paths in lock step),
+/// intersected as packets, and the shadow rays of every hit towards each delta light (point,
+/// spot, distant, ...) traced in packets (coherent rays: Embree's packet traversal shares node
+/// tests between them).
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
                   int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance);
 

@@ -411,12 +411,54 @@ TEST(Cmam, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
 }
 
 // trace_packet shades each sample's hits in trace_one's order, only intersecting the samples'
-// rays in packets (their paths in lock step; with the CMAM the first hits' children only) and
-// tracing every hit's shadow rays towards delta lights in packets: the radiance is trace_one's
-// bit for bit. The scene has both children at every glass hit (to depth 5), so the samples'
-// trees differ in shape, a mirror, an infinite light (random numbers at every lit hit) and
-// textures filtered by each footprint method, the CMAM's caches included (their lookups keep
-// their order per path).
+// rays in packets (their paths in lock step) and tracing every hit's shadow rays towards delta
+// lights in packets: the radiance is trace_one's bit for bit. The scenes have both children at
+// every glass hit, so the samples' trees differ in shape, mirrors, an infinite light (random
+// numbers at every lit hit) and textures filtered by each footprint method, the CMAM's caches
+// included (each sees a path's samples in order: taking the paths in another order changes
+// paper scene 4's CMAM image).
+namespace {
+// Packets of 16 samples along rows y0, y0 + dy, ... < y1, starting at the columns `x0`, against
+// the same samples traced one by one; the CMAM's caches go on along each row in both. Returns
+// how many samples spawned more than two reflected or transmitted rays.
+int expect_packets_match_single_rays(const Scene& s, std::initializer_list<int> x0, int y0, int y1,
+                                     int dy) {
+    const FootprintProducers producers(s.footprint_methods, s.camera, 1);
+    constexpr int N = Scene::kPacketSize;
+    int deep = 0;
+    PacketScratch scratch;
+    for (int py = y0; py < y1; py += dy) {
+        CmamRowState packet_caches, one_caches;
+        for (int x : x0) {
+            // Sixteen samples along a row, as the film would give them (tags in sequence).
+            CameraPath paths[N];
+            for (int k = 0; k < N; ++k) {
+                const float fx = x + k + 0.37f, fy = py + 0.61f;
+                const auto [o, d] = s.camera.generate_ray(fx, fy);
+                texture::RayTag tag;
+                tag.id = static_cast<uint32_t>(py);
+                tag.seq = static_cast<uint32_t>(x + k);
+                paths[k].ray = {o, d, producers.camera_ray(fx, fy, d, tag, 0.13f, -0.21f)};
+                paths[k].seed = mix_seed(static_cast<uint64_t>(py), static_cast<uint64_t>(x + k));
+            }
+            Rgb packet[N];
+            trace_packet(s, producers, paths, N, &packet_caches, scratch, packet);
+            for (int k = 0; k < N; ++k) {
+                RayCounts counts;
+                const Rgb one =
+                    trace_one(s, producers, paths[k].ray.org, paths[k].ray.dir, paths[k].ray.fp,
+                              paths[k].seed, &counts, &one_caches, nullptr);
+                deep += counts.secondary > 2;
+                EXPECT_EQ(std::memcmp(&one, &packet[k], sizeof(Rgb)), 0)
+                    << "row " << py << " sample " << x + k << ": " << one.r << " vs "
+                    << packet[k].r;
+            }
+        }
+    }
+    return deep;
+}
+}  // namespace
+
 TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
     for (const char* lod : {"differentials", "cmam", "cones-aniso"}) {
         SCOPED_TRACE(lod);
@@ -443,35 +485,16 @@ TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
             "Shape \"sphere\" \"float radius\" 0.5 AttributeEnd\nWorldEnd\n";
         auto s =
             build_scene(pbrt::parse_string(text, std::string(CMAM_SCENES_DIR) + "/p.pbrt"), {}, {});
-        const FootprintProducers producers(s->footprint_methods, s->camera, 1);
-        constexpr int N = Scene::kPacketSize;
-        int glass_rows = 0;
-        for (int py = 10; py < 48; py += 6) {
-            // Sixteen samples along a row, as the film would give them (tags in sequence).
-            CameraPath paths[N];
-            for (int k = 0; k < N; ++k) {
-                const float fx = 24 + k + 0.37f, fy = py + 0.61f;
-                const auto [o, d] = s->camera.generate_ray(fx, fy);
-                texture::RayTag tag;
-                tag.id = static_cast<uint32_t>(py);
-                tag.seq = static_cast<uint32_t>(k);
-                paths[k].ray = {o, d, producers.camera_ray(fx, fy, d, tag, 0.13f, -0.21f)};
-                paths[k].seed = mix_seed(static_cast<uint64_t>(py), static_cast<uint64_t>(k));
-            }
-            CmamRowState packet_caches, one_caches;
-            PacketScratch scratch;
-            Rgb packet[N];
-            trace_packet(*s, producers, paths, N, &packet_caches, scratch, packet);
-            for (int k = 0; k < N; ++k) {
-                RayCounts counts;
-                const Rgb one =
-                    trace_one(*s, producers, paths[k].ray.org, paths[k].ray.dir, paths[k].ray.fp,
-                              paths[k].seed, &counts, &one_caches, nullptr);
-                glass_rows += counts.secondary > 2;
-                EXPECT_EQ(std::memcmp(&one, &packet[k], sizeof(Rgb)), 0)
-                    << "row " << py << " sample " << k << ": " << one.r << " vs " << packet[k].r;
-            }
-        }
-        EXPECT_GT(glass_rows, 0);  // some samples went through the glass (children of children)
+        // Some samples went through the glass (children of children).
+        EXPECT_GT(expect_packets_match_single_rays(*s, {8, 24, 40}, 4, 48, 3), 0);
+    }
+    // Paper scene 4's two glass spheres, whose samples' trees differ most, through the CMAM.
+    for (FootprintMethod lod : {FootprintMethod::Cmam, FootprintMethod::Differentials}) {
+        SCOPED_TRACE(std::string(to_string(lod)));
+        BuildOptions bo;
+        bo.lod = lod;
+        auto s = build_scene(pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/paper/scene4.pbrt"),
+                             bo, {});
+        EXPECT_GT(expect_packets_match_single_rays(*s, {96, 112, 128, 240, 256}, 100, 220, 7), 0);
     }
 }
