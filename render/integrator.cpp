@@ -586,11 +586,11 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     std::optional<SurfaceHit>* step_hits = scratch.step_hits.data();
     for (;;) {
         bool any = false;
-        uint64_t path = 0;
+        uint64_t path = 0;  // with the CMAM, the step's
         for (int k = 0; k < n; ++k)
             if (!stack[k].empty()) {
                 const uint64_t p = stack[k].back().ray.fp.path;
-                if (!any || walked_before(p, path)) path = p;
+                if (by_path && (!any || walked_before(p, path))) path = p;
                 any = true;
             }
         if (!any) break;
