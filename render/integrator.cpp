@@ -524,8 +524,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         dir[k] = paths[k].ray.dir;
     }
     // (The slots below are the scratch's, made once: an array of 16 empty optionals on the
-    // stack was cleared whole, 4 KB per packet, and the packet's slots on the stack made the
-    // functions below it slower.)
+    // stack was cleared whole, 4 KB per packet.)
     static_assert(PacketScratch::kSamples == N);
     std::optional<SurfaceHit>* hits = scratch.camera_hits.data();
     scene.intersect_packet(org, dir, n, hits, false);  // (u,v) as li needs them
