@@ -503,6 +503,10 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
 }
 
 namespace {
+// How many hits and shadow rays a packet keeps deferred at most (about 1 MB), beyond which the
+// rays it takes are traced to the end at once.
+constexpr std::size_t kMaxDeferredHits = 4096, kMaxDeferredShadowRays = 16384;
+
 // Whether path a comes before path b in a depth-first walk of the bounces, the reflected child
 // first (paths as RayFootprint::path: 1, then 2p for the reflected and 2p + 1 for the
 // transmitted child of p): a path before its extensions, else by the first bounce that differs.
@@ -603,7 +607,19 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
                 who[m++] = k;
             }
         scene.intersect_packet(org, dir, m, step_hits, false);
+        // Deep trees (glass in glass under a high depth limit doubles a sample's rays at every
+        // level) would keep every hit and shadow ray of the packet until its end: past a bound,
+        // each ray taken is traced to the end of its subtree at once, as li does (its shadow
+        // rays one by one). The order stays li's for each sample, and each path's hits are all
+        // in this step's subtrees, taken in sample order, so the CMAM's caches keep theirs.
+        const bool deep =
+            deferred.size() > kMaxDeferredHits || shadow.size() > kMaxDeferredShadowRays;
         for (int i = 0; i < m; ++i) {
+            if (deep) {
+                deferred[static_cast<std::size_t>(step[i].hit)].radiance =
+                    tracer(who[i]).li(step[i].ray, step[i].depth, &step_hits[i]);
+                continue;
+            }
             tracer(who[i]).li_deferred(step[i].ray, step[i].depth, &step_hits[i], step[i].hit);
             push_children(who[i], step[i].hit, step[i].depth);
         }

@@ -488,6 +488,28 @@ TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
         // Some samples went through the glass (children of children).
         EXPECT_GT(expect_packets_match_single_rays(*s, {8, 24, 40}, 4, 48, 3), 0);
     }
+    // Glass in glass to depth 14: a packet's trees outgrow what it keeps deferred, and the rest
+    // is traced to the end at once.
+    for (const char* lod : {"differentials", "cmam"}) {
+        SCOPED_TRACE(std::string("deep glass, ") + lod);
+        const std::string text =
+            std::string(
+                "LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+                "Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 32\n"
+                "Integrator \"whitted\" \"integer maxdepth\" 14\nWorldBegin\n"
+                "LightSource \"point\" \"point from\" [2 3 -3] \"rgb I\" [10 10 10]\n"
+                "LightSource \"infinite\" \"rgb L\" [0.3 0.3 0.4]\n"
+                "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" "
+                "\"textures/bricks.png\" \"string lod\" \"") +
+            lod +
+            "\"\nAttributeBegin Material \"glass\" Shape \"sphere\" \"float radius\" 1 "
+            "AttributeEnd\nAttributeBegin Material \"glass\" Shape \"sphere\" \"float radius\" "
+            "0.6 AttributeEnd\nAttributeBegin Material \"matte\" \"texture Kd\" \"t\" "
+            "Translate 0 0 3 Shape \"sphere\" \"float radius\" 1.5 AttributeEnd\nWorldEnd\n";
+        auto s =
+            build_scene(pbrt::parse_string(text, std::string(CMAM_SCENES_DIR) + "/p.pbrt"), {}, {});
+        EXPECT_GT(expect_packets_match_single_rays(*s, {8}, 14, 18, 2), 0);
+    }
     // Paper scene 4's two glass spheres, whose samples' trees differ most, through the CMAM.
     for (FootprintMethod lod : {FootprintMethod::Cmam, FootprintMethod::Differentials}) {
         SCOPED_TRACE(std::string(to_string(lod)));
