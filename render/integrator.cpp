@@ -361,11 +361,10 @@ struct Tracer {
     }
 
     // The deferred hit of a ray traced from here on (li with `first` its hit, when found).
-    Rgb li_deferred(const Ray& ray, int depth, std::optional<SurfaceHit>* first, int index) {
+    void li_deferred(const Ray& ray, int depth, std::optional<SurfaceHit>* first, int index) {
         const Rgb L = li(ray, depth, first, index);
         DeferredHit& d = (*deferred_hits)[static_cast<std::size_t>(index)];
         if (!d.pending) d.radiance = L;
-        return L;
     }
 
     // The child ray `next` (its direction and footprint set) of a hit at `depth` leaves from h

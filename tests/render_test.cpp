@@ -457,6 +457,11 @@ int expect_packets_match_single_rays(const Scene& s, std::initializer_list<int> 
     }
     return deep;
 }
+
+// A scene from pbrt text, read as if from a file beside the bundled scenes (textures/...).
+std::unique_ptr<Scene> scene_beside_textures(const std::string& text) {
+    return build_scene(pbrt::parse_string(text, std::string(CMAM_SCENES_DIR) + "/p.pbrt"), {}, {});
+}
 }  // namespace
 
 TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
@@ -483,10 +488,10 @@ TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
             "radius\" 0.6 AttributeEnd\n"
             "AttributeBegin Material \"plastic\" \"texture Kd\" \"t\" Translate 1.8 0.5 1.5 "
             "Shape \"sphere\" \"float radius\" 0.5 AttributeEnd\nWorldEnd\n";
-        auto s =
-            build_scene(pbrt::parse_string(text, std::string(CMAM_SCENES_DIR) + "/p.pbrt"), {}, {});
         // Some samples went through the glass (children of children).
-        EXPECT_GT(expect_packets_match_single_rays(*s, {8, 24, 40}, 4, 48, 3), 0);
+        EXPECT_GT(
+            expect_packets_match_single_rays(*scene_beside_textures(text), {8, 24, 40}, 4, 48, 3),
+            0);
     }
     // Glass in glass to depth 14: a packet's trees outgrow what it keeps deferred, and the rest
     // is traced to the end at once.
@@ -506,9 +511,8 @@ TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
             "AttributeEnd\nAttributeBegin Material \"glass\" Shape \"sphere\" \"float radius\" "
             "0.6 AttributeEnd\nAttributeBegin Material \"matte\" \"texture Kd\" \"t\" "
             "Translate 0 0 3 Shape \"sphere\" \"float radius\" 1.5 AttributeEnd\nWorldEnd\n";
-        auto s =
-            build_scene(pbrt::parse_string(text, std::string(CMAM_SCENES_DIR) + "/p.pbrt"), {}, {});
-        EXPECT_GT(expect_packets_match_single_rays(*s, {8}, 14, 18, 2), 0);
+        EXPECT_GT(expect_packets_match_single_rays(*scene_beside_textures(text), {8}, 14, 18, 2),
+                  0);
     }
     // Paper scene 4's two glass spheres, whose samples' trees differ most, through the CMAM.
     for (FootprintMethod lod : {FootprintMethod::Cmam, FootprintMethod::Differentials}) {
