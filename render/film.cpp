@@ -86,11 +86,10 @@ class FilmTracer {
     // samples only feed the CMAM's caches (their radiance is dropped): they are what a row
     // traced whole would have put there.
     void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam) const {
-        Span sp{
-            row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {}, {},
-            {}};
+        Span sp{row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {},
+                {}};
         sp.counts.count_lookups = m_options.count_lookups;
-        draw_jitter(sp);
+        seed_pixels(sp);
         sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
         Packet packet;
         auto add = [&](int i, int sx, int sy) {
@@ -120,25 +119,33 @@ class FilmTracer {
         int row, py;
         int c0, n;  // first column (primed pixels included) and pixel count
         int prime;
-        std::vector<float> jitter;  // per pixel, 2 per sample
-        std::vector<uint64_t> seeds;
-        std::vector<double> sum;  // 3 per pixel
+        std::vector<uint64_t> seeds;  // per pixel
+        std::vector<double> sum;      // 3 per pixel
         RayCounts counts;
         PacketScratch scratch;  // trace_packet's
     };
 
-    // Each pixel's jitter, drawn in stratum order (sy, sx) from the pixel's own generator.
-    void draw_jitter(Span& sp) const {
-        sp.jitter.assign(static_cast<std::size_t>(sp.n) * m_spp * 2, 0.5f);
+    // Each pixel's seed. Its generator gives the pixel's jitter in stratum order (sy, sx), two
+    // numbers per sample; they are computed where the sample is made (jitter()), not stored: a
+    // row's jitter at 64 spp is 200 KB, read back from beyond the cache.
+    void seed_pixels(Span& sp) const {
         sp.seeds.resize(static_cast<std::size_t>(sp.n));
         for (int i = 0; i < sp.n; ++i) {
             const int px = m_film.x0 + sp.c0 + i;
             sp.seeds[i] = mix_seed(uint64_t(sp.py) * uint64_t(m_film.xres) + uint64_t(px), 0x5eed);
-            if (!m_scene.sampler.jitter) continue;
-            Rng rng(sp.seeds[i]);
-            for (int k = 0; k < 2 * m_spp; ++k)
-                sp.jitter[static_cast<std::size_t>(i) * m_spp * 2 + k] = rng.next_float();
         }
+    }
+
+    // The jitter of pixel i's stratum `sample`: the pixel generator's numbers 2 sample and
+    // 2 sample + 1, or the stratum's centre without jitter.
+    void jitter(const Span& sp, int i, int sample, float* j) const {
+        if (!m_scene.sampler.jitter) {
+            j[0] = j[1] = 0.5f;
+            return;
+        }
+        const uint64_t seed = sp.seeds[static_cast<std::size_t>(i)], k = 2 * uint64_t(sample);
+        j[0] = Rng::float_at(seed, k);
+        j[1] = Rng::float_at(seed, k + 1);
     }
 
     // Sets every member of `tag`.
@@ -173,7 +180,8 @@ class FilmTracer {
     void add_sample(Span& sp, Packet& packet, int i, int sx, int sy) const {
         const int k = packet.n++;
         const int col = sp.c0 + i, px = m_film.x0 + col, sample = sy * m_nx + sx;
-        const float* j = &sp.jitter[(static_cast<std::size_t>(i) * m_spp + sample) * 2];
+        float j[2];
+        jitter(sp, i, sample, j);
         const float fx = px + (sx + j[0]) / m_nx, fy = sp.py + (sy + j[1]) / m_ny;
         packet.i[k] = i;
         packet.sample[k] = sample;

@@ -18,15 +18,24 @@ namespace cmam::render {
 class Rng {
   public:
     explicit Rng(uint64_t seed) : m_state(seed) {}
-    uint64_t next_u64() {
-        uint64_t z = (m_state += 0x9E3779B97F4A7C15ull);
+    uint64_t next_u64() { return mix(m_state += kStep); }
+    float next_float() { return to_float(next_u64()); }
+    /// The float the k-th next_float() (k = 0, 1, ...) of a generator seeded with `seed` returns,
+    /// without drawing the ones before it (the state advances by a constant step).
+    static float float_at(uint64_t seed, uint64_t k) {
+        return to_float(mix(seed + (k + 1) * kStep));
+    }
+
+  private:
+    static constexpr uint64_t kStep = 0x9E3779B97F4A7C15ull;
+    static uint64_t mix(uint64_t z) {
         z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
         z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
         return z ^ (z >> 31);
     }
-    float next_float() { return std::min(float(next_u64() >> 40) * 0x1.0p-24f, 0x1.fffffep-1f); }
-
-  private:
+    static float to_float(uint64_t x) {
+        return std::min(float(x >> 40) * 0x1.0p-24f, 0x1.fffffep-1f);
+    }
     uint64_t m_state;
 };
 
