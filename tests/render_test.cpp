@@ -192,6 +192,21 @@ TEST(Determinism, OneAndTwoThreadsGiveIdenticalImages) {
     EXPECT_GT(sum / a.rgb.size(), 0.05);  // not black
 }
 
+TEST(Determinism, AGeneratorsKthNumberIsTheOneItDrawsKth) {
+    // The film computes each sample's jitter as the pixel generator's numbers 2k and 2k + 1
+    // (Rng::float_at) rather than drawing them in sequence: the two must agree for every k, or
+    // jittered images would change with the order samples are made in.
+    for (uint64_t seed : {uint64_t(0), uint64_t(1), mix_seed(123, 0x5eed), ~uint64_t(0)}) {
+        Rng rng(seed);
+        for (uint64_t k = 0; k < 2 * 64 * 4; ++k) {
+            const float drawn = rng.next_float();
+            ASSERT_EQ(drawn, Rng::float_at(seed, k)) << "seed " << seed << " k " << k;
+            ASSERT_GE(drawn, 0.0f);
+            ASSERT_LT(drawn, 1.0f);
+        }
+    }
+}
+
 TEST(Scenes, EveryBundledSceneBuilds) {
     int n = 0;
     for (const auto& e : std::filesystem::recursive_directory_iterator(CMAM_SCENES_DIR)) {
