@@ -193,9 +193,9 @@ TEST(Determinism, OneAndTwoThreadsGiveIdenticalImages) {
 }
 
 TEST(Determinism, AGeneratorsKthNumberIsTheOneItDrawsKth) {
-    // The film computes each sample's jitter as the pixel generator's numbers 2k and 2k + 1
-    // (Rng::float_at) rather than drawing them in sequence: the two must agree for every k, or
-    // jittered images would change with the order samples are made in.
+    // The film computes sample k's jitter as the pixel generator's numbers 2k and 2k + 1
+    // (Rng::float_at) rather than drawing the pixel's numbers in sequence: the two must agree
+    // for every k, or a jittered image would not be the one the sequence gives.
     for (uint64_t seed : {uint64_t(0), uint64_t(1), mix_seed(123, 0x5eed), ~uint64_t(0)}) {
         Rng rng(seed);
         for (uint64_t k = 0; k < 2 * 64 * 4; ++k) {
