@@ -2,7 +2,6 @@
 
 #include <bit>
 #include <memory>
-#include <type_traits>
 
 #include "render/footprint/footprint.h"
 #include "render/shading.h"

@@ -238,16 +238,16 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
                                  {fp.points[2].u * W, fp.points[2].v * H}};
         // The width squared: its square root would delay the level (trilinear_width2).
         const double width2 = cmam_width_squared({s0, t0}, others, matches);
-        const MipPyramid& pyr = pyramid();
+        double lambda = 0;
+        const Texel t = pyramid().trilinear_width2(u, v, width2, info ? &lambda : nullptr);
         if (info) {
-            const double width = std::sqrt(width2), lambda = pyr.trilinear_lambda(width);
-            info->width = width;
+            info->width = std::sqrt(width2);
             info->lambda = lambda;
             info->level_lo = static_cast<int>(std::floor(lambda));
             info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
             info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
         }
-        return pyr.trilinear_width2(u, v, width2);
+        return t;
     }
     CmamCache::Entry cached[2];
     for (int k = 0; k < matches; ++k) {
