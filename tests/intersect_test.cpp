@@ -234,3 +234,38 @@ TEST(Packets, QuadricUvOnDemandEqualsUvAtOnce) {
     }
     EXPECT_GT(quadrics, 10);
 }
+
+// A scene's only quadric carries a second Embree primitive, a point at the centre of its box
+// (so that Embree tests the box); rays through that point, one by one and in packets, find what
+// the quadric alone gives: nothing through an annulus's hole, the near side of a sphere.
+TEST(LoneQuadric, TheBoxsCentreHoldsNothingButTheShape) {
+    constexpr int N = render::Scene::kPacketSize;
+    auto annulus =
+        world("Shape \"disk\" \"float radius\" 2 \"float innerradius\" 1 \"float height\" 0.5");
+    auto ball = world("Translate 0 0 3 Shape \"sphere\" \"float radius\" 0.5");
+    Vec3 org[N], dir[N];
+    float tmax[N];
+    for (int i = 0; i < N; ++i) {  // from around the centre's normal, all through the centre
+        org[i] = Vec3(0.2f * (i % 4) - 0.3f, 0.2f * (i / 4) - 0.3f, 8);
+        dir[i] = render::normalize(Vec3(0, 0, 0.5f) - org[i]);
+        tmax[i] = 1e30f;
+    }
+    std::optional<SurfaceHit> hits[N];
+    bool occluded[N];
+    annulus->intersect_packet(org, dir, N, hits);
+    annulus->occluded_packet(org, dir, tmax, N, occluded);
+    for (int i = 0; i < N; ++i) {
+        EXPECT_FALSE(hits[i].has_value()) << "ray " << i;
+        EXPECT_FALSE(occluded[i]) << "ray " << i;
+        EXPECT_FALSE(annulus->intersect(org[i], dir[i], 0, 1e30f)) << "ray " << i;
+        EXPECT_FALSE(annulus->occluded(org[i], dir[i], 0, 1e30f)) << "ray " << i;
+    }
+    for (int i = 0; i < N; ++i) dir[i] = render::normalize(Vec3(0, 0, 3) - org[i]);
+    ball->intersect_packet(org, dir, N, hits);
+    for (int i = 0; i < N; ++i) {
+        ASSERT_TRUE(hits[i].has_value()) << "ray " << i;
+        EXPECT_EQ(hits[i]->prim->kind, render::Primitive::Kind::Sphere);
+        EXPECT_NEAR(hits[i]->t, length(Vec3(0, 0, 3) - org[i]) - 0.5f, 1e-4) << "ray " << i;
+        EXPECT_NEAR(length(hits[i]->p - (Vec3(0, 0, 3) - 0.5f * dir[i])), 0, 1e-4) << "ray " << i;
+    }
+}
