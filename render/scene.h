@@ -191,6 +191,9 @@ struct Primitive {
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
     double height = 0, inner_radius = 0;
+    // Quadrics: the scale of a transform that keeps them round (a rotation, reflection or
+    // uniform scale plus a translation), 0 for any other.
+    double uniform_scale = 0;
     // Area light ("AreaLightSource" in the shape's scope): its index in Scene::lights, and for
     // triangles the cumulative areas that pick one by area.
     int area_light = -1;

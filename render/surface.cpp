@@ -145,10 +145,12 @@ Partials SurfaceHit::local_partials() const {
         double r = pr.radius;
         double zr = std::sqrt(p[0] * p[0] + p[1] * p[1]);
         double cos_phi = zr > 0 ? p[0] / zr : 1, sin_phi = zr > 0 ? p[1] / zr : 0;
-        double theta = std::acos(std::clamp(p[2] / r, -1.0, 1.0));
+        // sin(theta) for cos(theta) = z / r, without the angle (pbrt-v3 takes acos, then sin).
+        const double cos_theta = std::clamp(p[2] / r, -1.0, 1.0);
+        const double sin_theta = std::sqrt(1 - cos_theta * cos_theta);
         double dtheta = pr.theta_zmax - pr.theta_zmin;
         du = {-pr.phi_max * p[1], pr.phi_max * p[0], 0};
-        dv = {dtheta * p[2] * cos_phi, dtheta * p[2] * sin_phi, -dtheta * r * std::sin(theta)};
+        dv = {dtheta * p[2] * cos_phi, dtheta * p[2] * sin_phi, -dtheta * r * sin_theta};
     } else {
         double r_hit = std::sqrt(p[0] * p[0] + p[1] * p[1]);
         du = {-pr.phi_max * p[1], pr.phi_max * p[0], 0};

@@ -226,6 +226,33 @@ TEST(Cones, ReflectionOffAConvexMirrorSpreadsTheCone) {
     EXPECT_GT(std::abs(t.width), 0);
 }
 
+// A sphere that its transform keeps round has curvature 1 / (radius x scale) everywhere (near
+// the pole facing the camera too), and in an instance over the instance's scale as well; a
+// squashed one takes the general path.
+TEST(Cones, ARoundSphereHasOneCurvatureEverywhere) {
+    auto s = test::scene_from(
+        camera512("Translate 0 0 5 Scale 2 2 2 Shape \"sphere\" \"float radius\" 0.5"));
+    EXPECT_DOUBLE_EQ(s->primitives[0]->uniform_scale, 2);
+    for (auto [px, py] : {std::pair{256.3f, 256.2f}, std::pair{270.0f, 250.0f},
+                          std::pair{290.0f, 270.0f}, std::pair{256.0f, 300.0f}}) {
+        Vec3 d;
+        const SurfaceHit h = hit_at(*s, px, py, &d);
+        EXPECT_NEAR(surface_curvature(h), 1.0, 1e-6) << px << ", " << py;
+    }
+    auto inst = test::scene_from(
+        camera512("ObjectBegin \"b\" Scale 2 2 2 Shape \"sphere\" \"float radius\" 0.5 ObjectEnd "
+                  "Translate 0 0 5 Scale 0.75 0.75 0.75 ObjectInstance \"b\""));
+    Vec3 d;
+    SurfaceHit h = hit_at(*inst, 262, 251, &d);
+    ASSERT_NE(h.instance, nullptr);
+    EXPECT_NEAR(surface_curvature(h), 1 / 0.75, 1e-5);
+    auto squashed = test::scene_from(camera512("Translate 0 0 5 Scale 1 1 2 Shape \"sphere\""));
+    EXPECT_EQ(squashed->primitives[0]->uniform_scale, 0);
+    h = hit_at(*squashed, 270, 250, &d);
+    const float k = surface_curvature(h);
+    EXPECT_TRUE(std::isfinite(k) && k > 0.25f && k < 2) << k;  // between its radii's 1/2 and 1
+}
+
 // The producers run only for the methods a scene uses, and each event hands on the state a
 // child ray needs: its own differential and cone, the level one deeper, the path extended.
 TEST(FootprintProducers, RunOnlyTheMethodsUsedAndCarryTagAndPath) {

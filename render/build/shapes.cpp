@@ -14,6 +14,23 @@ namespace cmam::render::build_detail {
 
 namespace fs = std::filesystem;
 
+namespace {
+// The scale of a 3x4 transform whose linear part is a rotation or reflection times a uniform
+// scale (columns orthogonal and of one length, to a relative 1e-6), else 0.
+double uniform_scale(const std::array<double, 12>& m) {
+    double len2[3], dots[3];
+    for (int c = 0; c < 3; ++c) {
+        const int d = (c + 1) % 3;
+        len2[c] = m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c];
+        dots[c] = m[c] * m[d] + m[4 + c] * m[4 + d] + m[8 + c] * m[8 + d];
+    }
+    for (int c = 0; c < 3; ++c)
+        if (!(std::abs(len2[c] - len2[0]) <= 1e-6 * len2[0] && std::abs(dots[c]) <= 1e-6 * len2[0]))
+            return 0;
+    return std::sqrt(len2[0]);
+}
+}  // namespace
+
 // pbrt-v3's sphere and disk, intersected analytically in object space.
 bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
@@ -21,6 +38,7 @@ bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
         inverse_or_error(s.world_from_object, e.loc, "the shape's transform is singular");
     prim.world_from_object = to34(s.world_from_object);
     prim.object_from_world = to34(ow);
+    prim.uniform_scale = uniform_scale(prim.world_from_object);
     double r = finite_float(e, "radius", 1, true);
     prim.radius = r;
     double phimax = std::clamp(finite_float(e, "phimax", 360), 0.0, 360.0);
@@ -327,18 +345,10 @@ QuadricParams Builder::quadric_params(const Entity& e) {
 void Builder::round_sphere(Primitive& prim) {
     if (prim.zmin > -prim.radius || prim.zmax < prim.radius || prim.phi_max < 2 * std::numbers::pi)
         return;
+    if (!(prim.uniform_scale > 0)) return;
     const auto& m = prim.world_from_object;
-    double len2[3], dots[3];
-    for (int c = 0; c < 3; ++c) {
-        const int d = (c + 1) % 3;
-        len2[c] = m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c];
-        dots[c] = m[c] * m[d] + m[4 + c] * m[4 + d] + m[8 + c] * m[8 + d];
-    }
-    for (int c = 0; c < 3; ++c)
-        if (std::abs(len2[c] - len2[0]) > 1e-6 * len2[0] || std::abs(dots[c]) > 1e-6 * len2[0])
-            return;
     prim.sphere_center = Vec3(float(m[3]), float(m[7]), float(m[11]));
-    prim.sphere_radius = float(prim.radius * std::sqrt(len2[0]));
+    prim.sphere_radius = float(prim.radius * prim.uniform_scale);
 }
 
 // pbrt-v3's "diffuse" area light: radiance L (times scale) leaving the surface.

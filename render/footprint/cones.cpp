@@ -19,13 +19,22 @@ float cone_width_at(const RayCone& cone, float t) {
 float surface_curvature(const SurfaceHit& hit) {
     const Primitive& pr = *hit.prim;
     if (pr.kind == Primitive::Kind::Sphere) {
-        // Exact: 1/r in object space, scaled by the transform's mean scale along the surface.
-        const auto [dpdu, dpdv] = hit.partials();
-        double s = std::sqrt(
-            length(cross(dpdu, dpdv)) /
-            (pr.phi_max * std::abs(pr.theta_zmax - pr.theta_zmin) * pr.radius * pr.radius *
-             std::max(1e-12, std::sqrt(1 - std::pow(hit.p_object[2] / pr.radius, 2)))));
-        float k = static_cast<float>(1 / (pr.radius * s));
+        // 1/r in object space over the scale along the surface (algorithms.md §8): a transform
+        // that keeps the sphere round scales it by its uniform scale (and an instance by its
+        // curvature_scale); any other, per hit, by the square root of the ratio of the world and
+        // object area elements.
+        float k;
+        if (pr.uniform_scale > 0) {
+            k = static_cast<float>(1 / (pr.radius * pr.uniform_scale));
+            if (hit.instance) k /= hit.instance->curvature_scale;
+        } else {
+            const auto [dpdu, dpdv] = hit.partials();
+            double s = std::sqrt(
+                length(cross(dpdu, dpdv)) /
+                (pr.phi_max * std::abs(pr.theta_zmax - pr.theta_zmin) * pr.radius * pr.radius *
+                 std::max(1e-12, std::sqrt(1 - std::pow(hit.p_object[2] / pr.radius, 2)))));
+            k = static_cast<float>(1 / (pr.radius * s));
+        }
         return pr.flip ? -k : k;
     }
     if (pr.kind == Primitive::Kind::Disk || pr.normals.empty()) return 0;
