@@ -250,7 +250,8 @@ TEST(Cones, ARoundSphereHasOneCurvatureEverywhere) {
     EXPECT_EQ(squashed->primitives[0]->uniform_scale, 0);
     h = hit_at(*squashed, 270, 250, &d);
     const float k = surface_curvature(h);
-    EXPECT_TRUE(std::isfinite(k) && k > 0.25f && k < 2) << k;  // between its radii's 1/2 and 1
+    // An ellipsoid of radii 1, 1 and 2: its curvatures lie between 1/4 and 2.
+    EXPECT_TRUE(std::isfinite(k) && k > 0.25f && k < 2) << k;
 }
 
 // The producers run only for the methods a scene uses, and each event hands on the state a
