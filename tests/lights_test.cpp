@@ -3,7 +3,6 @@
 // the light's frame; importance sampling is unbiased against a quadrature of the map; square,
 // disk and sphere area lights give the irradiance of their form factors.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -14,6 +13,7 @@
 #include "render/image_io.h"
 #include "render/integrator.h"
 #include "scene_util.h"
+#include "temp_dir.h"
 
 using namespace cmam;
 using namespace cmam::render;
@@ -21,10 +21,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir() {
-    fs::path d = fs::temp_directory_path() / ("cmam_lights_" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
+// The maps' folder, removed with them when the test process exits.
+const fs::path& temp_dir() {
+    static const test::TempDir dir("cmam_lights");
+    return dir.path;
 }
 
 // Writes a W x H map whose texel (i, j) (j = 0 the file's top row) is f(i, j).
