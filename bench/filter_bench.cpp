@@ -246,7 +246,9 @@ class SummaryReporter : public benchmark::ConsoleReporter {
                     auto it = m_value.find(std::string("BM_OursSpread/") + filter + key);
                     return it == m_value.end() ? 0.0 : it->second;
                 };
-                const double t = get("trilinear"), e = get("ewa"), a = get("area");
+                // The counter is seconds per lookup (an inverted rate).
+                const double t = 1e9 * get("trilinear"), e = 1e9 * get("ewa"),
+                             a = 1e9 * get("area");
                 if (t <= 0 || e <= 0 || a <= 0) continue;
                 std::printf("%5d/%-6d %10.1f %10.1f %10.1f %11.2fx\n", size, aniso, t, e, a, a / e);
             }
