@@ -120,6 +120,22 @@ LookupResult FilteredTexture::lookup_with_info(double u, double v, const Footpri
     return r;
 }
 
+Texel FilteredTexture::trilinear_noted(double u, double v, double width2, LookupInfo* info) const {
+    const MipPyramid& pyr = pyramid();
+    double lambda = 0;
+    const Texel t = pyr.trilinear_width2(u, v, width2, info ? &lambda : nullptr);
+    if (info) {
+        info->width = std::sqrt(width2);
+        info->lambda = lambda;
+        info->level_lo = static_cast<int>(std::floor(lambda));
+        info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
+        // At the coarsest level and beyond, the level's mean: one value read.
+        info->texels_read =
+            lambda >= pyr.levels() - 1 ? 1 : (info->level_lo == info->level_hi ? 4 : 8);
+    }
+    return t;
+}
+
 Texel FilteredTexture::lookup_into(double u, double v, const Footprint& fp,
                                    const FilterOptions& opts, LookupInfo* info) const {
     // Written only when the caller asks for it (no scratch copy to clear on the hot paths).
@@ -156,18 +172,7 @@ Texel FilteredTexture::lookup_into(double u, double v, const Footprint& fp,
                 width2 = std::max(a.u * a.u * W * W + a.v * a.v * H * H,
                                   b.u * b.u * W * W + b.v * b.v * H * H);
             }
-            const MipPyramid& pyr = pyramid();
-            double lambda = 0;
-            const Texel t = pyr.trilinear_width2(u, v, width2, &lambda);
-            if (info) {
-                info->width = std::sqrt(width2);
-                info->lambda = lambda;
-                info->level_lo = static_cast<int>(std::floor(lambda));
-                info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
-                info->texels_read =
-                    lambda >= pyr.levels() - 1 ? 1 : (info->level_lo == info->level_hi ? 4 : 8);
-            }
-            return t;
+            return trilinear_noted(u, v, width2, info);
         }
         case FilterKind::Sat: {
             // The pixel's own parallelogram c +- (a +- b)/2, bounded by its axis-aligned box,
@@ -238,16 +243,7 @@ Texel FilteredTexture::lookup_points(double u, double v, const Footprint& fp,
                                  {fp.points[2].u * W, fp.points[2].v * H}};
         // The width squared: its square root would delay the level (trilinear_width2).
         const double width2 = cmam_width_squared({s0, t0}, others, matches);
-        double lambda = 0;
-        const Texel t = pyramid().trilinear_width2(u, v, width2, info ? &lambda : nullptr);
-        if (info) {
-            info->width = std::sqrt(width2);
-            info->lambda = lambda;
-            info->level_lo = static_cast<int>(std::floor(lambda));
-            info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
-            info->texels_read = info->level_lo == info->level_hi ? 4 : 8;
-        }
-        return t;
+        return trilinear_noted(u, v, width2, info);
     }
     CmamCache::Entry cached[2];
     for (int k = 0; k < matches; ++k) {

@@ -114,6 +114,8 @@ class FilteredTexture {
                       LookupInfo* info) const;
     Texel lookup_points(double u, double v, const Footprint& fp, const FilterOptions& opts,
                         LookupInfo* info) const;
+    // Trilinear for a footprint `width2` level-0 texels squared wide, and what it read.
+    Texel trilinear_noted(double u, double v, double width2, LookupInfo* info) const;
 };
 
 }  // namespace cmam::texture
