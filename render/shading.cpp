@@ -151,7 +151,8 @@ texture::Texel cmam_texel(const Scene& scene, const TextureNode& n, int node, do
 }
 
 Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexContext& ctx) {
-    const MappedSt m = node_st(n, ctx, true);
+    // The CMAM's footprint is its cache's, not the hit's (which is none for it).
+    const MappedSt m = node_st(n, ctx, n.lod != FootprintMethod::Cmam);
     double s = m.st.u, t = m.st.v;
     texture::Texel x;
     if (n.lod == FootprintMethod::Cmam && ctx.cmam) {

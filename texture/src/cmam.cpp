@@ -28,15 +28,6 @@ std::string_view to_string(CmamSatMiss m) {
     return kCmamSatMissNames.name(m);
 }
 
-double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches) {
-    if (matches <= 0) return 0;
-    const double du = p[0].u - p0.u, dv = p[0].v - p0.v;
-    if (matches == 1) return du * du + dv * dv;
-    const double lo_u = std::min({p0.u, p[0].u, p[1].u}), hi_u = std::max({p0.u, p[0].u, p[1].u}),
-                 lo_v = std::min({p0.v, p[0].v, p[1].v}), hi_v = std::max({p0.v, p[0].v, p[1].v});
-    return (hi_u - lo_u) * (hi_u - lo_u) + (hi_v - lo_v) * (hi_v - lo_v);
-}
-
 double cmam_width(Vec2d p0, const Vec2d* p, int matches) {
     return std::sqrt(cmam_width_squared(p0, p, matches));
 }
@@ -157,6 +148,10 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     };
     if (same(cache.last, 1)) matches = same(cache.second_last, 2) ? 2 : 1;
     const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
+    // The matches' texture coordinates, read from the cache itself (read from `cached`, a
+    // 16-byte read of u and v spans two of the copy's stores and waits for both).
+    const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
+                                {cache.second_last.u, cache.second_last.v}};
     // Shift the cache: the most recent becomes the second, the current the most recent.
     // Positions beyond 2^30 texels (or not numbers) get the mean, as in every filter; they are
     // not cached, so every region's samples lie within that range.
@@ -302,7 +297,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         fp.point_count = 1 + std::min(matches, 2);
         fp.points[0] = {u, v};
         for (int k = 0; k + 1 < fp.point_count; ++k)
-            fp.points[k + 1] = {cached[k].u, cached[k].v};  // s = u W exactly as cached
+            fp.points[k + 1] = cached_uv[k];  // s = u W exactly as cached
     }
     if (!info) return tex.lookup(u, v, fp, fo);
     const LookupResult filtered = tex.lookup_with_info(u, v, fp, fo);

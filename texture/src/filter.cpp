@@ -65,8 +65,7 @@ const SummedAreaTable& FilteredTexture::level_sat(int l) const {
     return *m_level_sats[l];
 }
 
-const MipPyramid& FilteredTexture::pyramid() const {
-    if (MipPyramid* p = m_pyr_ready.load(std::memory_order_acquire)) return *p;
+const MipPyramid& FilteredTexture::build_pyramid() const {
     std::lock_guard<std::mutex> lock(m_build);
     if (!m_pyramid) {
         // Level 0 is the texture's own image, not a copy (m_image outlives m_pyramid).
@@ -120,19 +119,17 @@ LookupResult FilteredTexture::lookup_with_info(double u, double v, const Footpri
     return r;
 }
 
-Texel FilteredTexture::trilinear_noted(double u, double v, double width2, LookupInfo* info) const {
+Texel FilteredTexture::trilinear_with_info(double u, double v, double width2,
+                                           LookupInfo& info) const {
     const MipPyramid& pyr = pyramid();
     double lambda = 0;
-    const Texel t = pyr.trilinear_width2(u, v, width2, info ? &lambda : nullptr);
-    if (info) {
-        info->width = std::sqrt(width2);
-        info->lambda = lambda;
-        info->level_lo = static_cast<int>(std::floor(lambda));
-        info->level_hi = lambda > info->level_lo ? info->level_lo + 1 : info->level_lo;
-        // At the coarsest level and beyond, the level's mean: one value read.
-        info->texels_read =
-            lambda >= pyr.levels() - 1 ? 1 : (info->level_lo == info->level_hi ? 4 : 8);
-    }
+    const Texel t = pyr.trilinear_width2(u, v, width2, &lambda);
+    info.width = std::sqrt(width2);
+    info.lambda = lambda;
+    info.level_lo = static_cast<int>(std::floor(lambda));
+    info.level_hi = lambda > info.level_lo ? info.level_lo + 1 : info.level_lo;
+    // At the coarsest level and beyond, the level's mean: one value read.
+    info.texels_read = lambda >= pyr.levels() - 1 ? 1 : (info.level_lo == info.level_hi ? 4 : 8);
     return t;
 }
 

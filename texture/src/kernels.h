@@ -77,27 +77,34 @@ inline AxisTaps axis_taps(double s, int n, WrapMode mode) {
 }
 
 #if defined(__SSE2__)
-/// Bilinear interpolation of a 3- or 4-channel image at lattice coordinates (s, t) (finite, below
-/// 2^30 in magnitude) when all four taps lie inside the image, as four lanes in `out`; false,
-/// leaving `out` alone, otherwise. A 3-channel texel is loaded as four floats (the next texel's
-/// first channel, or the buffer's slack after the last texel), so lane 3 is then meaningless.
-/// Weights and sums in bilinear_at's order: w00 a + w10 b + w01 c + w11 d.
-inline bool bilinear_inside4(const Image& img, double s, double t, __m128* out) {
-    const int64_t ks = floor_to_int(s), kt = floor_to_int(t);
-    if (!(ks >= 0 && ks + 1 < img.width() && kt >= 0 && kt + 1 < img.height())) return false;
-    const float fs = static_cast<float>(s - static_cast<double>(ks));
-    const float ft = static_cast<float>(t - static_cast<double>(kt));
+/// Bilinear interpolation of a 3- or 4-channel image from resolved taps `x`, `y` (none of them
+/// Black), as four lanes. A 3-channel texel is loaded as four floats (the next texel's first
+/// channel, or the buffer's slack after the last texel), so lane 3 is then meaningless. Weights
+/// and sums in bilinear_at's scalar order: w00 a + w10 b + w01 c + w11 d.
+inline __m128 bilinear_taps4(const Image& img, const AxisTaps& x, const AxisTaps& y) {
+    const float fs = x.f, ft = y.f;
     // (w00, w10, w01, w11) in one multiply.
     const __m128 w =
         _mm_mul_ps(_mm_setr_ps(1 - fs, fs, 1 - fs, fs), _mm_setr_ps(1 - ft, 1 - ft, ft, ft));
     const float* base = img.row(0);
     const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
-    const float *r0 = base + rows[kt], *r1 = base + rows[kt + 1];
-    const std::ptrdiff_t c0 = cols[ks], c1 = cols[ks + 1];
+    const float *r0 = base + rows[y.i0], *r1 = base + rows[y.i1];
+    const std::ptrdiff_t c0 = cols[x.i0], c1 = cols[x.i1];
     __m128 v = _mm_mul_ps(_mm_shuffle_ps(w, w, 0x00), _mm_loadu_ps(r0 + c0));
     v = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0x55), _mm_loadu_ps(r0 + c1)));
     v = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xaa), _mm_loadu_ps(r1 + c0)));
-    *out = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xff), _mm_loadu_ps(r1 + c1)));
+    return _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xff), _mm_loadu_ps(r1 + c1)));
+}
+
+/// Bilinear interpolation of a 3- or 4-channel image at lattice coordinates (s, t) (finite, below
+/// 2^30 in magnitude), with the wrap applied, as four lanes in `out`; false, leaving `out`
+/// alone, when a tap lies outside a Black edge. A tiled texture's coordinates are mostly outside
+/// the base period: the wrap is resolved per axis (axis_taps), so they take this path too.
+inline bool bilinear_wrapped4(const Image& img, double s, double t, __m128* out) {
+    const AxisTaps x = axis_taps(s, img.width(), img.wrap_s());
+    const AxisTaps y = axis_taps(t, img.height(), img.wrap_t());
+    if ((x.i0 | x.i1 | y.i0 | y.i1) < 0) return false;
+    *out = bilinear_taps4(img, x, y);
     return true;
 }
 
@@ -151,15 +158,12 @@ inline BilinearPatch bilinear_patch(const Image& img, double s, double t) {
 /// Bilinear interpolation at lattice coordinates (s, t) = (u*W - 1/2, v*H - 1/2), which the
 /// caller has checked to be finite and below 2^30 in magnitude.
 inline Texel bilinear_at(const Image& img, double s, double t) {
-#if defined(__SSE2__)
-    if (img.channels() >= 3) {
-        __m128 v;
-        if (bilinear_inside4(img, s, t, &v)) return to_texel(v, img.channels());
-    }
-#endif
     const AxisTaps x = axis_taps(s, img.width(), img.wrap_s());
     const AxisTaps y = axis_taps(t, img.height(), img.wrap_t());
     const int nc = img.channels();
+#if defined(__SSE2__)
+    if (nc >= 3 && (x.i0 | x.i1 | y.i0 | y.i1) >= 0) return to_texel(bilinear_taps4(img, x, y), nc);
+#endif
     const float w00 = (1 - x.f) * (1 - y.f), w10 = x.f * (1 - y.f), w01 = (1 - x.f) * y.f,
                 w11 = x.f * y.f;
     Texel out{};

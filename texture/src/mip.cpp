@@ -158,8 +158,8 @@ Texel MipPyramid::trilinear_levels(double u, double v, int l, float f) const {
     // Both levels' texels stay in registers through the blend.
     if (fine.channels() >= 3) {
         __m128 a, b;
-        if (detail::bilinear_inside4(fine, s, t, &a) &&
-            detail::bilinear_inside4(coarse, sc, tc, &b))
+        if (detail::bilinear_wrapped4(fine, s, t, &a) &&
+            detail::bilinear_wrapped4(coarse, sc, tc, &b))
             return detail::to_texel(
                 _mm_add_ps(_mm_mul_ps(_mm_set1_ps(1 - f), a), _mm_mul_ps(_mm_set1_ps(f), b)),
                 fine.channels());

@@ -9,6 +9,7 @@
 #include <cmam/texture/filter.h>
 #include <cmam/texture/polygon.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -134,8 +135,16 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
 /// `matches` matching samples p[0..]: the distance to the one, or the diagonal of the three
 /// samples' bounding box for two (0 for none).
 double cmam_width(Vec2d p0, const Vec2d* p, int matches);
-/// Its square (cmam_width() is the square root of exactly this).
-double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches);
+/// Its square (cmam_width() is the square root of exactly this). Inline: the MIP filters read
+/// nothing else of the region.
+inline double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches) {
+    if (matches <= 0) return 0;
+    const double du = p[0].u - p0.u, dv = p[0].v - p0.v;
+    if (matches == 1) return du * du + dv * dv;
+    const double lo_u = std::min({p0.u, p[0].u, p[1].u}), hi_u = std::max({p0.u, p[0].u, p[1].u}),
+                 lo_v = std::min({p0.v, p[0].v, p[1].v}), hi_v = std::max({p0.v, p[0].v, p[1].v});
+    return (hi_u - lo_u) * (hi_u - lo_u) + (hi_v - lo_v) * (hi_v - lo_v);
+}
 
 /// Region for the current sample p0 and the `matches` cached samples that match it
 /// (cached[0] is the most recent). Pure geometry, no texture access.

@@ -78,7 +78,10 @@ class FilteredTexture {
 
     const Image& image() const { return m_image; }
     /// Built on first use (thread-safe).
-    const MipPyramid& pyramid() const;
+    const MipPyramid& pyramid() const {
+        if (MipPyramid* p = m_pyr_ready.load(std::memory_order_acquire)) return *p;
+        return build_pyramid();
+    }
     const SummedAreaTable& sat() const;
     /// Summed-area table of MIP level `l` (level 0 is sat()); built on first use.
     const SummedAreaTable& level_sat(int l) const;
@@ -114,8 +117,14 @@ class FilteredTexture {
                       LookupInfo* info) const;
     Texel lookup_points(double u, double v, const Footprint& fp, const FilterOptions& opts,
                         LookupInfo* info) const;
-    // Trilinear for a footprint `width2` level-0 texels squared wide, and what it read.
-    Texel trilinear_noted(double u, double v, double width2, LookupInfo* info) const;
+    const MipPyramid& build_pyramid() const;
+    // Trilinear for a footprint `width2` level-0 texels squared wide, and what it read (into
+    // `info` when not null).
+    Texel trilinear_noted(double u, double v, double width2, LookupInfo* info) const {
+        if (!info) return pyramid().trilinear_width2(u, v, width2);
+        return trilinear_with_info(u, v, width2, *info);
+    }
+    Texel trilinear_with_info(double u, double v, double width2, LookupInfo& info) const;
 };
 
 }  // namespace cmam::texture
