@@ -68,6 +68,39 @@ TEST_P(AreaWrap, RowPrefixIntegralMatchesTheCellOracle) {
     }
 }
 
+TEST(Area, RepeatRegionsAcrossThePeriodsEdgeMatchTheCellOracle) {
+    // A repeating texture's edges that leave the table by less than a period are cut at x = W
+    // and y = H and walked in parts inside it (algorithms.md §5.2): regions around the corner
+    // (W, H) of 1-, 3- and 4-channel textures, and edges exactly on those lines.
+    for (const int nc : {1, 3, 4}) {
+        Image img(40, 24, nc, noise(40, 24, nc, 7 + nc), WrapMode::Repeat, WrapMode::Repeat);
+        RowPrefixTable table(img);
+        std::mt19937 rng(29 + nc);
+        for (int k = 0; k < 300; ++k) {
+            Vec2d p[4];
+            random_parallelogram(rng, 18, 46, p);
+            const Texel got = table.integral(p, 4);
+            const Texel want = polygon_integral_cells(img, to_polygon(p, 4));
+            const double area = std::abs(signed_area(to_polygon(p, 4)));
+            for (int c = 0; c < nc; ++c)
+                ASSERT_NEAR(got[c], want[c], 1e-5 * std::max(1.0, area))
+                    << nc << " channels, polygon " << k << " channel " << c;
+        }
+        // Edges on x = W and y = H, a corner on (W, H), and an edge ending on x = W.
+        const Vec2d on_lines[][4] = {{{40, 20}, {52, 20}, {52, 30}, {40, 30}},
+                                     {{33.5, 24}, {40, 24}, {40, 31.25}, {33.5, 31.25}},
+                                     {{36.25, 17.5}, {40, 24}, {45.5, 30.5}, {41.75, 24}},
+                                     {{30, 10}, {40, 23}, {40, 26}, {30, 13}}};
+        for (const auto& q : on_lines) {
+            const Texel got = table.integral(q, 4);
+            const Texel want = polygon_integral_cells(img, to_polygon(q, 4));
+            const double area = std::abs(signed_area(to_polygon(q, 4)));
+            for (int c = 0; c < nc; ++c)
+                EXPECT_NEAR(got[c], want[c], 1e-5 * area) << nc << " channels, channel " << c;
+        }
+    }
+}
+
 TEST_P(AreaWrap, ConstantTextureStaysConstant) {
     const WrapMode w = GetParam();
     std::vector<float> px(std::size_t(40) * 24 * 3);

@@ -236,8 +236,10 @@ inline __m128 knot4(const float* d) {
 // midpoint value within one texel; partial end texels and whole ones between otherwise, times
 // `h_per_x`), with the channels as one vector: each piece's value in float (the table's
 // precision), added to double sums. Every channel count takes this path, so a channel's result
-// does not depend on how many there are.
-template <int NC>
+// does not depend on how many there are. `Guard`: the edge may end on the table's right edge
+// x = W (a part of an edge split there), where a position rounded to W would read two knots
+// past the row; a piece then starts in texel W - 1 at the latest.
+template <int NC, bool Guard = false>
 struct EdgeWalk {
     const float* row;
     std::size_t stride;
@@ -248,10 +250,12 @@ struct EdgeWalk {
     double x, xnext;
     __m128 h_row;
     __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
+    int64_t k_last = 0;  // Guard: W - 1
 
     EdgeWalk(const float* table, std::size_t stride_, Vec2d p_, Vec2d q_, double sign_,
-             double dxdy_, double h_per_x_)
+             double dxdy_, double h_per_x_, int64_t width = 0)
         : stride(stride_), p(p_), q(q_), dxdy(dxdy_), h_per_x(h_per_x_), sign(sign_) {
+        k_last = width - 1;
         j = floor_to_int(p.v);
         j_last = static_cast<int64_t>(std::ceil(q.v)) - 1;  // >= j, as q.v > p.v
         one_row = j == j_last;
@@ -269,7 +273,8 @@ struct EdgeWalk {
     template <bool Short>
     [[gnu::always_inline]] void piece(double xa, double xb, __m128 hv) {
         const double x0 = std::min(xa, xb), x1 = std::max(xa, xb);
-        const int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
+        int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
+        if constexpr (Guard) k0 = std::min(k0, k_last);
         const float* d = row + k0 * NC;
         if (Short || x1 <= double(k0 + 2)) {
             // Within texel k0, or into the next one by l1: the span's first part [x0, b0] has
@@ -391,6 +396,55 @@ template <int NC>
 #endif
 }
 
+#if defined(__SSE2__)
+// An edge (p.v < q.v) of a region on a texture that repeats, within [0, 2W) x [0, 2H] after the
+// region's shift to the base period (most edges that leave the table do so by less than a
+// period): cut where it crosses x = W and y = H, each part moved back into the table by whole
+// periods and walked like an edge inside it. Rows repeat along t, so a part above H is the same
+// rows H lower. Along s, R(x) = D[W] + R(x - W) beyond W, so a part beyond W adds, besides its
+// walk, its height in each row times that row's total D[W].
+template <int NC>
+void RowPrefixTable::edge_split(Vec2d p, Vec2d q, double sign, double dxdy, double h_per_x,
+                                double* acc) const {
+    const double W = m_w, H = m_h;
+    const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
+    // The cut points, in order along the edge (t its parameter): exactly on their lines.
+    struct Cut {
+        double t;
+        Vec2d at;
+    };
+    Cut cuts[4];
+    int n = 0;
+    cuts[n++] = {0, p};
+    if (p.v < H && q.v > H) cuts[n++] = {(H - p.v) / (q.v - p.v), {p.u + (H - p.v) * dxdy, H}};
+    if (std::min(p.u, q.u) < W && std::max(p.u, q.u) > W) {
+        const double t = (W - p.u) / (q.u - p.u);
+        cuts[n++] = {t, {W, p.v + t * (q.v - p.v)}};
+        if (n == 3 && cuts[2].t < cuts[1].t) std::swap(cuts[1], cuts[2]);
+    }
+    cuts[n++] = {1, q};
+    for (int k = 0; k + 1 < n; ++k) {
+        const Vec2d a = cuts[k].at, b = cuts[k + 1].at;
+        if (!(b.v > a.v)) continue;  // no height (or a rounding-sized inversion): nothing
+        const double sx = 0.5 * (a.u + b.u) >= W ? W : 0, sy = 0.5 * (a.v + b.v) >= H ? H : 0;
+        const Vec2d a1{a.u - sx, a.v - sy}, b1{b.u - sx, b.v - sy};
+        EdgeWalk<NC, true>(m_d.data(), stride, a1, b1, sign, dxdy, h_per_x, m_w).walk(acc);
+        if (sx == 0) continue;
+        // The row totals D_j[W] times the part's height in each row.
+        int64_t j = floor_to_int(a1.v);
+        const int64_t j_last = static_cast<int64_t>(std::ceil(b1.v)) - 1;
+        const float* total = m_d.data() + static_cast<std::size_t>(j) * stride + m_w * NC;
+        double sum[NC];
+        for (int c = 0; c < NC; ++c) sum[c] = 0;
+        for (; j <= j_last; ++j, total += stride) {
+            const double h = std::min(b1.v, double(j + 1)) - std::max(a1.v, double(j));
+            for (int c = 0; c < NC; ++c) sum[c] += h * total[c];
+        }
+        for (int c = 0; c < NC; ++c) acc[c] += sign * sum[c];
+    }
+}
+#endif
+
 // Green's theorem: the area integral of T is the boundary integral of R(x,y) dy, where R is the
 // row integral from 0 to x (algorithms.md §5.2). Each edge is cut where it crosses a texel row;
 // on a piece within row j, x is linear in y, so the piece's integral is its height times the
@@ -418,14 +472,27 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         edges[m++] = {p, q, sign, dxdy, h_per_x};
     }
     const bool far_rows = m_wrap_t == WrapMode::Clamp || m_wrap_t == WrapMode::Black;
+#if defined(__SSE2__)
+    // How far beyond the table an edge may reach and still be cut into parts inside it: a
+    // period along a repeating axis, none along the others.
+    const double split_u = m_wrap_s == WrapMode::Repeat ? 2.0 * m_w : m_w,
+                 split_v = m_wrap_t == WrapMode::Repeat ? 2.0 * m_h : m_h;
+#endif
     for (int e = 0; e < m; ++e) {
         const Edge& E = edges[e];
         const Vec2d p = E.p, q = E.q;
-        if (p.v >= 0 && q.v <= m_h && std::min(p.u, q.u) >= 0 && std::max(p.u, q.u) < m_w) {
+        const double u_lo = std::min(p.u, q.u), u_hi = std::max(p.u, q.u);
+        if (p.v >= 0 && q.v <= m_h && u_lo >= 0 && u_hi < m_w) {
             // The common case, the edge within the table: rows and knots read directly.
             edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
             continue;
         }
+#if defined(__SSE2__)
+        if (p.v >= 0 && q.v <= split_v && u_lo >= 0 && u_hi < split_u) {
+            edge_split<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
+            continue;
+        }
+#endif
         double y = p.v, x = p.u;
         while (y < q.v) {
             const int64_t j = floor_to_int(y);

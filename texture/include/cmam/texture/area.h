@@ -53,6 +53,8 @@ class RowPrefixTable {
     template <int NC>
     void edge_inside(Vec2d p, Vec2d q, double sign, double dxdy, double h_per_x, double* acc) const;
     template <int NC>
+    void edge_split(Vec2d p, Vec2d q, double sign, double dxdy, double h_per_x, double* acc) const;
+    template <int NC>
     void row_piece(int64_t j, double x0, double x1, double h, double h_per_x, double* acc) const;
     template <int NC>
     void knot(const float* row, int64_t k, double* out) const;
