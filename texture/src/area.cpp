@@ -427,7 +427,12 @@ void RowPrefixTable::edge_split(Vec2d p, Vec2d q, double sign, double dxdy, doub
         const Vec2d a = cuts[k].at, b = cuts[k + 1].at;
         if (!(b.v > a.v)) continue;  // no height (or a rounding-sized inversion): nothing
         const double sx = 0.5 * (a.u + b.u) >= W ? W : 0, sy = 0.5 * (a.v + b.v) >= H ? H : 0;
-        const Vec2d a1{a.u - sx, a.v - sy}, b1{b.u - sx, b.v - sy};
+        // Moved into the table. A cut computed on one line lies on the other to within rounding,
+        // so when the edge passes (about) through the corner (W, H) a part's end can be a
+        // rounding's width outside the table: it is put back on the table's edge.
+        const Vec2d a1{std::clamp(a.u - sx, 0.0, W), std::clamp(a.v - sy, 0.0, H)},
+            b1{std::clamp(b.u - sx, 0.0, W), std::clamp(b.v - sy, 0.0, H)};
+        if (!(b1.v > a1.v)) continue;
         EdgeWalk<NC, true>(m_d.data(), stride, a1, b1, sign, dxdy, h_per_x, m_w).walk(acc);
         if (sx == 0) continue;
         // The row totals D_j[W] times the part's height in each row.
