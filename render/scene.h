@@ -238,6 +238,9 @@ struct Instance {
     /// World curvature = object curvature / curvature_scale (the cube root of the transform's
     /// determinant: exact for rotations with uniform scale).
     float curvature_scale = 1;
+    /// Whether the transform keeps shapes round (a rotation, reflection or uniform scale plus a
+    /// translation): then curvature_scale is exact, else a mean.
+    bool uniform = true;
     uint32_t first_id = 0;  // the textured-object id of the object's first primitive here
 
     Vec3 to_world_point(const Vec3& p) const;

@@ -252,6 +252,14 @@ TEST(Cones, ARoundSphereHasOneCurvatureEverywhere) {
     const float k = surface_curvature(h);
     // An ellipsoid of radii 1, 1 and 2: its curvatures lie between 1/4 and 2.
     EXPECT_TRUE(std::isfinite(k) && k > 0.25f && k < 2) << k;
+    // A round sphere squashed by its instance's transform is that ellipsoid too.
+    auto squashed_instance =
+        test::scene_from(camera512("ObjectBegin \"b\" Shape \"sphere\" ObjectEnd "
+                                   "Translate 0 0 5 Scale 1 1 2 ObjectInstance \"b\""));
+    h = hit_at(*squashed_instance, 270, 250, &d);
+    ASSERT_NE(h.instance, nullptr);
+    EXPECT_FALSE(h.instance->uniform);
+    EXPECT_NEAR(surface_curvature(h), k, 1e-4 * k);
 }
 
 // The producers run only for the methods a scene uses, and each event hands on the state a

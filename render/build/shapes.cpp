@@ -396,6 +396,7 @@ void Builder::instances() {
         const double det = w[0] * (w[5] * w[10] - w[6] * w[9]) -
                            w[1] * (w[4] * w[10] - w[6] * w[8]) + w[2] * (w[4] * w[9] - w[5] * w[8]);
         in.curvature_scale = static_cast<float>(std::cbrt(std::abs(det)));
+        in.uniform = uniform_scale(w) > 0;
         if (next_id + n > std::numeric_limits<uint32_t>::max())
             throw SceneError(d.loc, "more than 2^32 instanced primitives");
         in.first_id = static_cast<uint32_t>(next_id);

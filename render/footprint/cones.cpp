@@ -19,12 +19,12 @@ float cone_width_at(const RayCone& cone, float t) {
 float surface_curvature(const SurfaceHit& hit) {
     const Primitive& pr = *hit.prim;
     if (pr.kind == Primitive::Kind::Sphere) {
-        // 1/r in object space over the scale along the surface (algorithms.md §8): a transform
-        // that keeps the sphere round scales it by its uniform scale (and an instance by its
-        // curvature_scale); any other, per hit, by the square root of the ratio of the world and
-        // object area elements.
+        // 1/r in object space over the scale along the surface (algorithms.md §8): transforms
+        // that keep the sphere round (its own and its instance's) scale it by their uniform
+        // scales; any other, per hit, by the square root of the ratio of the world and object
+        // area elements.
         float k;
-        if (pr.uniform_scale > 0) {
+        if (pr.uniform_scale > 0 && (!hit.instance || hit.instance->uniform)) {
             k = static_cast<float>(1 / (pr.radius * pr.uniform_scale));
             if (hit.instance) k /= hit.instance->curvature_scale;
         } else {
