@@ -320,6 +320,17 @@ bool one_quadric(const std::vector<std::unique_ptr<Primitive>>& prims) {
 }  // namespace
 
 void Scene::commit() {
+    // The (u,v) gradients of the triangles whose material reads textures (their hits' footprints
+    // need them).
+    auto gradients = [this](Primitive& pr) {
+        if (pr.kind == Primitive::Kind::Triangles && pr.material >= 0 &&
+            pr.material < static_cast<int>(materials.size()) &&
+            materials[pr.material].reads_textures())
+            pr.make_uv_gradients();
+    };
+    for (auto& pr : primitives) gradients(*pr);
+    for (Object& o : objects)
+        for (auto& pr : o.primitives) gradients(*pr);
     // Objects first: an instance refers to its object's committed scene. Objects that no
     // instance uses are not built.
     std::vector<bool> used(objects.size(), false);

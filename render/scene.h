@@ -187,6 +187,14 @@ struct Primitive {
     std::vector<Vec3> positions, normals;
     std::vector<std::array<float, 2>> uvs;
     std::vector<uint32_t> indices;
+    // Triangles whose material reads textures: per triangle, the gradients of u and of v within
+    // its plane, so that an offset dP in the plane moves (u,v) by (g[0] . dP, g[1] . dP) with no
+    // division (made by make_uv_gradients; empty otherwise).
+    std::vector<std::array<Vec3, 2>> uv_gradients;
+    /// Makes uv_gradients (in double, rounded once to float): the barycentric differentials'
+    /// basis divided through and combined with the vertices' (u,v), as local_uv_offsets used to
+    /// do per hit.
+    void make_uv_gradients();
     // Quadrics: object_from_world / world_from_object as 3x4, double precision
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;

@@ -183,10 +183,52 @@ struct BarycentricBasis {
 };
 }  // namespace
 
+void Primitive::make_uv_gradients() {
+    uv_gradients.clear();
+    if (kind != Kind::Triangles) return;
+    const std::size_t n = indices.size() / 3;
+    uv_gradients.resize(n);
+    using D = std::array<double, 3>;
+    auto d3 = [](const Vec3& v) { return D{v.x, v.y, v.z}; };
+    auto sub = [](const D& a, const D& b) { return D{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+    auto crs = [](const D& a, const D& b) {
+        return D{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    };
+    auto dt = [](const D& a, const D& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    for (std::size_t t = 0; t < n; ++t) {
+        const uint32_t i0 = indices[3 * t], i1 = indices[3 * t + 1], i2 = indices[3 * t + 2];
+        // dB1 = L1 . dP / (L1 . E1) and dB2 = L2 . dP / (L2 . E2), with L1 = E2 x N, L2 = E1 x N
+        // (N = E1 x E2); (u,v) interpolates linearly in B1, B2.
+        const D p0 = d3(positions[i0]), e1 = sub(d3(positions[i1]), p0),
+                e2 = sub(d3(positions[i2]), p0);
+        const D nrm = crs(e1, e2), l1 = crs(e2, nrm), l2 = crs(e1, nrm);
+        const double d1 = dt(l1, e1), d2 = dt(l2, e2);
+        std::array<float, 2> uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+        if (!uvs.empty()) {
+            uv0 = uvs[i0];
+            uv1 = uvs[i1];
+            uv2 = uvs[i2];
+        }
+        for (int c = 0; c < 2; ++c) {
+            // A degenerate triangle (d1 or d2 zero) gives non-finite gradients, and its hits no
+            // footprint, as the per-hit division did.
+            const double k1 = (double(uv1[c]) - uv0[c]) / d1, k2 = (double(uv2[c]) - uv0[c]) / d2;
+            uv_gradients[t][c] = Vec3(static_cast<float>(k1 * l1[0] + k2 * l2[0]),
+                                      static_cast<float>(k1 * l1[1] + k2 * l2[1]),
+                                      static_cast<float>(k1 * l1[2] + k2 * l2[2]));
+        }
+    }
+}
+
 template <std::size_t N>
 std::array<UvDelta, N> SurfaceHit::local_uv_offsets(const std::array<Vec3, N>& dp) const {
     std::array<UvDelta, N> out{};
     const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Triangles && !pr.uv_gradients.empty()) {
+        const std::array<Vec3, 2>& g = pr.uv_gradients[triangle];
+        for (std::size_t k = 0; k < N; ++k) out[k] = {dot(g[0], dp[k]), dot(g[1], dp[k])};
+        return out;
+    }
     if (pr.kind == Primitive::Kind::Triangles) {
         // Barycentric differentials: dB_k = L_k . dP, then (u,v) interpolates linearly.
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],

@@ -119,6 +119,45 @@ TEST(Differentials, UvDerivativesMatchFiniteDifferencesOnATiltedPlaneAndASphere)
     }
 }
 
+// A textured mesh's triangles carry their (u,v) gradients, made once at commit in double; a hit's
+// (u,v) offsets from them equal the barycentric basis's per hit (the path of an untextured mesh)
+// to float rounding, on a tilted, irregular mesh with skewed (u,v).
+TEST(Differentials, TriangleUvGradientsEqualThePerHitBasis) {
+    auto s =
+        test::scene_from(camera512("Texture \"checks\" \"spectrum\" \"checkerboard\" "
+                                   "Material \"matte\" \"texture Kd\" \"checks\" "
+                                   "Translate 0.5 -0.3 9 Rotate 50 1 0.3 0 Shape \"trianglemesh\" "
+                                   "\"point3 P\" [-7 -6 0  8 -8 1  6 7 -0.5  -8 6 0.5  0.5 0.2 2] "
+                                   "\"integer indices\" [0 1 4 1 2 4 2 3 4 3 0 4] "
+                                   "\"point2 uv\" [0 0  5 0.5  4.5 6  -0.5 4  2.2 3.1]"));
+    int hits = 0;
+    for (float py = 140.5f; py < 400; py += 37)
+        for (float px = 120.25f; px < 420; px += 41) {
+            Vec3 d;
+            const CameraRay r = s->camera.generate_ray(px, py);
+            const std::optional<SurfaceHit> h = s->intersect(r.org, r.dir, 0, 1e30f);
+            if (!h) continue;
+            ++hits;
+            ASSERT_FALSE(h->prim->uv_gradients.empty());
+            d = r.dir;
+            const RayDifferential rd = camera_differential(s->camera, px, py, 1);
+            const HitDifferential with = transfer(rd, d, *h);
+            Primitive plain = *h->prim;
+            plain.uv_gradients.clear();
+            SurfaceHit h2 = *h;
+            h2.prim = &plain;
+            const HitDifferential without = transfer(rd, d, h2);
+            ASSERT_TRUE(with.valid && without.valid);
+            const double tol = 1e-5 * (std::abs(without.dudx) + std::abs(without.dvdx) +
+                                       std::abs(without.dudy) + std::abs(without.dvdy));
+            EXPECT_NEAR(with.dudx, without.dudx, tol) << px << " " << py;
+            EXPECT_NEAR(with.dvdx, without.dvdx, tol) << px << " " << py;
+            EXPECT_NEAR(with.dudy, without.dudy, tol) << px << " " << py;
+            EXPECT_NEAR(with.dvdy, without.dvdy, tol) << px << " " << py;
+        }
+    EXPECT_GT(hits, 20);
+}
+
 namespace {
 // Direction of the reflected or refracted ray through raster (px, py), as the integrator makes it.
 Vec3 secondary(const Scene& s, float px, float py, bool refracted, float eta,
