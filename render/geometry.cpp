@@ -319,6 +319,14 @@ bool one_quadric(const std::vector<std::unique_ptr<Primitive>>& prims) {
 }
 }  // namespace
 
+namespace {
+// Embree's SAH build (its default quality). The high quality's spatial splits made no render
+// measurably faster (the bundled mesh scene at 64 spp, pbrt-v3-scenes' breakfast, coffee-splash,
+// caustic-glass and buddha-fractal at 16 spp) and cost up to a third more CPU time in loading a
+// large mesh (breakfast: 533k triangles). docs/performance.md, "Loading".
+constexpr RTCBuildQuality kBuildQuality = RTC_BUILD_QUALITY_MEDIUM;
+}  // namespace
+
 void Scene::commit() {
     // The (u,v) gradients of the triangles whose material reads textures (their hits' footprints
     // need them).
@@ -339,7 +347,7 @@ void Scene::commit() {
     for (std::size_t o = 0; o < objects.size(); ++o) {
         if (!used[o]) continue;
         RTCScene s = rtcNewScene(m_device);
-        rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
+        rtcSetSceneBuildQuality(s, kBuildQuality);
         const bool lone = one_quadric(objects[o].primitives);
         for (std::size_t id = 0; id < objects[o].primitives.size(); ++id)
             attach(m_device, s, *objects[o].primitives[id], static_cast<unsigned>(id), this, lone);
@@ -347,7 +355,7 @@ void Scene::commit() {
         m_object_scenes[o] = s;
     }
     m_scene = rtcNewScene(m_device);
-    rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneBuildQuality(m_scene, kBuildQuality);
     const bool lone = one_quadric(primitives);
     for (std::size_t id = 0; id < primitives.size(); ++id)
         attach(m_device, m_scene, *primitives[id], static_cast<unsigned>(id), this, lone);

@@ -189,7 +189,7 @@ struct Primitive {
     std::vector<uint32_t> indices;
     // Triangles whose material reads textures: per triangle, the gradients of u and of v within
     // its plane, so that an offset dP in the plane moves (u,v) by (g[0] . dP, g[1] . dP) with no
-    // division (made by make_uv_gradients; empty otherwise).
+    // division (made by make_uv_gradients; empty otherwise). algorithms.md §7.
     std::vector<std::array<Vec3, 2>> uv_gradients;
     /// Makes uv_gradients (in double, rounded once to float): the barycentric differentials'
     /// basis divided through and combined with the vertices' (u,v), as local_uv_offsets used to
