@@ -163,6 +163,11 @@ std::vector<unsigned char> encode_png(int w, int h, const unsigned char* rgb) {
     if (!s->png || !(s->info = png_create_info_struct(s->png))) throw RenderError("out of memory");
     if (setjmp(png_jmpbuf(s->png))) throw RenderError(s->message.text);
     png_set_write_fn(s->png, &s->out, png_append, png_no_flush);
+    // The Sub filter on every row and zlib level 3: the demo's 640x400 render is written in about
+    // a third of the time libpng's defaults take (every filter tried per row, level 6), and the
+    // bundled scenes' renders come out 4-13% smaller (docs/performance.md, "Writing images").
+    png_set_filter(s->png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
+    png_set_compression_level(s->png, 3);
     png_set_IHDR(s->png, s->info, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     png_set_sRGB_gAMA_and_cHRM(s->png, s->info, PNG_sRGB_INTENT_PERCEPTUAL);
