@@ -328,10 +328,13 @@ constexpr RTCBuildQuality kBuildQuality = RTC_BUILD_QUALITY_MEDIUM;
 }  // namespace
 
 void Scene::commit() {
-    // The (u,v) gradients of the triangles whose material reads textures (their hits' footprints
-    // need them).
-    auto gradients = [this](Primitive& pr) {
-        if (pr.kind == Primitive::Kind::Triangles && pr.material >= 0 &&
+    // The (u,v) gradients of the triangles whose material reads textures, for the footprint
+    // producers that turn offsets on the surface into (u,v) (ray differentials and anisotropic
+    // cones); 24 bytes a triangle, so not made when nothing reads them.
+    const bool offsets = footprint_methods.has(FootprintMethod::Differentials) ||
+                         footprint_methods.has(FootprintMethod::ConesAniso);
+    auto gradients = [this, offsets](Primitive& pr) {
+        if (offsets && pr.kind == Primitive::Kind::Triangles && pr.material >= 0 &&
             pr.material < static_cast<int>(materials.size()) &&
             materials[pr.material].reads_textures())
             pr.make_uv_gradients();
