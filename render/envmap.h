@@ -33,6 +33,8 @@ class Distribution1D {
   private:
     std::vector<float> m_func;
     std::vector<float> m_cdf;  // size() + 1 entries, from 0 to 1 (summed in double)
+    static constexpr std::size_t kCellsPerGuide = 4;
+    std::vector<uint32_t> m_guide;  // the cell holding g / m_guide.size(), for each g
     double m_integral = 0;
 };
 

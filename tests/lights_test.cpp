@@ -4,6 +4,8 @@
 // disk and sphere area lights give the irradiance of their form factors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -390,4 +392,47 @@ TEST(AreaLight, NsamplesUnderDirectLightingAveragesThatManyShadowRays) {
     EXPECT_NEAR(m16, m1, 4 * s1 / std::sqrt(4000.0));
     EXPECT_GT(s1, 0);
     EXPECT_NEAR(s16 / s1, 0.25, 0.05);
+}
+
+// A piecewise-constant distribution's sample finds its cell from a guide table and a short walk:
+// the cell must be the one a binary search over the CDF finds (the last cell whose CDF start is
+// at or below u), for every u at, just below and just above each CDF value, and on a fine grid,
+// on distributions with zero-weight cells, one dominant cell, and sizes that do not divide the
+// guide's stride. The CDF is restated here as the constructor's documented sums.
+TEST(EnvironmentMap, DistributionSamplingFindsTheBinarySearchesCell) {
+    auto check = [](const std::vector<float>& w) {
+        const Distribution1D d(w);
+        const std::size_t n = w.size();
+        std::vector<double> sums(n + 1, 0.0);
+        for (std::size_t i = 0; i < n; ++i)
+            sums[i + 1] = sums[i] + double(std::max(0.0f, w[i])) / double(n);
+        std::vector<float> cdf(n + 1);
+        for (std::size_t i = 0; i <= n; ++i)
+            cdf[i] = float(sums[n] > 0 ? sums[i] / sums[n] : double(i) / double(n));
+        cdf[n] = 1;
+        auto expected = [&](float u) {
+            const auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
+            return std::clamp(static_cast<int>(it - cdf.begin()) - 1, 0, static_cast<int>(n) - 1);
+        };
+        std::vector<float> us;
+        for (float c : cdf)
+            for (float u : {c, std::nextafter(c, 0.0f), std::nextafter(c, 1.0f)})
+                if (u >= 0 && u < 1) us.push_back(u);
+        for (int i = 0; i < 4096; ++i) us.push_back((i + 0.37f) / 4096);
+        us.push_back(0x1.fffffep-1f);
+        int wrong = 0;
+        for (float u : us) wrong += d.sample(u).cell != expected(u);
+        EXPECT_EQ(wrong, 0) << "n = " << n;
+    };
+    check({1});
+    check({0, 3});
+    check({2, 0, 0, 5, 1});
+    std::vector<float> peaked(1000, 0.01f);
+    peaked[613] = 5000;
+    for (int i = 100; i < 180; ++i) peaked[static_cast<std::size_t>(i)] = 0;
+    check(peaked);
+    std::vector<float> ramp(1023);
+    for (std::size_t i = 0; i < ramp.size(); ++i) ramp[i] = float(i % 17) * float(i % 5);
+    check(ramp);
+    check(std::vector<float>(7, 0));  // no weight: uniform
 }
