@@ -6,6 +6,8 @@
 #include <cmam/texture/filter.h>
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
