@@ -39,7 +39,7 @@ Distribution1D::Sample Distribution1D::sample(float u) const {
     // their start equals the next cell's), clamped to the cells: what std::upper_bound gives,
     // found from the guide's entry for u by a short walk (about kCellsPerGuide cells on average,
     // on one or two cache lines, where a binary search over an environment map's row touched a
-    // dozen: it was a fifth of an environment-lit render's time). The walk back covers a guide
+    // dozen, with a branch each that no predictor could follow). The walk back covers a guide
     // index rounded up. algorithms.md §13.
     const int n = size();
     const std::size_t guides = m_guide.size();
