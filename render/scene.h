@@ -192,8 +192,8 @@ struct Primitive {
     // division (made by make_uv_gradients; empty otherwise). algorithms.md §7.
     std::vector<std::array<Vec3, 2>> uv_gradients;
     /// Makes uv_gradients (in double, rounded once to float): the barycentric differentials'
-    /// basis divided through and combined with the vertices' (u,v), as local_uv_offsets used to
-    /// do per hit.
+    /// basis divided through and combined with the vertices' (u,v), which local_uv_offsets
+    /// otherwise does per hit (in float, for triangles without gradients).
     void make_uv_gradients();
     // Quadrics: object_from_world / world_from_object as 3x4, double precision
     std::array<double, 12> object_from_world{}, world_from_object{};

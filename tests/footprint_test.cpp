@@ -133,13 +133,12 @@ TEST(Differentials, TriangleUvGradientsEqualThePerHitBasis) {
     int hits = 0;
     for (float py = 140.5f; py < 400; py += 37)
         for (float px = 120.25f; px < 420; px += 41) {
-            Vec3 d;
             const CameraRay r = s->camera.generate_ray(px, py);
             const std::optional<SurfaceHit> h = s->intersect(r.org, r.dir, 0, 1e30f);
             if (!h) continue;
             ++hits;
             ASSERT_FALSE(h->prim->uv_gradients.empty());
-            d = r.dir;
+            const Vec3& d = r.dir;
             const RayDifferential rd = camera_differential(s->camera, px, py, 1);
             const HitDifferential with = transfer(rd, d, *h);
             Primitive plain = *h->prim;
