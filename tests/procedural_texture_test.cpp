@@ -3,6 +3,9 @@
 // mappings; Perlin noise's lattice zeros.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <random>
+
 #include "render/integrator.h"
 #include "render/noise.h"
 #include "render/shading.h"
@@ -28,6 +31,102 @@ Rgb at(const Scene& s, float u, float v, Vec3 p = {}) {
 }
 
 }  // namespace
+
+// fbm and turbulence take their octaves' noise four at a time: each must be what the octaves
+// one by one give (pbrt-v3's loops, restated here with the single noise), bit for bit, for
+// every number of octaves, at negative and large coordinates (beyond 2^23 and 2^31 too), on
+// lattice planes, at -0, and with the faded octave anywhere in a group of four.
+namespace {
+float octave_count(const Vec3& dpdx, const Vec3& dpdy, int max_octaves) {
+    const float len2 = std::max(dot(dpdx, dpdx), dot(dpdy, dpdy));
+    if (!(len2 > 0)) return float(max_octaves);
+    return std::clamp(-1 - 0.5f * std::log2(len2), 0.0f, float(max_octaves));
+}
+float smooth(float x) {
+    if (x <= 0.3f) return 0;
+    if (x >= 0.7f) return 1;
+    const float t = (x - 0.3f) / (0.7f - 0.3f);
+    return t * t * (3 - 2 * t);
+}
+float fbm_one_by_one(const Vec3& p, const Vec3& dx, const Vec3& dy, float omega, int octaves) {
+    const float n = octave_count(dx, dy, octaves);
+    const int whole = static_cast<int>(std::floor(n));
+    float sum = 0, frequency = 1, amplitude = 1;
+    for (int i = 0; i < whole; ++i) {
+        sum += amplitude * perlin_noise(p * frequency);
+        frequency *= 1.99f;
+        amplitude *= omega;
+    }
+    return sum + amplitude * smooth(n - float(whole)) * perlin_noise(p * frequency);
+}
+float turbulence_one_by_one(const Vec3& p, const Vec3& dx, const Vec3& dy, float omega,
+                            int octaves) {
+    const float n = octave_count(dx, dy, octaves);
+    const int whole = static_cast<int>(std::floor(n));
+    float sum = 0, frequency = 1, amplitude = 1;
+    for (int i = 0; i < whole; ++i) {
+        sum += amplitude * std::abs(perlin_noise(p * frequency));
+        frequency *= 1.99f;
+        amplitude *= omega;
+    }
+    const float w = smooth(n - float(whole));
+    sum += amplitude * (0.2f + w * (std::abs(perlin_noise(p * frequency)) - 0.2f));
+    for (int i = whole; i < octaves; ++i) {
+        sum += amplitude * 0.2f;
+        amplitude *= omega;
+    }
+    return sum;
+}
+uint32_t bits(float x) {
+    uint32_t u;
+    std::memcpy(&u, &x, 4);
+    return u;
+}
+}  // namespace
+
+TEST(Noise, OctavesFourAtOnceEqualOneByOne) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> small(-300.0f, 300.0f), big(-1e6f, 1e6f),
+        step(0.0f, 0.3f), omega(0.2f, 0.8f);
+    std::uniform_int_distribution<int> lattice(-600, 600), octaves(1, 11);
+    int differ = 0, nonzero = 0, n = 0;
+    for (int k = 0; k < 40000; ++k) {
+        Vec3 p;
+        switch (k % 6) {
+            case 0:
+                p = Vec3(small(rng), small(rng), small(rng));
+                break;
+            case 1:
+                p = Vec3(big(rng), big(rng), small(rng));
+                break;
+            case 2:
+                p = Vec3(float(lattice(rng)), small(rng), small(rng));
+                break;
+            case 3:
+                p = Vec3(small(rng), float(lattice(rng)), float(lattice(rng)));
+                break;
+            // Beyond 2^23 (integral floats) and 2^31 (past a 32-bit integer), and -0.
+            case 4:
+                p = Vec3(big(rng) * 1e4f, small(rng) * 3e7f, -0.0f);
+                break;
+            default:
+                p = Vec3(-0.0f, std::nextafter(float(lattice(rng)), 0.0f), small(rng));
+                break;
+        }
+        // Footprints from none (every octave) to wide (none but a faded first one).
+        const Vec3 dx = k % 5 == 0 ? Vec3() : Vec3(step(rng), 0, step(rng)),
+                   dy = Vec3(0, step(rng), 0);
+        const float w = omega(rng);
+        const int o = octaves(rng);
+        const float f = fbm(p, dx, dy, w, o), t = turbulence(p, dx, dy, w, o);
+        differ += bits(f) != bits(fbm_one_by_one(p, dx, dy, w, o));
+        differ += bits(t) != bits(turbulence_one_by_one(p, dx, dy, w, o));
+        nonzero += f != 0;
+        ++n;
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_GT(nonzero, n * 3 / 4);
+}
 
 TEST(Noise, ZeroOnTheLatticeAndBounded) {
     EXPECT_EQ(perlin_noise(Vec3(0, 0, 0)), 0);
