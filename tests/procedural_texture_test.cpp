@@ -1,6 +1,7 @@
 // pbrt-v3's procedural textures and 2-D mappings at points where their value is known: bilerp,
 // uv, dots, 3-D checkerboard, fbm, wrinkled, windy, marble; spherical, cylindrical and planar
-// mappings; Perlin noise's lattice zeros.
+// mappings; Perlin noise's lattice zeros; fBm and turbulence, whose octaves are evaluated four at
+// a time, against the octaves one by one.
 #include <gtest/gtest.h>
 
 #include <cstring>
