@@ -71,6 +71,20 @@ Distribution2D::Sample Distribution2D::sample(float u1, float u2) const {
     return {{u.x, v.x}, u.pdf * v.pdf};
 }
 
+void Distribution2D::sample(const float* u1, const float* u2, int n, Sample* out) const {
+    constexpr int kBatch = 16;
+    for (int i0 = 0; i0 < n; i0 += kBatch) {
+        const int m = std::min(kBatch, n - i0);
+        Distribution1D::Sample v[kBatch];
+        for (int i = 0; i < m; ++i) v[i] = m_marginal.sample(u2[i0 + i]);
+        for (int i = 0; i < m; ++i) {
+            const Distribution1D::Sample u =
+                m_rows[static_cast<std::size_t>(v[i].cell)].sample(u1[i0 + i]);
+            out[i0 + i] = {{u.x, v[i].x}, u.pdf * v[i].pdf};
+        }
+    }
+}
+
 float Distribution2D::pdf(float u, float v) const {
     const int nv = m_marginal.size(), nu = m_rows.empty() ? 0 : m_rows[0].size();
     if (nv == 0) return 0;
@@ -178,7 +192,26 @@ Rgb EnvironmentMap::radiance(const Vec3& dir, const Vec3* dddx, const Vec3* dddy
 
 EnvironmentMap::Sample EnvironmentMap::sample(float u1, float u2) const {
     if (m_dist.empty()) return {};
-    const auto [uv, map_pdf] = m_dist.sample(u1, u2);
+    return direction_of(m_dist.sample(u1, u2));
+}
+
+void EnvironmentMap::sample(const float* u1, const float* u2, int n, Sample* out) const {
+    if (m_dist.empty()) {
+        std::fill(out, out + n, Sample{});
+        return;
+    }
+    constexpr int kBatch = 16;
+    Distribution2D::Sample d[kBatch];
+    for (int i0 = 0; i0 < n; i0 += kBatch) {
+        const int m = std::min(kBatch, n - i0);
+        m_dist.sample(u1 + i0, u2 + i0, m, d);
+        for (int i = 0; i < m; ++i) out[i0 + i] = direction_of(d[i]);
+    }
+}
+
+// The world direction, density and radiance of a point the distribution drew.
+EnvironmentMap::Sample EnvironmentMap::direction_of(const Distribution2D::Sample& d) const {
+    const auto [uv, map_pdf] = d;
     if (map_pdf == 0) return {};
     const float theta = uv[1] * kPi, phi = uv[0] * 2 * kPi;
     const float sin_theta = std::sin(theta);

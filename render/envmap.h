@@ -52,6 +52,10 @@ class Distribution2D {
         float pdf;                // with respect to du dv
     };
     Sample sample(float u1, float u2) const;
+    /// The same for n pairs (u1[i], u2[i]) into out[i]: every pair's row first, then every
+    /// pair's column, so the pairs' table reads (each a likely cache miss on a large map) wait
+    /// together rather than one after another. Each out[i] is sample(u1[i], u2[i]).
+    void sample(const float* u1, const float* u2, int n, Sample* out) const;
     float pdf(float u, float v) const;
 
   private:
@@ -81,6 +85,8 @@ class EnvironmentMap {
     };
     /// Samples a world direction towards the map by its luminance.
     Sample sample(float u1, float u2) const;
+    /// The same for n pairs (Distribution2D's batch): out[i] is sample(u1[i], u2[i]).
+    void sample(const float* u1, const float* u2, int n, Sample* out) const;
     /// Density sample() gives the world direction `dir`, with respect to solid angle.
     float pdf(const Vec3& dir) const;
     const texture::FilteredTexture& image() const { return *m_image; }
@@ -91,6 +97,7 @@ class EnvironmentMap {
     Distribution2D m_dist;
     texture::FilterOptions m_filter{texture::FilterKind::Ewa};
     Rgb at(float s, float theta_over_pi) const;
+    Sample direction_of(const Distribution2D::Sample& d) const;
 };
 
 /// The image of pbrt-v3's goniometric or projection light: a point light whose intensity in

@@ -82,17 +82,23 @@ struct Tracer {
         return ls;
     }
 
+    // A light sample from the sample of its environment map (none where the map gave none).
+    static std::optional<LightSample> from_map(const Light& light,
+                                               const EnvironmentMap::Sample& s) {
+        if (s.pdf == 0) return std::nullopt;
+        LightSample ls;
+        ls.li = light.intensity * s.radiance;
+        ls.wi = s.wi;
+        ls.pdf = s.pdf;
+        return ls;
+    }
+
     std::optional<LightSample> sample_infinite(const Light& light, const SurfaceHit& h,
                                                const Vec3& wo) {
         LightSample ls;
         if (light.env) {  // by the map's luminance
             float u1 = rng.next_float(), u2 = rng.next_float();
-            const EnvironmentMap::Sample s = light.env->sample(u1, u2);
-            if (s.pdf == 0) return std::nullopt;
-            ls.li = light.intensity * s.radiance;
-            ls.wi = s.wi;
-            ls.pdf = s.pdf;
-            return ls;
+            return from_map(light, light.env->sample(u1, u2));
         }
         // Cosine-weighted about the geometric normal on wo's side: the same expected value as
         // pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
@@ -160,32 +166,55 @@ struct Tracer {
         const Bsdf::Outgoing o = bsdf.outgoing(wo);
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
-            // Lights that are sampled (infinite, area) take light.samples shadow rays, averaged.
-            for (int k = 0; k < light.samples; ++k) {
-                const std::optional<LightSample> ls = sample_light(light, h, wo);
-                if (!ls || ls->li.is_black()) continue;
-                const Rgb fv = bsdf.f(o, ls->wi);
-                if (fv.is_black()) continue;
+            // A light sample's shadow ray, unless the light's radiance or the BSDF is zero.
+            auto add = [&](const LightSample& ls) {
+                if (ls.li.is_black()) return;
+                const Rgb fv = bsdf.f(o, ls.wi);
+                if (fv.is_black()) return;
                 if (counts) ++counts->shadow;
                 ShadowRay& r = out.emplace_back();  // in place: no copy of a half-written ray
                 r.light = static_cast<int>(l);
-                r.contribution = fv * ls->li * (absdot(ls->wi, h.ns) / ls->pdf);
-                r.org = offset_origin(h, ls->wi);
+                r.contribution = fv * ls.li * (absdot(ls.wi, h.ns) / ls.pdf);
+                r.org = offset_origin(h, ls.wi);
                 if (light.type == Light::Type::Area) {
-                    const Vec3 d = ls->target - r.org;
+                    const Vec3 d = ls.target - r.org;
                     const float len = length(d);
                     r.dir = d / len;
-                    r.tmax = len - ray_epsilon(ls->target);
+                    r.tmax = len - ray_epsilon(ls.target);
                     if (r.tmax <= 0) {  // the hit is on the light: nothing to trace
                         r.traced = false;
                         r.clear = true;
                     }
                 } else {
-                    r.dir = ls->wi;
-                    r.tmax = std::isinf(ls->dist) ? std::numeric_limits<float>::infinity()
-                                                  : ls->dist * (1 - 1e-4f);
+                    r.dir = ls.wi;
+                    r.tmax = std::isinf(ls.dist) ? std::numeric_limits<float>::infinity()
+                                                 : ls.dist * (1 - 1e-4f);
                 }
+            };
+            // Lights that are sampled (infinite, area) take light.samples shadow rays, averaged.
+            if (light.type == Light::Type::Infinite && light.env && light.samples > 1) {
+                // An environment map's samples (pbrt-v3's directlighting takes nsamples of them)
+                // drawn in batches: their table reads in the map's distribution, mostly cache
+                // misses on a large map, then overlap (EnvironmentMap::sample's batch). The
+                // random numbers are drawn in sample_infinite's order, and each sample is the
+                // one it gives.
+                constexpr int kBatch = 16;
+                for (int k0 = 0; k0 < light.samples; k0 += kBatch) {
+                    const int m = std::min(kBatch, light.samples - k0);
+                    float u1[kBatch], u2[kBatch];
+                    for (int i = 0; i < m; ++i) {
+                        u1[i] = rng.next_float();
+                        u2[i] = rng.next_float();
+                    }
+                    EnvironmentMap::Sample es[kBatch];
+                    light.env->sample(u1, u2, m, es);
+                    for (int i = 0; i < m; ++i)
+                        if (const std::optional<LightSample> ls = from_map(light, es[i])) add(*ls);
+                }
+                continue;
             }
+            for (int k = 0; k < light.samples; ++k)
+                if (const std::optional<LightSample> ls = sample_light(light, h, wo)) add(*ls);
         }
     }
 

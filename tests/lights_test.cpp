@@ -46,6 +46,21 @@ std::string write_map(const std::string& name, int W, int H, F f) {
     return path;
 }
 
+// The red radiance's mean and standard deviation over 4000 seeds along one ray down onto the
+// plane of camera_and_plane.
+std::pair<double, double> radiance_stats(const Scene& s) {
+    double m = 0, m2 = 0;
+    const int n = 4000;
+    for (int k = 0; k < n; ++k) {
+        const double r =
+            trace_radiance(s, Vec3(0.3f, 0.2f, 0.5f), Vec3(0, 0, -1), uint64_t(k) + 1, nullptr).r;
+        m += r;
+        m2 += r * r;
+    }
+    m /= n;
+    return {m, std::sqrt(std::max(0.0, m2 / n - m * m))};
+}
+
 std::string camera_and_plane(const std::string& world) {
     return "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
            "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 WorldBegin " +
@@ -155,6 +170,72 @@ TEST(EnvironmentMap, ImportanceSamplingIsUnbiasedAndItsPdfIsConsistent) {
     EXPECT_GT(checked, 100);
     EXPECT_LE(pdf_mismatches, checked / 50);
     EXPECT_NEAR(est, ref, 0.01 * ref);
+}
+
+// A batch of samples (drawn together so that their table reads overlap) is each pair's single
+// sample, bit for bit: batch sizes below, at and past the batch's 16, u at 0 and just below 1,
+// and a black map (nothing to sample).
+TEST(EnvironmentMap, BatchedSamplesAreTheSingleSamples) {
+    const std::string map = write_map("batch.exr", 48, 24, [](int i, int j) {
+        if (i == 30 && j == 7) return Rgb(500, 400, 300);
+        return Rgb(0.02f * float((i * 5 + j * 11) % 7), 0.3f, 0.01f * float(j));
+    });
+    const std::string black = write_map("black.exr", 8, 4, [](int, int) { return Rgb(0); });
+    for (const std::string& m : {map, black}) {
+        auto s = test::scene_from(
+            camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + m + "\""), "t.pbrt",
+            1);
+        const EnvironmentMap& env = *s->lights[0].env;
+        uint64_t x = 99;
+        auto uni = [&x] {
+            x = x * 6364136223846793005ull + 1442695040888963407ull;
+            return float(x >> 40) * 0x1.0p-24f;
+        };
+        for (int n : {0, 1, 5, 16, 17, 40}) {
+            std::vector<float> u1(static_cast<std::size_t>(n)), u2(u1.size());
+            for (int i = 0; i < n; ++i) {
+                u1[i] = i == 1 ? 0.0f : (i == 2 ? std::nextafter(1.0f, 0.0f) : uni());
+                u2[i] = i == 3 ? 0.0f : (i == 4 ? std::nextafter(1.0f, 0.0f) : uni());
+            }
+            std::vector<EnvironmentMap::Sample> out(u1.size());
+            env.sample(u1.data(), u2.data(), n, out.data());
+            for (int i = 0; i < n; ++i) {
+                const EnvironmentMap::Sample one = env.sample(u1[i], u2[i]);
+                EXPECT_EQ(std::memcmp(&one.radiance, &out[i].radiance, sizeof one.radiance), 0);
+                EXPECT_EQ(std::memcmp(&one.wi, &out[i].wi, sizeof one.wi), 0);
+                EXPECT_EQ(std::memcmp(&one.pdf, &out[i].pdf, sizeof one.pdf), 0);
+                // (u2 = 0 is the pole, where no direction is drawn)
+                if (m == black || i == 3)
+                    EXPECT_EQ(out[i].pdf, 0) << i;
+                else
+                    EXPECT_GT(out[i].pdf, 0) << i;
+            }
+        }
+    }
+}
+
+// pbrt-v3's directlighting takes an environment map's nsamples (drawn in batches): their mean
+// is the one-sample estimate's, with 1/sqrt(nsamples) of its spread (20 samples: a batch of 16
+// and one of 4).
+TEST(EnvironmentMap, NsamplesUnderDirectLightingAveragesThatManySamples) {
+    const std::string map = write_map("ns.exr", 32, 16, [](int i, int j) {
+        return Rgb(0.2f + float((i * 3 + j * 5) % 4), 1, 1);
+    });
+    auto scene = [&](const std::string& integrator) {
+        std::string text = camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map +
+                                            "\" \"integer nsamples\" 20");
+        text.insert(text.find("WorldBegin"), integrator + " ");
+        return test::scene_from(text, "t.pbrt", 1);
+    };
+    const auto direct = scene("Integrator \"directlighting\""),
+               whitted = scene("Integrator \"whitted\"");
+    EXPECT_EQ(direct->lights[0].samples, 20);
+    EXPECT_EQ(whitted->lights[0].samples, 1);
+    const auto [m20, s20] = radiance_stats(*direct);
+    const auto [m1, s1] = radiance_stats(*whitted);
+    EXPECT_NEAR(m20, m1, 4 * s1 / std::sqrt(4000.0));
+    EXPECT_GT(s1, 0);
+    EXPECT_NEAR(s20 / s1, 1 / std::sqrt(20.0), 0.05);
 }
 
 TEST(EnvironmentMap, EscapingRaysFilterTheMapOverTheirDifferentials) {
@@ -374,21 +455,8 @@ TEST(AreaLight, NsamplesUnderDirectLightingAveragesThatManyShadowRays) {
     EXPECT_EQ(direct->lights[0].samples, 16);
     EXPECT_EQ(whitted->lights[0].samples, 1);
     EXPECT_EQ(one->lights[0].samples, 1);
-    auto stats = [](const Scene& s) {  // mean and standard deviation over seeds at one point
-        double m = 0, m2 = 0;
-        const int n = 4000;
-        for (int k = 0; k < n; ++k) {
-            const double r =
-                trace_radiance(s, Vec3(0.3f, 0.2f, 0.5f), Vec3(0, 0, -1), uint64_t(k) + 1, nullptr)
-                    .r;
-            m += r;
-            m2 += r * r;
-        }
-        m /= n;
-        return std::pair{m, std::sqrt(std::max(0.0, m2 / n - m * m))};
-    };
-    const auto [m16, s16] = stats(*direct);
-    const auto [m1, s1] = stats(*whitted);
+    const auto [m16, s16] = radiance_stats(*direct);
+    const auto [m1, s1] = radiance_stats(*whitted);
     EXPECT_NEAR(m16, m1, 4 * s1 / std::sqrt(4000.0));
     EXPECT_GT(s1, 0);
     EXPECT_NEAR(s16 / s1, 0.25, 0.05);
