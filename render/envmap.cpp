@@ -42,10 +42,7 @@ Distribution1D::Sample Distribution1D::sample(float u) const {
     // dozen, with a branch each that no predictor could follow). The walk back covers a guide
     // index rounded up. algorithms.md §13.
     const int n = size();
-    const std::size_t guides = m_guide.size();
-    const float gu = u * float(guides);
-    std::size_t k = m_guide[gu >= 0 && gu < float(guides) ? static_cast<std::size_t>(gu)
-                                                          : (gu >= 0 ? guides - 1 : 0)];
+    std::size_t k = m_guide[guide_of(u)];
     while (k > 0 && u < m_cdf[k]) --k;
     while (k + 1 < static_cast<std::size_t>(n) && !(u < m_cdf[k + 1])) ++k;
     const double width = double(m_cdf[k + 1]) - m_cdf[k];
@@ -77,6 +74,8 @@ void Distribution2D::sample(const float* u1, const float* u2, int n, Sample* out
         const int m = std::min(kBatch, n - i0);
         Distribution1D::Sample v[kBatch];
         for (int i = 0; i < m; ++i) v[i] = m_marginal.sample(u2[i0 + i]);
+        for (int i = 0; i < m; ++i)
+            m_rows[static_cast<std::size_t>(v[i].cell)].prefetch(u1[i0 + i]);
         for (int i = 0; i < m; ++i) {
             const Distribution1D::Sample u =
                 m_rows[static_cast<std::size_t>(v[i].cell)].sample(u1[i0 + i]);
