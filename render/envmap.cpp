@@ -191,7 +191,8 @@ Rgb EnvironmentMap::radiance(const Vec3& dir, const Vec3* dddx, const Vec3* dddy
 
 EnvironmentMap::Sample EnvironmentMap::sample(float u1, float u2) const {
     if (m_dist.empty()) return {};
-    return direction_of(m_dist.sample(u1, u2));
+    const Distribution2D::Sample d = m_dist.sample(u1, u2);
+    return direction_of(d, d.pdf != 0 ? at(d.uv[0], d.uv[1]) : Rgb());
 }
 
 void EnvironmentMap::sample(const float* u1, const float* u2, int n, Sample* out) const {
@@ -204,12 +205,17 @@ void EnvironmentMap::sample(const float* u1, const float* u2, int n, Sample* out
     for (int i0 = 0; i0 < n; i0 += kBatch) {
         const int m = std::min(kBatch, n - i0);
         m_dist.sample(u1 + i0, u2 + i0, m, d);
-        for (int i = 0; i < m; ++i) out[i0 + i] = direction_of(d[i]);
+        // The radiances (each a read at a random place in the image) together, then the rest.
+        Rgb radiance[kBatch];
+        for (int i = 0; i < m; ++i)
+            if (d[i].pdf != 0) radiance[i] = at(d[i].uv[0], d[i].uv[1]);
+        for (int i = 0; i < m; ++i) out[i0 + i] = direction_of(d[i], radiance[i]);
     }
 }
 
-// The world direction, density and radiance of a point the distribution drew.
-EnvironmentMap::Sample EnvironmentMap::direction_of(const Distribution2D::Sample& d) const {
+// The world direction and density of a point the distribution drew, with its radiance.
+EnvironmentMap::Sample EnvironmentMap::direction_of(const Distribution2D::Sample& d,
+                                                    const Rgb& radiance) const {
     const auto [uv, map_pdf] = d;
     if (map_pdf == 0) return {};
     const float theta = uv[1] * kPi, phi = uv[0] * 2 * kPi;
@@ -221,7 +227,7 @@ EnvironmentMap::Sample EnvironmentMap::direction_of(const Distribution2D::Sample
     s.wi =
         normalize(transform3(m_world_from_light, Vec3(sin_theta * std::cos(phi),
                                                       sin_theta * std::sin(phi), std::cos(theta))));
-    s.radiance = at(uv[0], uv[1]);
+    s.radiance = radiance;
     return s;
 }
 

@@ -105,7 +105,7 @@ class EnvironmentMap {
     Distribution2D m_dist;
     texture::FilterOptions m_filter{texture::FilterKind::Ewa};
     Rgb at(float s, float theta_over_pi) const;
-    Sample direction_of(const Distribution2D::Sample& d) const;
+    Sample direction_of(const Distribution2D::Sample& d, const Rgb& radiance) const;
 };
 
 /// The image of pbrt-v3's goniometric or projection light: a point light whose intensity in
