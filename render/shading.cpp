@@ -1,5 +1,7 @@
 #include "render/shading.h"
 
+#include <limits>
+
 #include "render/noise.h"
 
 namespace cmam::render {
@@ -318,11 +320,18 @@ float tr_lambda(const Vec3& w, float alpha) {
     return (-1 + std::sqrt(1 + alpha * alpha * tan2)) / 2;
 }
 
+// pbrt-v3's remapping of a roughness to the microfacet alpha. A material's roughness is mostly a
+// constant, and a thread shades one material after another: the last value's alpha is kept, per
+// thread, so that the logarithm runs only when the roughness changes (the same values: a roughness
+// equal to the last one, +0 and -0 included, has the same alpha).
 float roughness_to_alpha(float r) {
-    r = std::max(r, 1e-3f);
-    float x = std::log(r);
-    return 1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x +
-           0.000640711f * x * x * x * x;
+    thread_local float last_r = std::numeric_limits<float>::quiet_NaN(), last_alpha = 0;
+    if (r == last_r) return last_alpha;
+    last_r = r;
+    const float x = std::log(std::max(r, 1e-3f));
+    last_alpha = 1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x +
+                 0.000640711f * x * x * x * x;
+    return last_alpha;
 }
 
 }  // namespace
