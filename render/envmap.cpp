@@ -69,10 +69,9 @@ Distribution2D::Sample Distribution2D::sample(float u1, float u2) const {
 }
 
 void Distribution2D::sample(const float* u1, const float* u2, int n, Sample* out) const {
-    constexpr int kBatch = 16;
-    for (int i0 = 0; i0 < n; i0 += kBatch) {
-        const int m = std::min(kBatch, n - i0);
-        Distribution1D::Sample v[kBatch];
+    for (int i0 = 0; i0 < n; i0 += kSampleBatch) {
+        const int m = std::min(kSampleBatch, n - i0);
+        Distribution1D::Sample v[kSampleBatch];
         for (int i = 0; i < m; ++i) v[i] = m_marginal.sample(u2[i0 + i]);
         for (int i = 0; i < m; ++i)
             m_rows[static_cast<std::size_t>(v[i].cell)].prefetch(u1[i0 + i]);
@@ -200,13 +199,12 @@ void EnvironmentMap::sample(const float* u1, const float* u2, int n, Sample* out
         std::fill(out, out + n, Sample{});
         return;
     }
-    constexpr int kBatch = 16;
-    Distribution2D::Sample d[kBatch];
-    for (int i0 = 0; i0 < n; i0 += kBatch) {
-        const int m = std::min(kBatch, n - i0);
+    Distribution2D::Sample d[kSampleBatch];
+    for (int i0 = 0; i0 < n; i0 += kSampleBatch) {
+        const int m = std::min(kSampleBatch, n - i0);
         m_dist.sample(u1 + i0, u2 + i0, m, d);
         // The radiances (each a read at a random place in the image) together, then the rest.
-        Rgb radiance[kBatch];
+        Rgb radiance[kSampleBatch];
         for (int i = 0; i < m; ++i)
             if (d[i].pdf != 0) radiance[i] = at(d[i].uv[0], d[i].uv[1]);
         for (int i = 0; i < m; ++i) out[i0 + i] = direction_of(d[i], radiance[i]);

@@ -15,6 +15,10 @@
 
 namespace cmam::render {
 
+/// How many samples the batched sample() functions below take together (their table reads
+/// overlap); callers drawing many samples hand them over in batches of this size.
+inline constexpr int kSampleBatch = 16;
+
 /// A piecewise-constant density on [0,1): n equal cells with non-negative weights.
 class Distribution1D {
   public:

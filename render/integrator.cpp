@@ -198,15 +198,14 @@ struct Tracer {
                 // misses on a large map, then overlap (EnvironmentMap::sample's batch). The
                 // random numbers are drawn in sample_infinite's order, and each sample is the
                 // one it gives.
-                constexpr int kBatch = 16;
-                for (int k0 = 0; k0 < light.samples; k0 += kBatch) {
-                    const int m = std::min(kBatch, light.samples - k0);
-                    float u1[kBatch], u2[kBatch];
+                for (int k0 = 0; k0 < light.samples; k0 += kSampleBatch) {
+                    const int m = std::min(kSampleBatch, light.samples - k0);
+                    float u1[kSampleBatch], u2[kSampleBatch];
                     for (int i = 0; i < m; ++i) {
                         u1[i] = rng.next_float();
                         u2[i] = rng.next_float();
                     }
-                    EnvironmentMap::Sample es[kBatch];
+                    EnvironmentMap::Sample es[kSampleBatch];
                     light.env->sample(u1, u2, m, es);
                     for (int i = 0; i < m; ++i)
                         if (const std::optional<LightSample> ls = from_map(light, es[i])) add(*ls);
