@@ -142,8 +142,13 @@ class Image {
 };
 
 /// floor() for |x| < 2^62 without a libm call (baseline x86-64 has no rounding instruction).
+/// Truncation is the floor of a non-negative x, as most texel coordinates are: a predicted
+/// branch then spares the index the conversion back and the comparison (about 10 cycles on the
+/// way to a lookup's first texel).
 inline int64_t floor_to_int(double x) {
     auto i = static_cast<int64_t>(x);
+    if (x >= 0) [[likely]]
+        return i;
     return i - (static_cast<double>(i) > x ? 1 : 0);
 }
 
