@@ -43,6 +43,7 @@ Distribution1D::Sample Distribution1D::sample(float u) const {
     // index rounded up. algorithms.md §13.
     const int n = size();
     std::size_t k = m_guide[guide_of(u)];
+    __builtin_prefetch(m_func.data() + k);  // pdf() reads the cell's, a few cells on at most
     while (k > 0 && u < m_cdf[k]) --k;
     while (k + 1 < static_cast<std::size_t>(n) && !(u < m_cdf[k + 1])) ++k;
     const double width = double(m_cdf[k + 1]) - m_cdf[k];
@@ -60,12 +61,6 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv
         marginal[static_cast<std::size_t>(v)] = float(m_rows.back().integral());
     }
     m_marginal = Distribution1D(std::move(marginal));
-}
-
-Distribution2D::Sample Distribution2D::sample(float u1, float u2) const {
-    const Distribution1D::Sample v = m_marginal.sample(u2);
-    const Distribution1D::Sample u = m_rows[static_cast<std::size_t>(v.cell)].sample(u1);
-    return {{u.x, v.x}, u.pdf * v.pdf};
 }
 
 void Distribution2D::sample(const float* u1, const float* u2, int n, Sample* out) const {
@@ -190,7 +185,19 @@ Rgb EnvironmentMap::radiance(const Vec3& dir, const Vec3* dddx, const Vec3* dddy
 
 EnvironmentMap::Sample EnvironmentMap::sample(float u1, float u2) const {
     if (m_dist.empty()) return {};
-    const Distribution2D::Sample d = m_dist.sample(u1, u2);
+    // Once the row and the cell its walk starts from are known, the texels around them, which the
+    // radiance's bilinear read takes (the walk ends a few cells on at most), are asked of the
+    // cache: a large map's misses there then overlap the walk's instead of following them.
+    const Distribution2D::Start s = m_dist.start(u1, u2);
+    const texture::Image& img = m_image->image();
+    const int j = img.height() - 1 - s.v.cell;  // the image row of distribution row v
+    const int i0 = std::max(s.cell - 1, 0), i1 = std::min(s.cell + 3, img.width() - 1);
+    for (int dj = -1; dj <= 1; ++dj)
+        if (j + dj >= 0 && j + dj < img.height()) {
+            __builtin_prefetch(img.texel(i0, j + dj));
+            __builtin_prefetch(img.texel(i1, j + dj));
+        }
+    const Distribution2D::Sample d = m_dist.finish(s, u1);
     return direction_of(d, d.pdf != 0 ? at(d.uv[0], d.uv[1]) : Rgb());
 }
 

@@ -36,6 +36,8 @@ class Distribution1D {
     Sample sample(float u) const;
     /// Asks the cache for the guide entry sample(u) starts from (a batch's rows ask first).
     void prefetch(float u) const { __builtin_prefetch(m_guide.data() + guide_of(u)); }
+    /// The cell sample(u) starts its walk from: the one it returns or one a few cells from it.
+    int start_cell(float u) const { return static_cast<int>(m_guide[guide_of(u)]); }
     float pdf(int cell) const;
 
   private:
@@ -63,7 +65,22 @@ class Distribution2D {
         std::array<float, 2> uv;  // in [0,1)^2
         float pdf;                // with respect to du dv
     };
-    Sample sample(float u1, float u2) const;
+    Sample sample(float u1, float u2) const { return finish(start(u1, u2), u1); }
+    /// sample(u1, u2) in two steps. start() draws the row (v) and finds the cell its walk
+    /// starts from (the cell drawn or one a few cells from it): a caller that will read near it
+    /// can ask the cache for that before finish() walks, so that the misses overlap.
+    struct Start {
+        Distribution1D::Sample v;
+        int cell;
+    };
+    Start start(float u1, float u2) const {
+        const Distribution1D::Sample v = m_marginal.sample(u2);
+        return {v, m_rows[static_cast<std::size_t>(v.cell)].start_cell(u1)};
+    }
+    Sample finish(const Start& s, float u1) const {
+        const Distribution1D::Sample u = m_rows[static_cast<std::size_t>(s.v.cell)].sample(u1);
+        return {{u.x, s.v.x}, u.pdf * s.v.pdf};
+    }
     /// The same for n pairs (u1[i], u2[i]) into out[i]: every pair's row first, then every
     /// pair's column, so the pairs' table reads (each a likely cache miss on a large map) wait
     /// together rather than one after another. Each out[i] is sample(u1[i], u2[i]).
