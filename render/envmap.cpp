@@ -70,11 +70,7 @@ void Distribution2D::sample(const float* u1, const float* u2, int n, Sample* out
         for (int i = 0; i < m; ++i) v[i] = m_marginal.sample(u2[i0 + i]);
         for (int i = 0; i < m; ++i)
             m_rows[static_cast<std::size_t>(v[i].cell)].prefetch(u1[i0 + i]);
-        for (int i = 0; i < m; ++i) {
-            const Distribution1D::Sample u =
-                m_rows[static_cast<std::size_t>(v[i].cell)].sample(u1[i0 + i]);
-            out[i0 + i] = {{u.x, v[i].x}, u.pdf * v[i].pdf};
-        }
+        for (int i = 0; i < m; ++i) out[i0 + i] = finish(v[i], u1[i0 + i]);
     }
 }
 
@@ -197,7 +193,7 @@ EnvironmentMap::Sample EnvironmentMap::sample(float u1, float u2) const {
             __builtin_prefetch(img.texel(i0, j + dj));
             __builtin_prefetch(img.texel(i1, j + dj));
         }
-    const Distribution2D::Sample d = m_dist.finish(s, u1);
+    const Distribution2D::Sample d = m_dist.finish(s.v, u1);
     return direction_of(d, d.pdf != 0 ? at(d.uv[0], d.uv[1]) : Rgb());
 }
 

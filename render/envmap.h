@@ -65,7 +65,7 @@ class Distribution2D {
         std::array<float, 2> uv;  // in [0,1)^2
         float pdf;                // with respect to du dv
     };
-    Sample sample(float u1, float u2) const { return finish(start(u1, u2), u1); }
+    Sample sample(float u1, float u2) const { return finish(m_marginal.sample(u2), u1); }
     /// sample(u1, u2) in two steps. start() draws the row (v) and finds the cell its walk
     /// starts from (the cell drawn or one a few cells from it): a caller that will read near it
     /// can ask the cache for that before finish() walks, so that the misses overlap.
@@ -77,9 +77,10 @@ class Distribution2D {
         const Distribution1D::Sample v = m_marginal.sample(u2);
         return {v, m_rows[static_cast<std::size_t>(v.cell)].start_cell(u1)};
     }
-    Sample finish(const Start& s, float u1) const {
-        const Distribution1D::Sample u = m_rows[static_cast<std::size_t>(s.v.cell)].sample(u1);
-        return {{u.x, s.v.x}, u.pdf * s.v.pdf};
+    /// The column in the row v drew, and the pair's sample (the batch's last step too).
+    Sample finish(const Distribution1D::Sample& v, float u1) const {
+        const Distribution1D::Sample u = m_rows[static_cast<std::size_t>(v.cell)].sample(u1);
+        return {{u.x, v.x}, u.pdf * v.pdf};
     }
     /// The same for n pairs (u1[i], u2[i]) into out[i]: every pair's row first, then every
     /// pair's column, so the pairs' table reads (each a likely cache miss on a large map) wait
