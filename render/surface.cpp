@@ -268,6 +268,13 @@ std::array<Vec3, N> SurfaceHit::local_normal_offsets(const std::array<Vec3, N>& 
         if (pr.normals.empty()) return out;  // flat: the normal is constant
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
+        const Vec3 &n0 = pr.normals[i0], &n1 = pr.normals[i1], &n2 = pr.normals[i2];
+        // The same normal at the three vertices (a flat face given normals, as exporters write
+        // them): the normal is constant over the triangle, and its offsets zero.
+        auto same = [](const Vec3& a, const Vec3& b) {
+            return a.x == b.x && a.y == b.y && a.z == b.z;
+        };
+        if (same(n0, n1) && same(n0, n2)) return out;
         const BarycentricBasis basis(pr, triangle);
         float b0 = 1 - b1 - b2;
         Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];

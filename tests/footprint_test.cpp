@@ -157,6 +157,44 @@ TEST(Differentials, TriangleUvGradientsEqualThePerHitBasis) {
     EXPECT_GT(hits, 20);
 }
 
+// A triangle given the same normal at its three vertices (a flat face with normals, as
+// exporters write them) has a constant normal: its offsets are exactly zero, however the normal
+// leans from the face's. With normals that vary they are not.
+TEST(Differentials, OneNormalAtEveryVertexHasNoNormalOffsets) {
+    const std::string mesh =
+        "Material \"glass\" Translate 0.5 -0.3 9 Rotate 50 1 0.3 0 Shape \"trianglemesh\" "
+        "\"point3 P\" [-7 -6 0  8 -8 1  6 7 -0.5  -8 6 0.5  0.5 0.2 2] "
+        "\"integer indices\" [0 1 4 1 2 4 2 3 4 3 0 4] \"normal N\" ";
+    auto one = test::scene_from(
+        camera512(mesh + "[0.2 -0.1 1  0.2 -0.1 1  0.2 -0.1 1  0.2 -0.1 1  0.2 -0.1 1]"));
+    auto varied = test::scene_from(
+        camera512(mesh + "[-0.5 -0.4 1  0.6 -0.5 1  0.4 0.7 1  -0.6 0.3 1  0.1 0 1]"));
+    int hits = 0;
+    for (float py = 140.5f; py < 400; py += 37)
+        for (float px = 120.25f; px < 420; px += 41) {
+            Vec3 d;
+            const CameraRay r = one->camera.generate_ray(px, py);
+            if (!one->intersect(r.org, r.dir, 0, 1e30f)) continue;
+            ++hits;
+            for (const Scene* s : {one.get(), varied.get()}) {
+                const SurfaceHit h = hit_at(*s, px, py, &d);
+                const HitDifferential hd =
+                    transfer(camera_differential(s->camera, px, py, 1), d, h);
+                ASSERT_TRUE(hd.valid);
+                Vec3 dnx, dny;
+                h.normal_offsets(hd.dpdx, hd.dpdy, dnx, dny);
+                if (s == one.get()) {
+                    EXPECT_EQ(length(dnx), 0.0f) << px << " " << py;
+                    EXPECT_EQ(length(dny), 0.0f) << px << " " << py;
+                } else {
+                    EXPECT_GT(length(dnx), 1e-4f) << px << " " << py;
+                    EXPECT_GT(length(dny), 1e-4f) << px << " " << py;
+                }
+            }
+        }
+    EXPECT_GT(hits, 20);
+}
+
 namespace {
 // Direction of the reflected or refracted ray through raster (px, py), as the integrator makes it.
 Vec3 secondary(const Scene& s, float px, float py, bool refracted, float eta,
