@@ -231,6 +231,7 @@ int run_render(const RenderArgs& a) {
                          "\"");
     render::BuildOptions bo = build_options(a);
     bo.max_memory = max_memory;  // mesh files too big are refused before they are read
+    bo.threads = a.threads;
     auto scene = render::build_scene(desc, bo, print_warning);
     std::string out = a.output.empty() ? scene->film.filename : a.output;
     check_output_folder(out);  // before rendering: a long render is not lost to a typo

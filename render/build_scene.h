@@ -24,6 +24,8 @@ struct BuildOptions {
     /// The memory the process may use (nullopt: memory_limit() of memory.h): a mesh file whose
     /// header announces more than what is left of it is refused before it is read.
     std::optional<std::size_t> max_memory;
+    /// Threads that read the scene's image and mesh files (0: all cores).
+    int threads = 0;
 };
 
 /// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.

@@ -13,45 +13,10 @@
 
 #include "render/integrator.h"
 #include "render/memory.h"
+#include "render/parallel.h"
 #include "render/tracer.h"
 
 namespace cmam::render {
-
-namespace {
-
-// The threads a parallel_range will run on.
-int worker_count(int threads) {
-#ifdef CMAM_STD_THREADS
-    return std::max(1,
-                    threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()));
-#else
-    return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
-#endif
-}
-
-// body(begin, end) over [0, n) in parallel: with oneTBB, or, in a build for ThreadSanitizer
-// (CMAM_STD_THREADS), with std::thread workers taking one index at a time, whose hand-offs
-// ThreadSanitizer sees (it cannot see into an uninstrumented oneTBB). The image does not depend
-// on which is used.
-template <class Body>
-void parallel_range(int n, int threads, Body&& body) {
-#ifdef CMAM_STD_THREADS
-    const int workers = worker_count(threads);
-    std::atomic<int> next{0};
-    std::vector<std::thread> pool;
-    for (int w = 0; w < workers; ++w)
-        pool.emplace_back([&] {
-            for (int i = next++; i < n; i = next++) body(i, i + 1);
-        });
-    for (std::thread& t : pool) t.join();
-#else
-    (void)threads;
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 1),
-                      [&](const tbb::blocked_range<int>& r) { body(r.begin(), r.end()); });
-#endif
-}
-
-}  // namespace
 
 namespace {
 

@@ -61,6 +61,53 @@ TEST(Errors, BuildingReportsEveryBadTextureShapeAndLight) {
     EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 3) << e;
 }
 
+// Image and mesh files are read ahead, side by side, before the directives are built: each
+// file's error still comes from its own directive, in the order the directives are built
+// (textures, then shapes), and the files that read are used; one thread or all give the same.
+TEST(Errors, FilesReadAheadReportTheirErrorsFromTheirDirectives) {
+    const std::string scenes = CMAM_SCENES_DIR;
+    const std::string text =
+        kHead + "Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"missing-1.png\"\n" +
+        "Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + scenes +
+        "/textures/bricks.png\"\n" +                                   // line 4
+        "Shape \"plymesh\" \"string filename\" \"missing-2.ply\"\n" +  // line 5
+        "Texture \"c\" \"float\" \"imagemap\" \"string filename\" \"missing-3.png\"\n" +
+        "Shape \"plymesh\" \"string filename\" \"" + scenes + "/meshes/torus.ply\"\n" +
+        "WorldEnd\n";
+    auto build = [&](int threads) {
+        render::BuildOptions o;
+        o.threads = threads;
+        try {
+            render::build_scene(pbrt::parse_string(text, "t.pbrt"), o, {});
+        } catch (const pbrt::SceneError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    const std::string e = build(0);
+    const auto l3 = e.find("t.pbrt:3:"), l6 = e.find("t.pbrt:6:"), l5 = e.find("t.pbrt:5:");
+    ASSERT_NE(l3, std::string::npos) << e;
+    ASSERT_NE(l6, std::string::npos) << e;
+    ASSERT_NE(l5, std::string::npos) << e;
+    EXPECT_TRUE(l3 < l6 && l6 < l5) << e;
+    EXPECT_NE(e.find("missing-1.png"), std::string::npos) << e;
+    EXPECT_NE(e.find("missing-2.ply"), std::string::npos) << e;
+    EXPECT_NE(e.find("missing-3.png"), std::string::npos) << e;
+    EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 2) << e;  // the files that exist read
+    EXPECT_EQ(build(1), e);
+    // Without the missing files, the scene builds with the image and the mesh read ahead.
+    std::string good = text;
+    for (const char* line :
+         {"Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"missing-1.png\"\n",
+          "Shape \"plymesh\" \"string filename\" \"missing-2.ply\"\n",
+          "Texture \"c\" \"float\" \"imagemap\" \"string filename\" \"missing-3.png\"\n"})
+        good.erase(good.find(line), std::string(line).size());
+    const auto scene = render::build_scene(pbrt::parse_string(good, "t.pbrt"), {}, {});
+    EXPECT_EQ(scene->images.size(), 1u);
+    ASSERT_EQ(scene->primitives.size(), 1u);
+    EXPECT_GT(scene->primitives[0]->indices.size(), 0u);
+}
+
 TEST(Errors, OneErrorIsReportedAlone) {
     EXPECT_EQ(error_of(kHead + "Scale 1\nWorldEnd\n").find('\n'), std::string::npos);
 }

@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
+#include "pbrt/parser.h"
 #include "render/build_scene.h"
+#include "render/image_io.h"
+#include "render/parallel.h"
 
 namespace cmam::render::build_detail {
 
@@ -44,6 +48,7 @@ std::unique_ptr<Scene> Builder::run() {
             m_desc.accelerator.params.check_unused("Accelerator", m_warn,
                                                    names_of(m_desc.accelerator));
     });
+    read_ahead();
     // A texture, material or area light that fails keeps its index (a placeholder), so
     // that what names it is still checked.
     for (std::size_t i = 0; i < m_desc.textures.size(); ++i) {
@@ -69,6 +74,89 @@ std::unique_ptr<Scene> Builder::run() {
                                     "the scene has no lights; it will render black"));
     m_scene->commit();
     return std::move(m_scene);
+}
+
+// The image textures' files and the meshes' PLY files, read before the directives are built, in
+// parallel: decoding them is most of loading a scene that has several. A directive whose
+// parameters are in error is left to report it when built (its file is not read ahead), and a
+// file's own error is kept for its directive, so that errors and warnings come in the order
+// and at the places they would without reading ahead. Meshes read together are checked against
+// the memory limit together (check_mesh_memory). Only the objects that instances use are read.
+void Builder::read_ahead() {
+    struct Job {
+        const Entity* entity = nullptr;
+        ImageRequest image;  // an image's, or
+        std::string ply;     // a mesh file's path
+    };
+    std::vector<Job> jobs;
+    for (const pbrt::TextureDesc& t : m_desc.textures) {
+        if (t.entity.type != "imagemap") continue;
+        try {
+            ImageRequest r = image_request(t.entity, t.is_float);
+            if (m_read_images.emplace(r.key, ReadImage{}).second)
+                jobs.push_back({&t.entity, std::move(r), {}});
+        } catch (...) {  // reported when the texture is built
+        }
+    }
+    auto mesh_file = [&](const pbrt::ShapeDesc& s) {
+        const auto* fp = s.entity.params.find("filename");
+        if (s.entity.type != "plymesh" || !fp) return;
+        try {
+            std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc,
+                                                  s.entity.params.get_string("filename", ""));
+            if (m_read_plys.emplace(path, ReadPly{}).second)
+                jobs.push_back({&s.entity, {}, std::move(path)});
+        } catch (...) {
+        }
+    };
+    for (const pbrt::ShapeDesc& s : m_desc.shapes) mesh_file(s);
+    std::vector<bool> used(m_desc.objects.size(), false);
+    for (const pbrt::InstanceDesc& d : m_desc.instances)
+        if (d.object >= 0 && static_cast<std::size_t>(d.object) < used.size() &&
+            !used[static_cast<std::size_t>(d.object)]) {
+            used[static_cast<std::size_t>(d.object)] = true;
+            for (const pbrt::ShapeDesc& s :
+                 m_desc.objects[static_cast<std::size_t>(d.object)].shapes)
+                mesh_file(s);
+        }
+    if (jobs.size() < 2) {  // nothing to read side by side: read where it is used
+        m_read_images.clear();
+        m_read_plys.clear();
+        return;
+    }
+    parallel_range_on(static_cast<int>(jobs.size()), m_opts.threads, [&](int begin, int end) {
+        for (int i = begin; i < end; ++i) {
+            const Job& job = jobs[static_cast<std::size_t>(i)];
+            if (job.ply.empty()) {
+                const ImageRequest& r = job.image;
+                ReadImage& out = m_read_images.at(r.key);
+                try {
+                    out.image = load_texture(r.path, r.is_float, r.gamma, r.scale, r.wrap, nullptr,
+                                             true, &out.bad);
+                } catch (...) {
+                    out.error = std::current_exception();
+                }
+                continue;
+            }
+            ReadPly& out = m_read_plys.at(job.ply);
+            const auto* fp = job.entity->params.find("filename");
+            const std::string name = in_quotes(std::filesystem::path(job.ply).filename().string());
+            double reserved = 0;
+            auto check = [&](const pbrt::PlyCounts& c) {
+                check_mesh_memory(fp->loc, name, c, true);
+                reserved = mesh_memory_need(c);
+            };
+            try {
+                out.mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(job.ply, check));
+            } catch (...) {
+                out.error = std::current_exception();
+            }
+            if (reserved > 0) {
+                std::lock_guard<std::mutex> lock(m_mesh_memory_mutex);
+                m_mesh_memory_reserved -= reserved;
+            }
+        }
+    });
 }
 
 // Shadow rays per shading point for a light: its nsamples under pbrt-v3's directlighting

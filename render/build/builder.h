@@ -5,8 +5,11 @@
 #pragma once
 
 #include <array>
+#include <exception>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -78,6 +81,25 @@ class Builder {
     pbrt::WarningSink m_warn;
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
+
+    // Files read ahead, in parallel, before the directives are built in order (read_ahead):
+    // each is taken by the directive that reads it, which reports its error (or warning) where
+    // and when reading it there would have. A file not read ahead is read there.
+    struct ReadImage {
+        texture::Image image;
+        std::size_t bad = 0;  // texel values that are not finite
+        std::exception_ptr error;
+    };
+    std::map<std::string, ReadImage> m_read_images;  // by ImageRequest::key
+    struct ReadPly {
+        std::unique_ptr<pbrt::PlyMesh> mesh;
+        std::exception_ptr error;
+    };
+    std::map<std::string, ReadPly> m_read_plys;  // by resolved path
+    // What mesh files being read ahead may still take (check_mesh_memory counts it as used).
+    std::mutex m_mesh_memory_mutex;
+    double m_mesh_memory_reserved = 0;
+    void read_ahead();
     // Per texture node: how many nodes deep its evaluation recurses (itself included).
     std::vector<int> m_texture_depth;
     std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits
@@ -128,6 +150,16 @@ class Builder {
                          float def, bool positive = false);
     void uv_mapping(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n);
     void texture_space(const Entity& e, const pbrt::TextureDesc& t, TextureNode* n);
+    // An image texture's file and the settings it is loaded under; `key` names the pair (the
+    // same file under the same settings is loaded once). Throws for parameters in error.
+    struct ImageRequest {
+        std::string name, path, key;
+        bool is_float = false;
+        std::optional<bool> gamma;
+        float scale = 1;
+        texture::WrapMode wrap = texture::WrapMode::Repeat;
+    };
+    ImageRequest image_request(const Entity& e, bool is_float) const;
     const texture::FilteredTexture* load_image(const Entity& e, bool is_float);
     void texture(const pbrt::TextureDesc& t);
     // Each fills in the node of its texture class (or classes).
@@ -166,8 +198,11 @@ class Builder {
     bool analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
     bool tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim);
     bool ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
+    // `reserve`: the mesh is being read ahead; what it needs is counted as used until it is
+    // read (read_ahead releases it), so that meshes read side by side are checked together.
     void check_mesh_memory(const pbrt::FileLoc& loc, const std::string& name,
-                           const pbrt::PlyCounts& counts);
+                           const pbrt::PlyCounts& counts, bool reserve = false);
+    static double mesh_memory_need(const pbrt::PlyCounts& counts);
     bool triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
     bool subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                          const std::vector<int>& idx, Primitive& prim);

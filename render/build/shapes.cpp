@@ -87,13 +87,23 @@ bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
 // coordinate, 12 a triangle's indices) and the acceleration structure Embree builds over it,
 // about 110 bytes a triangle (measured: 2 million triangles with texture coordinates take
 // 313 MB). A face is counted as one triangle (quads are two), so this is a lower bound.
-void Builder::check_mesh_memory(const pbrt::FileLoc& loc, const std::string& name,
-                                const pbrt::PlyCounts& c) {
+double Builder::mesh_memory_need(const pbrt::PlyCounts& c) {
     const double per_vertex = 12 + (c.normals ? 12 : 0) + (c.uvs ? 8 : 0);
-    const double need = 2 * per_vertex * double(c.vertices) + (2 * 12 + 110) * double(c.faces);
+    return 2 * per_vertex * double(c.vertices) + (2 * 12 + 110) * double(c.faces);
+}
+
+void Builder::check_mesh_memory(const pbrt::FileLoc& loc, const std::string& name,
+                                const pbrt::PlyCounts& c, bool reserve) {
+    const double need = mesh_memory_need(c);
     const std::size_t limit = m_opts.max_memory.value_or(memory_limit()), have = resident_memory();
-    const double left = have < limit ? double(limit - have) : 0;
-    if (need <= left) return;
+    std::unique_lock<std::mutex> lock(m_mesh_memory_mutex);
+    const double left =
+        std::max(0.0, (have < limit ? double(limit - have) : 0) - m_mesh_memory_reserved);
+    if (need <= left) {
+        if (reserve) m_mesh_memory_reserved += need;
+        return;
+    }
+    lock.unlock();
     throw SceneError(
         loc, name + ": " + std::to_string(c.vertices) + " vertices and " + std::to_string(c.faces) +
                  " faces need about " +
@@ -141,7 +151,14 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
         const std::string name = in_quotes(fs::path(path).filename().string());
         auto check = [&](const pbrt::PlyCounts& c) { check_mesh_memory(fp->loc, name, c); };
         try {
-            mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path, check));
+            if (auto ahead = m_read_plys.find(path); ahead != m_read_plys.end()) {
+                ReadPly read = std::move(ahead->second);
+                m_read_plys.erase(ahead);
+                if (read.error) std::rethrow_exception(read.error);
+                mesh = std::move(read.mesh);
+            } else {
+                mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path, check));
+            }
         } catch (const SceneError& err) {
             throw SceneError(fp->loc, err.message());
         }

@@ -72,34 +72,51 @@ void Builder::texture_space(const Entity& e, const pbrt::TextureDesc& t, Texture
         for (int j = 0; j < 4; ++j) n->texture_from_world[4 * i + j] = float(inv.m[i][j]);
 }
 
-const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_float) {
+Builder::ImageRequest Builder::image_request(const Entity& e, bool is_float) const {
     const auto* fp = e.params.find("filename");
     if (!fp) throw SceneError(e.loc, "imagemap texture needs a \"string filename\" parameter");
-    std::string name = e.params.get_string("filename", "");
-    std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc, name);
+    ImageRequest r;
+    r.is_float = is_float;
+    r.name = e.params.get_string("filename", "");
+    r.path = pbrt::resolve_path(m_desc.base_dir, fp->loc, r.name);
     std::string wrap_name = e.params.get_string("wrap", "repeat");
     auto wrap = texture::parse_wrap_mode(wrap_name);
     if (!wrap || *wrap == texture::WrapMode::Mirror)
         throw SceneError(e.params.find("wrap")->loc,
                          "unknown wrap mode " + in_quotes(wrap_name) +
                              " (expected \"repeat\", \"black\" or \"clamp\")");
-    float scale = float(finite_float(e, "scale", 1));
-    std::optional<bool> gamma;
-    if (e.params.find("gamma")) gamma = e.params.get_bool("gamma", true);
+    r.wrap = *wrap;
+    r.scale = float(finite_float(e, "scale", 1));
+    if (e.params.find("gamma")) r.gamma = e.params.get_bool("gamma", true);
     // The same file under the same settings is loaded once. A path the file system cannot
     // resolve (too long a name, say) keys as written; reading it then fails with the reason.
     std::error_code ec;
-    std::string canonical = std::filesystem::weakly_canonical(path, ec).string();
-    if (ec) canonical = path;
-    std::string key = canonical + "|" + (is_float ? "f" : "s") + "|" +
-                      std::string(texture::to_string(*wrap)) + "|" + std::to_string(scale) + "|" +
-                      (gamma ? (*gamma ? "1" : "0") : "default");
-    auto it = m_scene->images.find(key);
+    std::string canonical = std::filesystem::weakly_canonical(r.path, ec).string();
+    if (ec) canonical = r.path;
+    r.key = canonical + "|" + (is_float ? "f" : "s") + "|" +
+            std::string(texture::to_string(r.wrap)) + "|" + std::to_string(r.scale) + "|" +
+            (r.gamma ? (*r.gamma ? "1" : "0") : "default");
+    return r;
+}
+
+const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_float) {
+    const ImageRequest r = image_request(e, is_float);
+    const auto* fp = e.params.find("filename");
+    const std::string& name = r.name;
+    auto it = m_scene->images.find(r.key);
     if (it != m_scene->images.end()) return it->second.get();
     texture::Image level0;
     std::size_t bad = 0;  // texel values that are not finite
     try {
-        level0 = load_texture(path, is_float, gamma, scale, *wrap, nullptr, true, &bad);
+        if (auto ahead = m_read_images.find(r.key); ahead != m_read_images.end()) {
+            ReadImage read = std::move(ahead->second);
+            m_read_images.erase(ahead);
+            if (read.error) std::rethrow_exception(read.error);
+            level0 = std::move(read.image);
+            bad = read.bad;
+        } else {
+            level0 = load_texture(r.path, is_float, r.gamma, r.scale, r.wrap, nullptr, true, &bad);
+        }
     } catch (const RenderError& err) {
         throw SceneError(fp->loc, err.what());
     }
@@ -113,7 +130,7 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
                           (bad == 1 ? "it" : "them") + " are taken as black");
     auto img = std::make_unique<texture::FilteredTexture>(std::move(level0));
     const texture::FilteredTexture* ptr = img.get();
-    m_scene->images.emplace(key, std::move(img));
+    m_scene->images.emplace(r.key, std::move(img));
     return ptr;
 }
 
