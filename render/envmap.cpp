@@ -52,12 +52,19 @@ Distribution1D::Sample Distribution1D::sample(float u) const {
     return {std::min(float((cell + std::clamp(t, 0.0, 1.0)) / n), 0x1.fffffep-1f), pdf(cell), cell};
 }
 
-Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv) {
+Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv)
+    : Distribution2D(nu, nv, [&](int v, float* row) {
+          std::copy_n(weights.begin() + static_cast<std::ptrdiff_t>(v) * nu, nu, row);
+      }) {}
+
+Distribution2D::Distribution2D(int nu, int nv,
+                               const std::function<void(int, float*)>& row_weights) {
     std::vector<float> marginal(static_cast<std::size_t>(nv));
     m_rows.reserve(static_cast<std::size_t>(nv));
     for (int v = 0; v < nv; ++v) {
-        const auto row = weights.begin() + static_cast<std::ptrdiff_t>(v) * nu;
-        m_rows.emplace_back(std::vector<float>(row, row + nu));
+        std::vector<float> row(static_cast<std::size_t>(nu));
+        row_weights(v, row.data());
+        m_rows.emplace_back(std::move(row));
         marginal[static_cast<std::size_t>(v)] = float(m_rows.back().integral());
     }
     m_marginal = Distribution1D(std::move(marginal));
@@ -115,35 +122,53 @@ EnvironmentMap::EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> i
     // so the estimate is unbiased; sin(theta) turns the (u,v) density into one over the sphere.
     const texture::Image& img = m_image->image();
     const int W = img.width(), H = img.height(), ch = img.channels();
-    std::vector<float> lum(static_cast<std::size_t>(W) * H);
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) {
-            const float* t = img.texel(i, j);
-            const float y = ch >= 3 ? Rgb(t[0], t[1], t[2]).luminance() : t[0];
-            lum[static_cast<std::size_t>(j) * W + i] = std::max(0.0f, y);
-        }
-    auto L = [&](int i, int j) {
-        i = ((i % W) + W) % W;
-        j = ((j % H) + H) % H;
-        return lum[static_cast<std::size_t>(j) * W + i];
+    // The luminance of image rows (clamped at 0), three at a time: a distribution row reads its
+    // image row and the two beside it (wrapped), and the rows go from the image's top down, so
+    // each image row is computed about once, with no map-sized copy.
+    struct LumRow {
+        int j = -1;
+        std::vector<float> y;
     };
-    std::vector<float> weights(static_cast<std::size_t>(W) * H);
-    for (int r = 0; r < H; ++r) {
+    std::array<LumRow, 3> slots;
+    auto lum_rows = [&](const std::array<int, 3>& want) {
+        std::array<const float*, 3> out{};
+        for (int k = 0; k < 3; ++k) {
+            LumRow* have = nullptr;
+            for (LumRow& s : slots)
+                if (s.j == want[k]) have = &s;
+            if (!have) {  // a slot none of the three wants
+                for (LumRow& s : slots)
+                    if (s.j != want[0] && s.j != want[1] && s.j != want[2]) have = &s;
+                have->j = want[k];
+                have->y.resize(static_cast<std::size_t>(W));
+                for (int i = 0; i < W; ++i) {
+                    const float* t = img.texel(i, want[k]);
+                    const float y = ch >= 3 ? Rgb(t[0], t[1], t[2]).luminance() : t[0];
+                    have->y[static_cast<std::size_t>(i)] = std::max(0.0f, y);
+                }
+            }
+            out[static_cast<std::size_t>(k)] = have->y.data();
+        }
+        return out;
+    };
+    m_dist = Distribution2D(W, H, [&](int r, float* weights) {
         const int j = H - 1 - r;  // image row of distribution row r
+        const auto [below, row, above] = lum_rows({(j - 1 + H) % H, j, (j + 1) % H});
         const float sin_theta = std::sin(kPi * (r + 0.5f) / H);
         for (int i = 0; i < W; ++i) {
-            const float c = L(i, j);
+            const int side[2] = {i == 0 ? W - 1 : i - 1, i == W - 1 ? 0 : i + 1};  // i -+ 1
+            const float* beside[2] = {below, above};                               // j -+ 1
+            const float c = row[i];
             float m = c;
-            for (int dj = -1; dj <= 1; dj += 2)
-                for (int di = -1; di <= 1; di += 2) {
-                    const float side_u = L(i + di, j), side_v = L(i, j + dj);
-                    const float corner = 0.25f * (c + side_u + side_v + L(i + di, j + dj));
+            for (int dj = 0; dj < 2; ++dj)
+                for (int di = 0; di < 2; ++di) {
+                    const float side_u = row[side[di]], side_v = beside[dj][i];
+                    const float corner = 0.25f * (c + side_u + side_v + beside[dj][side[di]]);
                     m = std::max({m, 0.5f * (c + side_u), 0.5f * (c + side_v), corner});
                 }
-            weights[static_cast<std::size_t>(r) * W + i] = m * sin_theta;
+            weights[i] = m * sin_theta;
         }
-    }
-    m_dist = Distribution2D(weights, W, H);
+    });
 }
 
 Rgb EnvironmentMap::at(float s, float theta_over_pi) const {

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -60,6 +61,8 @@ class Distribution2D {
   public:
     Distribution2D() = default;
     Distribution2D(const std::vector<float>& weights, int nu, int nv);
+    /// The same with row v's nu weights written by row_weights(v, row), one row at a time.
+    Distribution2D(int nu, int nv, const std::function<void(int, float*)>& row_weights);
     bool empty() const { return m_marginal.size() == 0 || m_marginal.integral() == 0; }
     struct Sample {
         std::array<float, 2> uv;  // in [0,1)^2
