@@ -165,7 +165,7 @@ const Token* Parser::peek() {
 Token Parser::expect_any(const Token& after, const char* what) {
     auto t = next();
     if (!t) throw SceneError(after.loc, "premature end of file: " + after.text + " needs " + what);
-    return *t;
+    return std::move(*t);
 }
 
 std::string Parser::expect_string(const Token& dir, const char* what) {
@@ -183,15 +183,18 @@ double Parser::expect_number(const Token& dir) {
     return to_number(t, dir.text);
 }
 
+bool Parser::number_of(const Token& t, double& v) {
+    if (t.quoted) return false;
+    const char* b = t.text.data();
+    const char* e = b + t.text.size();
+    if (!t.text.empty() && *b == '+') ++b;
+    auto r = std::from_chars(b, e, v);
+    return r.ec == std::errc() && r.ptr == e && b != e;
+}
+
 double Parser::to_number(const Token& t, const std::string& context) {
     double v = 0;
-    if (!t.quoted) {
-        const char* b = t.text.data();
-        const char* e = b + t.text.size();
-        if (!t.text.empty() && *b == '+') ++b;
-        auto r = std::from_chars(b, e, v);
-        if (r.ec == std::errc() && r.ptr == e && b != e) return v;
-    }
+    if (number_of(t, v)) return v;
     throw SceneError(t.loc,
                      context + " expects a number, got " + (t.quoted ? in_quotes(t.text) : t.text));
 }
@@ -283,8 +286,11 @@ void Parser::add_value(Param& p, const Token& v) {
                                         v.text);
         p.strings.push_back(v.text);
     } else {
-        p.numbers.push_back(
-            to_number(v, std::string(to_string(p.type)) + " parameter " + in_quotes(p.name)));
+        // The context of the error is written only for one (a mesh has millions of numbers).
+        double x = 0;
+        if (!number_of(v, x))
+            x = to_number(v, std::string(to_string(p.type)) + " parameter " + in_quotes(p.name));
+        p.numbers.push_back(x);
     }
 }
 

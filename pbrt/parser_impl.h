@@ -137,6 +137,9 @@ class Parser {
     Token expect_any(const Token& after, const char* what);
     std::string expect_string(const Token& dir, const char* what);
     double expect_number(const Token& dir);
+    // A number token's value: number_of says whether there is one, to_number throws when not,
+    // naming `context`.
+    static bool number_of(const Token& t, double& v);
     static double to_number(const Token& t, const std::string& context);
     std::vector<double> numbers(const Token& dir, int n, bool allow_brackets);
     ParamSet param_list();

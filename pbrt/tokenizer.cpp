@@ -1,6 +1,5 @@
 #include "pbrt/tokenizer.h"
 
-#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -40,6 +39,13 @@ Tokenizer Tokenizer::from_file(const std::string& path, const FileLoc& included_
     return Tokenizer(path, std::move(text));
 }
 
+namespace {
+// std::isspace in the "C" locale (the one cmam runs in), without a call a byte.
+bool is_space(char c) {
+    return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r';
+}
+}  // namespace
+
 char Tokenizer::advance() {
     char c = m_text[m_pos++];
     if (c == '\n') {
@@ -54,7 +60,7 @@ char Tokenizer::advance() {
 std::optional<Token> Tokenizer::next() {
     while (m_pos < m_text.size()) {
         char c = m_text[m_pos];
-        if (std::isspace(static_cast<unsigned char>(c))) {
+        if (is_space(c)) {
             advance();
             continue;
         }
@@ -114,13 +120,16 @@ std::optional<Token> Tokenizer::next() {
             }
             return tok;
         }
-        while (m_pos < m_text.size()) {
-            char d = m_text[m_pos];
-            if (std::isspace(static_cast<unsigned char>(d)) || d == '"' || d == '[' || d == ']' ||
-                d == '#')
-                break;
-            tok.text += advance();
+        // A bare word (a number, a directive) holds no newline: taken whole, one column a byte.
+        std::size_t end = m_pos;
+        while (end < m_text.size()) {
+            const char d = m_text[end];
+            if (is_space(d) || d == '"' || d == '[' || d == ']' || d == '#') break;
+            ++end;
         }
+        tok.text.assign(m_text, m_pos, end - m_pos);
+        m_col += static_cast<int>(end - m_pos);
+        m_pos = end;
         return tok;
     }
     return std::nullopt;
