@@ -61,9 +61,10 @@ TEST(Errors, BuildingReportsEveryBadTextureShapeAndLight) {
     EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 3) << e;
 }
 
-// Image and mesh files are read ahead, side by side, before the directives are built: each
-// file's error still comes from its own directive, in the order the directives are built
-// (textures, then shapes), and the files that read are used; one thread or all give the same.
+// Image, mesh and light map files are read ahead, side by side, before the directives are
+// built: each file's error still comes from its own directive, in the order the directives are
+// built (textures, shapes, lights), and the files that read are used; one thread or all give
+// the same.
 TEST(Errors, FilesReadAheadReportTheirErrorsFromTheirDirectives) {
     const std::string scenes = CMAM_SCENES_DIR;
     const std::string text =
@@ -73,6 +74,8 @@ TEST(Errors, FilesReadAheadReportTheirErrorsFromTheirDirectives) {
         "Shape \"plymesh\" \"string filename\" \"missing-2.ply\"\n" +  // line 5
         "Texture \"c\" \"float\" \"imagemap\" \"string filename\" \"missing-3.png\"\n" +
         "Shape \"plymesh\" \"string filename\" \"" + scenes + "/meshes/torus.ply\"\n" +
+        "LightSource \"infinite\" \"string mapname\" \"missing-4.exr\"\n" +  // line 8
+        "LightSource \"infinite\" \"string mapname\" \"" + scenes + "/textures/grass.png\"\n" +
         "WorldEnd\n";
     auto build = [&](int threads) {
         render::BuildOptions o;
@@ -85,27 +88,35 @@ TEST(Errors, FilesReadAheadReportTheirErrorsFromTheirDirectives) {
         return std::string();
     };
     const std::string e = build(0);
-    const auto l3 = e.find("t.pbrt:3:"), l6 = e.find("t.pbrt:6:"), l5 = e.find("t.pbrt:5:");
+    const auto l3 = e.find("t.pbrt:3:"), l6 = e.find("t.pbrt:6:"), l5 = e.find("t.pbrt:5:"),
+               l8 = e.find("t.pbrt:8:");
     ASSERT_NE(l3, std::string::npos) << e;
     ASSERT_NE(l6, std::string::npos) << e;
     ASSERT_NE(l5, std::string::npos) << e;
-    EXPECT_TRUE(l3 < l6 && l6 < l5) << e;
+    ASSERT_NE(l8, std::string::npos) << e;
+    EXPECT_TRUE(l3 < l6 && l6 < l5 && l5 < l8) << e;
     EXPECT_NE(e.find("missing-1.png"), std::string::npos) << e;
     EXPECT_NE(e.find("missing-2.ply"), std::string::npos) << e;
     EXPECT_NE(e.find("missing-3.png"), std::string::npos) << e;
-    EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 2) << e;  // the files that exist read
+    EXPECT_NE(e.find("missing-4.exr"), std::string::npos) << e;
+    EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 3) << e;  // the files that exist read
     EXPECT_EQ(build(1), e);
-    // Without the missing files, the scene builds with the image and the mesh read ahead.
+    // Without the missing files, the scene builds with the image, the mesh and the map read
+    // ahead.
     std::string good = text;
     for (const char* line :
          {"Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"missing-1.png\"\n",
           "Shape \"plymesh\" \"string filename\" \"missing-2.ply\"\n",
-          "Texture \"c\" \"float\" \"imagemap\" \"string filename\" \"missing-3.png\"\n"})
+          "Texture \"c\" \"float\" \"imagemap\" \"string filename\" \"missing-3.png\"\n",
+          "LightSource \"infinite\" \"string mapname\" \"missing-4.exr\"\n"})
         good.erase(good.find(line), std::string(line).size());
     const auto scene = render::build_scene(pbrt::parse_string(good, "t.pbrt"), {}, {});
     EXPECT_EQ(scene->images.size(), 1u);
     ASSERT_EQ(scene->primitives.size(), 1u);
     EXPECT_GT(scene->primitives[0]->indices.size(), 0u);
+    ASSERT_EQ(scene->lights.size(), 1u);
+    ASSERT_TRUE(scene->lights[0].env);
+    EXPECT_EQ(scene->lights[0].env->image().image().width(), 512);
 }
 
 TEST(Errors, OneErrorIsReportedAlone) {

@@ -76,17 +76,19 @@ std::unique_ptr<Scene> Builder::run() {
     return std::move(m_scene);
 }
 
-// The image textures' files and the meshes' PLY files, read before the directives are built, in
-// parallel: decoding them is most of loading a scene that has several. A directive whose
-// parameters are in error is left to report it when built (its file is not read ahead), and a
-// file's own error is kept for its directive, so that errors and warnings come in the order
-// and at the places they would without reading ahead. Meshes read together are checked against
-// the memory limit together (check_mesh_memory). Only the objects that instances use are read.
+// The image textures' files, the meshes' PLY files and the lights' maps, read before the
+// directives are built, in parallel: decoding them is most of loading a scene that has several. A
+// directive whose parameters are in error is left to report it when built (its file is not read
+// ahead), and a file's own error is kept for its directive, so that errors and warnings come in the
+// order and at the places they would without reading ahead. Meshes read together are checked
+// against the memory limit together (check_mesh_memory). Only the objects that instances use are
+// read.
 void Builder::read_ahead() {
     struct Job {
         const Entity* entity = nullptr;
-        ImageRequest image;  // an image's, or
-        std::string ply;     // a mesh file's path
+        ImageRequest image;       // an image texture's, or
+        std::string ply;          // a mesh file's path, or
+        std::string light_image;  // a light's map's path
     };
     std::vector<Job> jobs;
     for (const pbrt::TextureDesc& t : m_desc.textures) {
@@ -94,7 +96,7 @@ void Builder::read_ahead() {
         try {
             ImageRequest r = image_request(t.entity, t.is_float);
             if (m_read_images.emplace(r.key, ReadImage{}).second)
-                jobs.push_back({&t.entity, std::move(r), {}});
+                jobs.push_back({&t.entity, std::move(r), {}, {}});
         } catch (...) {  // reported when the texture is built
         }
     }
@@ -105,7 +107,7 @@ void Builder::read_ahead() {
             std::string path = pbrt::resolve_path(m_desc.base_dir, fp->loc,
                                                   s.entity.params.get_string("filename", ""));
             if (m_read_plys.emplace(path, ReadPly{}).second)
-                jobs.push_back({&s.entity, {}, std::move(path)});
+                jobs.push_back({&s.entity, {}, std::move(path), {}});
         } catch (...) {
         }
     };
@@ -119,14 +121,39 @@ void Builder::read_ahead() {
                  m_desc.objects[static_cast<std::size_t>(d.object)].shapes)
                 mesh_file(s);
         }
+    // The maps of infinite, goniometric and projection lights (light_image).
+    for (const pbrt::LightDesc& l : m_desc.lights) {
+        const auto* mp = l.entity.params.find("mapname");
+        if (!mp || (l.entity.type != "infinite" && l.entity.type != "goniometric" &&
+                    l.entity.type != "projection"))
+            continue;
+        try {
+            std::string path = pbrt::resolve_path(m_desc.base_dir, mp->loc,
+                                                  l.entity.params.get_string("mapname", ""));
+            if (m_read_light_images.emplace(path, ReadImage{}).second)
+                jobs.push_back({&l.entity, {}, {}, std::move(path)});
+        } catch (...) {
+        }
+    }
     if (jobs.size() < 2) {  // nothing to read side by side: read where it is used
         m_read_images.clear();
         m_read_plys.clear();
+        m_read_light_images.clear();
         return;
     }
     parallel_range_on(static_cast<int>(jobs.size()), m_opts.threads, [&](int begin, int end) {
         for (int i = begin; i < end; ++i) {
             const Job& job = jobs[static_cast<std::size_t>(i)];
+            if (!job.light_image.empty()) {
+                ReadImage& out = m_read_light_images.at(job.light_image);
+                try {
+                    out.image = load_texture(job.light_image, false, std::nullopt, 1.0f,
+                                             texture::WrapMode::Repeat);
+                } catch (...) {
+                    out.error = std::current_exception();
+                }
+                continue;
+            }
             if (job.ply.empty()) {
                 const ImageRequest& r = job.image;
                 ReadImage& out = m_read_images.at(r.key);

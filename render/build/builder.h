@@ -90,7 +90,8 @@ class Builder {
         std::size_t bad = 0;  // texel values that are not finite
         std::exception_ptr error;
     };
-    std::map<std::string, ReadImage> m_read_images;  // by ImageRequest::key
+    std::map<std::string, ReadImage> m_read_images;        // by ImageRequest::key
+    std::map<std::string, ReadImage> m_read_light_images;  // lights' maps, by resolved path
     struct ReadPly {
         std::unique_ptr<pbrt::PlyMesh> mesh;
         std::exception_ptr error;

@@ -16,6 +16,12 @@ std::shared_ptr<const texture::FilteredTexture> Builder::light_image(const Entit
     const std::string path =
         pbrt::resolve_path(m_desc.base_dir, p.loc, e.params.get_string("mapname", ""));
     try {
+        if (auto ahead = m_read_light_images.find(path); ahead != m_read_light_images.end()) {
+            ReadImage read = std::move(ahead->second);
+            m_read_light_images.erase(ahead);
+            if (read.error) std::rethrow_exception(read.error);
+            return std::make_shared<const texture::FilteredTexture>(std::move(read.image));
+        }
         return std::make_shared<const texture::FilteredTexture>(
             load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat));
     } catch (const RenderError& err) {
