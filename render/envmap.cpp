@@ -3,29 +3,79 @@
 #include <cmam/texture/filters.h>
 
 #include <algorithm>
+#include <cstring>
 #include <numbers>
+
+#include "render/image_io.h"
 
 namespace cmam::render {
 
-Distribution1D::Distribution1D(std::vector<float> weights) : m_func(std::move(weights)) {
-    const std::size_t n = m_func.size();
+std::size_t Distribution1D::table_bytes(std::size_t n) {
+    return (n + (n + 1)) * sizeof(float) + guide_count(n) * sizeof(uint32_t);
+}
+
+Distribution1D::Distribution1D(std::vector<float> weights)
+    : m_own(std::make_unique<std::byte[]>(table_bytes(weights.size()))) {
+    build(weights.data(), weights.size(), m_own.get());
+}
+
+Distribution1D::Distribution1D(const float* weights, std::size_t n, std::byte* storage) {
+    build(weights, n, storage);
+}
+
+Distribution1D::Distribution1D(const Distribution1D& other) {
+    *this = other;
+}
+
+Distribution1D& Distribution1D::operator=(const Distribution1D& other) {
+    if (this == &other) return *this;
+    m_n = other.m_n;
+    m_guides = other.m_guides;
+    m_integral = other.m_integral;
+    if (!other.m_own) {  // another's tables: shared
+        m_own.reset();
+        m_func = other.m_func;
+        m_cdf = other.m_cdf;
+        m_guide = other.m_guide;
+        return *this;
+    }
+    const std::size_t bytes = table_bytes(m_n);
+    m_own = std::make_unique<std::byte[]>(bytes);
+    std::memcpy(m_own.get(), other.m_own.get(), bytes);
+    auto at = [&](const void* p) {  // the same offset in the copy
+        return m_own.get() + (static_cast<const std::byte*>(p) - other.m_own.get());
+    };
+    m_func = reinterpret_cast<const float*>(at(other.m_func));
+    m_cdf = reinterpret_cast<const float*>(at(other.m_cdf));
+    m_guide = reinterpret_cast<const uint32_t*>(at(other.m_guide));
+    return *this;
+}
+
+void Distribution1D::build(const float* weights, std::size_t n, std::byte* storage) {
+    m_n = n;
+    m_guides = guide_count(n);
+    float* func = reinterpret_cast<float*>(storage);
+    float* cdf = func + n;
+    uint32_t* guide = reinterpret_cast<uint32_t*>(cdf + n + 1);
+    m_func = func;
+    m_cdf = cdf;
+    m_guide = guide;
+    std::copy_n(weights, n, func);
     std::vector<double> sums(n + 1, 0.0);
     for (std::size_t i = 0; i < n; ++i)
-        sums[i + 1] = sums[i] + double(std::max(0.0f, m_func[i])) / double(n);
+        sums[i + 1] = sums[i] + double(std::max(0.0f, func[i])) / double(n);
     m_integral = sums[n];
-    m_cdf.resize(n + 1);
     for (std::size_t i = 0; i <= n; ++i)
-        m_cdf[i] = float(m_integral > 0 ? sums[i] / m_integral : double(i) / double(n));
-    if (n) m_cdf[n] = 1;
+        cdf[i] = float(m_integral > 0 ? sums[i] / m_integral : double(i) / double(n));
+    if (n) cdf[n] = 1;
     // The guide: entry g is the cell holding g / guides, so that sample() starts next to its
     // cell instead of searching the whole table.
-    const std::size_t guides = std::max<std::size_t>(1, n / kCellsPerGuide);
-    m_guide.resize(guides);
+    const std::size_t guides = m_guides;
     std::size_t k = 0;
     for (std::size_t g = 0; g < guides; ++g) {
         const float at = float(double(g) / double(guides));
-        while (k + 1 < n && !(at < m_cdf[k + 1])) ++k;
-        m_guide[g] = static_cast<uint32_t>(k);
+        while (k + 1 < n && !(at < cdf[k + 1])) ++k;
+        guide[g] = static_cast<uint32_t>(k);
     }
 }
 
@@ -43,7 +93,7 @@ Distribution1D::Sample Distribution1D::sample(float u) const {
     // index rounded up. algorithms.md §13.
     const int n = size();
     std::size_t k = m_guide[guide_of(u)];
-    __builtin_prefetch(m_func.data() + k);  // pdf() reads the cell's, a few cells on at most
+    __builtin_prefetch(m_func + k);  // pdf() reads the cell's, a few cells on at most
     while (k > 0 && u < m_cdf[k]) --k;
     while (k + 1 < static_cast<std::size_t>(n) && !(u < m_cdf[k + 1])) ++k;
     const double width = double(m_cdf[k + 1]) - m_cdf[k];
@@ -57,15 +107,22 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv
           std::copy_n(weights.begin() + static_cast<std::ptrdiff_t>(v) * nu, nu, row);
       }) {}
 
+void Distribution2D::FreeTables::operator()(std::byte* p) const noexcept {
+    free_pixels(p);
+}
+
 Distribution2D::Distribution2D(int nu, int nv,
                                const std::function<void(int, float*)>& row_weights) {
-    std::vector<float> marginal(static_cast<std::size_t>(nv));
-    m_rows.reserve(static_cast<std::size_t>(nv));
-    for (int v = 0; v < nv; ++v) {
-        std::vector<float> row(static_cast<std::size_t>(nu));
-        row_weights(v, row.data());
-        m_rows.emplace_back(std::move(row));
-        marginal[static_cast<std::size_t>(v)] = float(m_rows.back().integral());
+    const std::size_t n = static_cast<std::size_t>(std::max(nu, 0)),
+                      rows = static_cast<std::size_t>(std::max(nv, 0)),
+                      row_bytes = Distribution1D::table_bytes(n);
+    m_tables.reset(static_cast<std::byte*>(allocate_pixels(rows * row_bytes)));
+    std::vector<float> marginal(rows), row(n);
+    m_rows.reserve(rows);
+    for (std::size_t v = 0; v < rows; ++v) {
+        row_weights(static_cast<int>(v), row.data());
+        m_rows.emplace_back(row.data(), n, m_tables.get() + v * row_bytes);
+        marginal[v] = float(m_rows.back().integral());
     }
     m_marginal = Distribution1D(std::move(marginal));
 }

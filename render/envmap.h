@@ -5,6 +5,7 @@
 
 #include <cmam/texture/filter.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -25,7 +26,17 @@ class Distribution1D {
   public:
     Distribution1D() = default;
     explicit Distribution1D(std::vector<float> weights);
-    int size() const { return static_cast<int>(m_func.size()); }
+    /// The same from n weights, its tables written in `storage` (table_bytes(n) bytes, aligned
+    /// to 4, which the caller keeps while the distribution is used): Distribution2D's rows, all
+    /// in one allocation.
+    Distribution1D(const float* weights, std::size_t n, std::byte* storage);
+    static std::size_t table_bytes(std::size_t n);
+    Distribution1D(const Distribution1D& other);  // its own tables copied; another's shared
+    Distribution1D& operator=(const Distribution1D& other);
+    Distribution1D(Distribution1D&&) noexcept = default;  // the tables' pointers stay valid
+    Distribution1D& operator=(Distribution1D&&) noexcept = default;
+
+    int size() const { return static_cast<int>(m_n); }
     /// The weights' integral over [0,1) (their mean).
     double integral() const { return m_integral; }
     struct Sample {
@@ -36,19 +47,27 @@ class Distribution1D {
     /// Maps a uniform number in [0,1) to x in [0,1) with its density and cell.
     Sample sample(float u) const;
     /// Asks the cache for the guide entry sample(u) starts from (a batch's rows ask first).
-    void prefetch(float u) const { __builtin_prefetch(m_guide.data() + guide_of(u)); }
+    void prefetch(float u) const { __builtin_prefetch(m_guide + guide_of(u)); }
     /// The cell sample(u) starts its walk from: the one it returns or one a few cells from it.
     int start_cell(float u) const { return static_cast<int>(m_guide[guide_of(u)]); }
     float pdf(int cell) const;
 
   private:
-    std::vector<float> m_func;
-    std::vector<float> m_cdf;  // size() + 1 entries, from 0 to 1 (summed in double)
     static constexpr std::size_t kCellsPerGuide = 4;
-    std::vector<uint32_t> m_guide;  // the cell holding g / m_guide.size(), for each g
+    static std::size_t guide_count(std::size_t n) {
+        return std::max<std::size_t>(1, n / kCellsPerGuide);
+    }
+    void build(const float* weights, std::size_t n, std::byte* storage);
+    std::unique_ptr<std::byte[]> m_own;  // the tables, when they are its own
+    // The tables: the weights, the cumulative sums (n + 1 entries, from 0 to 1, summed in
+    // double) and the guide (the cell holding g / guides, for each g), one after another.
+    const float* m_func = nullptr;
+    const float* m_cdf = nullptr;
+    const uint32_t* m_guide = nullptr;
+    std::size_t m_n = 0, m_guides = 0;
     double m_integral = 0;
     std::size_t guide_of(float u) const {  // u's guide entry (the last one from u = 1 on)
-        const std::size_t guides = m_guide.size();
+        const std::size_t guides = m_guides;
         const float gu = u * float(guides);
         return gu >= 0 && gu < float(guides) ? static_cast<std::size_t>(gu)
                                              : (gu >= 0 ? guides - 1 : 0);
@@ -91,7 +110,19 @@ class Distribution2D {
     void sample(const float* u1, const float* u2, int n, Sample* out) const;
     float pdf(float u, float v) const;
 
+    // Its rows share one allocation: copies would share it, so it is moved, not copied.
+    Distribution2D(const Distribution2D&) = delete;
+    Distribution2D& operator=(const Distribution2D&) = delete;
+    Distribution2D(Distribution2D&&) noexcept = default;
+    Distribution2D& operator=(Distribution2D&&) noexcept = default;
+
   private:
+    // Every row's tables, one after another, in one allocation (on 2 MB pages from 2 MB on: a
+    // 2048x1024 map's are 18 MB, read at random by every sample).
+    struct FreeTables {
+        void operator()(std::byte* p) const noexcept;
+    };
+    std::unique_ptr<std::byte[], FreeTables> m_tables;
     std::vector<Distribution1D> m_rows;
     Distribution1D m_marginal;
 };
