@@ -6,7 +6,7 @@
 #include <cstring>
 #include <numbers>
 
-#include "render/image_io.h"
+#include "render/huge_pages.h"
 
 namespace cmam::render {
 
@@ -108,7 +108,7 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv
       }) {}
 
 void Distribution2D::FreeTables::operator()(std::byte* p) const noexcept {
-    free_pixels(p);
+    free_huge(p);
 }
 
 Distribution2D::Distribution2D(int nu, int nv,
@@ -116,7 +116,7 @@ Distribution2D::Distribution2D(int nu, int nv,
     const std::size_t n = static_cast<std::size_t>(std::max(nu, 0)),
                       rows = static_cast<std::size_t>(std::max(nv, 0)),
                       row_bytes = Distribution1D::table_bytes(n);
-    m_tables.reset(static_cast<std::byte*>(allocate_pixels(rows * row_bytes)));
+    m_tables.reset(static_cast<std::byte*>(allocate_huge(rows * row_bytes)));
     std::vector<float> marginal(rows), row(n);
     m_rows.reserve(rows);
     for (std::size_t v = 0; v < rows; ++v) {

@@ -281,18 +281,15 @@ void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id, cons
     RTCGeometry g;
     if (prim.kind == Primitive::Kind::Triangles) {
         g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                              prim.positions.size()));
-        for (std::size_t i = 0; i < prim.positions.size(); ++i) {
-            v[3 * i] = prim.positions[i].x;
-            v[3 * i + 1] = prim.positions[i].y;
-            v[3 * i + 2] = prim.positions[i].z;
-        }
-        auto* idx = static_cast<uint32_t*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                    3 * sizeof(uint32_t), prim.indices.size() / 3));
-        std::copy(prim.indices.begin(), prim.indices.end(), idx);
+        // Embree reads the primitive's own arrays (no copy of them, and on the large pages they
+        // are on). It may read a vertex as 16 bytes: the array has room for one more.
+        static_assert(sizeof(Vec3) == 3 * sizeof(float));
+        prim.positions.reserve(prim.positions.size() + 1);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                   prim.positions.data(), 0, sizeof(Vec3), prim.positions.size());
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                   prim.indices.data(), 0, 3 * sizeof(uint32_t),
+                                   prim.indices.size() / 3);
         prim.scene = owner;
         if (prim.has_alpha()) {
             rtcSetGeometryUserData(g, &prim);

@@ -2,7 +2,6 @@
 
 #include <cmam/texture/image.h>
 #include <fcntl.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,7 +12,6 @@
 #include <filesystem>
 #include <iterator>
 #include <mutex>
-#include <new>
 
 #include "render/image_codecs.h"
 #include "render/memory.h"
@@ -59,25 +57,6 @@ RawImage read_image(const std::string& path, bool keep_8bit) {
     } catch (const std::bad_alloc&) {
         throw RenderError(where + "out of memory");
     }
-}
-
-void* allocate_pixels(std::size_t bytes) {
-    constexpr std::size_t kHuge = std::size_t{2} << 20;
-    if (bytes < kHuge) {
-        if (void* p = std::malloc(bytes == 0 ? 1 : bytes)) return p;
-        throw std::bad_alloc();
-    }
-    const std::size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
-    void* p = std::aligned_alloc(kHuge, rounded);
-    if (!p) throw std::bad_alloc();
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    madvise(p, rounded, MADV_HUGEPAGE);  // advice only: may be ignored
-#endif
-    return p;
-}
-
-void free_pixels(void* p) noexcept {
-    std::free(p);
 }
 
 texture::Image load_texture(const std::string& path, bool is_float, std::optional<bool> gamma_opt,

@@ -14,35 +14,18 @@
 #include <vector>
 
 #include "render/error.h"
+#include "render/huge_pages.h"
 
 namespace cmam::render {
-
-/// Memory for a file's decoded pixels: from 2 MiB on, aligned to and advised to use 2 MiB pages
-/// (a 2048x1024 RGB map decodes into 24 MiB, touched once: 4 KiB pages fault 6000 times).
-void* allocate_pixels(std::size_t bytes);
-void free_pixels(void* p) noexcept;
-template <class T>
-struct PixelAllocator {
-    using value_type = T;
-    PixelAllocator() = default;
-    template <class U>
-    PixelAllocator(const PixelAllocator<U>&) noexcept {}
-    T* allocate(std::size_t n) { return static_cast<T*>(allocate_pixels(n * sizeof(T))); }
-    void deallocate(T* p, std::size_t) noexcept { free_pixels(p); }
-    template <class U>
-    bool operator==(const PixelAllocator<U>&) const noexcept {
-        return true;
-    }
-};
 
 /// Pixels as read from a file: top row first, `channels` floats per pixel, values as stored
 /// (8-bit data scaled to [0,1], no colour conversion).
 struct RawImage {
     int width = 0, height = 0, channels = 0;
-    bool is_8bit = false;  // the file stores 8-bit (or narrower) integers
-    std::vector<float, PixelAllocator<float>> pixels;
+    bool is_8bit = false;      // the file stores 8-bit (or narrower) integers
+    HugeVector<float> pixels;  // (a 2048x1024 RGB map: 24 MiB, touched once)
     /// An 8-bit image read with keep_8bit: its samples as stored, `pixels` then empty.
-    std::vector<unsigned char, PixelAllocator<unsigned char>> bytes;
+    HugeVector<unsigned char> bytes;
     /// Sample i (of width × height × channels, top row first) in [0,1] for 8-bit data, either way.
     float sample(std::size_t i) const {
         return bytes.empty() ? pixels[i] : bytes[i] * (1.0f / 255.0f);

@@ -19,6 +19,7 @@
 
 #include "render/envmap.h"
 #include "render/footprint/method.h"
+#include "render/huge_pages.h"
 #include "render/math.h"
 
 namespace cmam::render {
@@ -184,13 +185,14 @@ struct Primitive {
     int material = -1;  // -1 is the default matte
     bool flip = false;  // reverse_orientation xor transform swaps handedness
     // Triangles (world space)
-    std::vector<Vec3> positions, normals;
-    std::vector<std::array<float, 2>> uvs;
-    std::vector<uint32_t> indices;
+    // (Large meshes are read at random by every hit: their arrays on 2 MiB pages.)
+    HugeVector<Vec3> positions, normals;
+    HugeVector<std::array<float, 2>> uvs;
+    HugeVector<uint32_t> indices;
     // Triangles whose material reads textures: per triangle, the gradients of u and of v within
     // its plane, so that an offset dP in the plane moves (u,v) by (g[0] . dP, g[1] . dP) with no
     // division (made by make_uv_gradients; empty otherwise). algorithms.md §7.
-    std::vector<std::array<Vec3, 2>> uv_gradients;
+    HugeVector<std::array<Vec3, 2>> uv_gradients;
     /// Makes uv_gradients (in double, rounded once to float): the barycentric differentials'
     /// basis divided through and combined with the vertices' (u,v), which local_uv_offsets
     /// otherwise does per hit (in float, for triangles without gradients).
