@@ -6,15 +6,34 @@
 
 namespace cmam::render {
 
+namespace {
+// The environment camera's world direction at polar angle theta and azimuth phi, from their
+// sines and cosines.
+Vec3 environment_direction(const std::array<float, 12>& m, float sin_theta, float cos_theta,
+                           float sin_phi, float cos_phi) {
+    const Vec3 d(sin_theta * cos_phi, cos_theta, sin_theta * sin_phi);
+    return normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
+                          m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                          m[8] * d.x + m[9] * d.y + m[10] * d.z));
+}
+}  // namespace
+
+void Camera::environment_directions(float px, float py, Vec3 (&dirs)[3]) const {
+    const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;
+    const float theta_down = kPi * (py + 1) / yres, phi_right = 2 * kPi * (px + 1) / xres;
+    const float st = std::sin(theta), ct = std::cos(theta), sp = std::sin(phi), cp = std::cos(phi);
+    const auto& m = world_from_camera;
+    dirs[0] = environment_direction(m, st, ct, sp, cp);
+    dirs[1] = environment_direction(m, st, ct, std::sin(phi_right), std::cos(phi_right));
+    dirs[2] = environment_direction(m, std::sin(theta_down), std::cos(theta_down), sp, cp);
+}
+
 CameraRay Camera::generate_ray(float px, float py) const {
     const auto& m = world_from_camera;
     if (environment) {
         const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;
-        const Vec3 d(std::sin(theta) * std::cos(phi), std::cos(theta),
-                     std::sin(theta) * std::sin(phi));
-        return {Vec3(m[3], m[7], m[11]), normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
-                                                        m[4] * d.x + m[5] * d.y + m[6] * d.z,
-                                                        m[8] * d.x + m[9] * d.y + m[10] * d.z))};
+        return {Vec3(m[3], m[7], m[11]), environment_direction(m, std::sin(theta), std::cos(theta),
+                                                               std::sin(phi), std::cos(phi))};
     }
     float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);

@@ -162,6 +162,14 @@ class FilmTracer {
             packet.fy[k] = fy;
             packet.to_stratum_x[k] = 0.5f - j[0];
             packet.to_stratum_y[k] = 0.5f - j[1];
+        } else if (m_scene.camera.environment && m_footprints.differentials()) {
+            // The ray and its neighbours' directions together (they share sines and cosines).
+            Vec3 dirs[3];
+            m_scene.camera.environment_directions(fx, fy, dirs);
+            const auto& m = m_scene.camera.world_from_camera;
+            p.ray.org = Vec3(m[3], m[7], m[11]);
+            p.ray.dir = dirs[0];
+            m_footprints.start_environment_ray(p.ray.fp, dirs, 0.5f - j[0], 0.5f - j[1]);
         } else {  // orthographic and environment cameras, one ray at a time
             const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
             p.ray.org = ray.org;

@@ -43,6 +43,10 @@ struct Camera {
 
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
     CameraRay generate_ray(float px, float py) const;
+    /// The environment camera's directions through (px, py), (px + 1, py) and (px, py + 1),
+    /// each generate_ray's bit for bit: the first two share theta's sine and cosine, the first
+    /// and the last phi's (four of them where three rays apart take six).
+    void environment_directions(float px, float py, Vec3 (&dirs)[3]) const;
 };
 
 /// Limits on the film and the samples a scene (or --spp) may ask for, checked in 64 bits before

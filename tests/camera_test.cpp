@@ -74,6 +74,28 @@ TEST(Camera, LookAtPlacesTheCamera) {
     EXPECT_GT(d.x, 0.5f);
 }
 
+// The environment camera's ray and its neighbours one pixel right and down, made together with
+// shared sines and cosines, are generate_ray's bit for bit (the render's ray differentials are
+// their differences), at the poles, the seam and in between, under a turned camera.
+TEST(Camera, EnvironmentDirectionsAreGenerateRaysBitForBit) {
+    auto s = test::scene_from(
+        "LookAt 0.3 -1 2  4 2 -1  0.2 0 1 Camera \"environment\" Film \"image\" "
+        "\"integer xresolution\" 400 \"integer yresolution\" 200 WorldBegin WorldEnd");
+    ASSERT_TRUE(s->camera.environment);
+    auto same = [](const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+    int checked = 0;
+    for (float py : {0.0f, 0.37f, 17.25f, 99.5f, 150.125f, 199.0f, 199.99f})
+        for (float px : {0.0f, 0.5f, 123.375f, 250.0f, 398.75f, 399.0f, 399.9f}) {
+            Vec3 dirs[3];
+            s->camera.environment_directions(px, py, dirs);
+            EXPECT_TRUE(same(dirs[0], s->camera.generate_ray(px, py).dir)) << px << " " << py;
+            EXPECT_TRUE(same(dirs[1], s->camera.generate_ray(px + 1, py).dir)) << px << " " << py;
+            EXPECT_TRUE(same(dirs[2], s->camera.generate_ray(px, py + 1).dir)) << px << " " << py;
+            ++checked;
+        }
+    EXPECT_EQ(checked, 49);
+}
+
 TEST(Camera, ScreenWindowAndCrop) {
     auto s = test::scene_from(
         "Camera \"perspective\" \"float fov\" 90 \"float screenwindow\" [0 1 0 1] "

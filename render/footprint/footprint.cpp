@@ -80,6 +80,17 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, c
     start_camera_state(r, to_stratum_x, to_stratum_y);
 }
 
+void FootprintProducers::start_environment_ray(RayFootprint& r, const Vec3 (&dirs)[3],
+                                               float to_stratum_x, float to_stratum_y) const {
+    r.diff = {};
+    if (m_differentials) {
+        r.diff.valid = true;
+        r.diff.dddx = (dirs[1] - dirs[0]) * m_scale;
+        r.diff.dddy = (dirs[2] - dirs[0]) * m_scale;
+    }
+    start_camera_state(r, to_stratum_x, to_stratum_y);
+}
+
 void FootprintProducers::start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir,
                                           const CameraRayBatch& batch, int i, float to_stratum_x,
                                           float to_stratum_y) const {

@@ -81,6 +81,12 @@ class FootprintProducers {
     /// loop's slot, without a copy of the state.
     void start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir, float to_stratum_x,
                           float to_stratum_y) const;
+    /// The environment camera's: `dirs` from Camera::environment_directions, the ray's and its
+    /// neighbours' one pixel right and down (the same state as start_camera_ray's).
+    void start_environment_ray(RayFootprint& r, const Vec3 (&dirs)[3], float to_stratum_x,
+                               float to_stratum_y) const;
+    /// Whether camera rays carry ray differentials.
+    bool differentials() const { return m_differentials; }
     /// Whether camera rays can be made together (camera_rays): the perspective camera's.
     bool batches_camera_rays() const { return !m_camera.orthographic && !m_camera.environment; }
     /// The perspective camera's rays through (fx[i], fy[i]), i < n <= 16, together
