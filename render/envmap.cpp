@@ -3,7 +3,6 @@
 #include <cmam/texture/filters.h>
 
 #include <algorithm>
-#include <cstring>
 #include <numbers>
 
 #include "render/huge_pages.h"
@@ -21,34 +20,6 @@ Distribution1D::Distribution1D(std::vector<float> weights)
 
 Distribution1D::Distribution1D(const float* weights, std::size_t n, std::byte* storage) {
     build(weights, n, storage);
-}
-
-Distribution1D::Distribution1D(const Distribution1D& other) {
-    *this = other;
-}
-
-Distribution1D& Distribution1D::operator=(const Distribution1D& other) {
-    if (this == &other) return *this;
-    m_n = other.m_n;
-    m_guides = other.m_guides;
-    m_integral = other.m_integral;
-    if (!other.m_own) {  // another's tables: shared
-        m_own.reset();
-        m_func = other.m_func;
-        m_cdf = other.m_cdf;
-        m_guide = other.m_guide;
-        return *this;
-    }
-    const std::size_t bytes = table_bytes(m_n);
-    m_own = std::make_unique<std::byte[]>(bytes);
-    std::memcpy(m_own.get(), other.m_own.get(), bytes);
-    auto at = [&](const void* p) {  // the same offset in the copy
-        return m_own.get() + (static_cast<const std::byte*>(p) - other.m_own.get());
-    };
-    m_func = reinterpret_cast<const float*>(at(other.m_func));
-    m_cdf = reinterpret_cast<const float*>(at(other.m_cdf));
-    m_guide = reinterpret_cast<const uint32_t*>(at(other.m_guide));
-    return *this;
 }
 
 void Distribution1D::build(const float* weights, std::size_t n, std::byte* storage) {
@@ -101,11 +72,6 @@ Distribution1D::Sample Distribution1D::sample(float u) const {
     const int cell = static_cast<int>(k);
     return {std::min(float((cell + std::clamp(t, 0.0, 1.0)) / n), 0x1.fffffep-1f), pdf(cell), cell};
 }
-
-Distribution2D::Distribution2D(const std::vector<float>& weights, int nu, int nv)
-    : Distribution2D(nu, nv, [&](int v, float* row) {
-          std::copy_n(weights.begin() + static_cast<std::ptrdiff_t>(v) * nu, nu, row);
-      }) {}
 
 void Distribution2D::FreeTables::operator()(std::byte* p) const noexcept {
     free_huge(p);

@@ -31,9 +31,11 @@ class Distribution1D {
     /// in one allocation.
     Distribution1D(const float* weights, std::size_t n, std::byte* storage);
     static std::size_t table_bytes(std::size_t n);
-    Distribution1D(const Distribution1D& other);  // its own tables copied; another's shared
-    Distribution1D& operator=(const Distribution1D& other);
-    Distribution1D(Distribution1D&&) noexcept = default;  // the tables' pointers stay valid
+    // Rows share their Distribution2D's tables: moved (the tables' pointers stay valid), not
+    // copied.
+    Distribution1D(const Distribution1D&) = delete;
+    Distribution1D& operator=(const Distribution1D&) = delete;
+    Distribution1D(Distribution1D&&) noexcept = default;
     Distribution1D& operator=(Distribution1D&&) noexcept = default;
 
     int size() const { return static_cast<int>(m_n); }
@@ -79,8 +81,7 @@ class Distribution1D {
 class Distribution2D {
   public:
     Distribution2D() = default;
-    Distribution2D(const std::vector<float>& weights, int nu, int nv);
-    /// The same with row v's nu weights written by row_weights(v, row), one row at a time.
+    /// Over nu x nv cells, row v's nu weights written by row_weights(v, row), one row at a time.
     Distribution2D(int nu, int nv, const std::function<void(int, float*)>& row_weights);
     bool empty() const { return m_marginal.size() == 0 || m_marginal.integral() == 0; }
     struct Sample {

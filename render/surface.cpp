@@ -277,10 +277,10 @@ std::array<Vec3, N> SurfaceHit::local_normal_offsets(const std::array<Vec3, N>& 
         if (same(n0, n1) && same(n0, n2)) return out;
         const BarycentricBasis basis(pr, triangle);
         float b0 = 1 - b1 - b2;
-        Vec3 ni = b0 * pr.normals[i0] + b1 * pr.normals[i1] + b2 * pr.normals[i2];
+        Vec3 ni = b0 * n0 + b1 * n1 + b2 * n2;
         for (std::size_t k = 0; k < N; ++k) {
             const auto [db1, db2] = basis(dp[k]);
-            Vec3 dn = (-db1 - db2) * pr.normals[i0] + db1 * pr.normals[i1] + db2 * pr.normals[i2];
+            Vec3 dn = (-db1 - db2) * n0 + db1 * n1 + db2 * n2;
             Vec3 d = unit_derivative(ni, dn);
             out[k] = pr.flip ? -d : d;
         }

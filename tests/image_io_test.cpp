@@ -242,7 +242,7 @@ TEST(ImageIo, PngLayoutsReadAsStored) {
     ASSERT_EQ(g16.channels, 1);
     EXPECT_FALSE(g16.is_8bit);
     EXPECT_EQ(floats(g16), (std::vector<float>{0, 1000 / 65535.0f, 30000 / 65535.0f, 1, 1,
-                                              64535 / 65535.0f, 35535 / 65535.0f, 0}));
+                                               64535 / 65535.0f, 35535 / 65535.0f, 0}));
     const RawImage g1 = read_fixture("gray1.png");
     ASSERT_EQ(g1.channels, 1);
     EXPECT_TRUE(g1.is_8bit);

@@ -147,8 +147,7 @@ void Builder::read_ahead() {
             if (!job.light_image.empty()) {
                 ReadImage& out = m_read_light_images.at(job.light_image);
                 try {
-                    out.image = load_texture(job.light_image, false, std::nullopt, 1.0f,
-                                             texture::WrapMode::Repeat);
+                    out.image = load_light_map(job.light_image);
                 } catch (...) {
                     out.error = std::current_exception();
                 }

@@ -101,6 +101,20 @@ class Builder {
     std::mutex m_mesh_memory_mutex;
     double m_mesh_memory_reserved = 0;
     void read_ahead();
+    // What read_ahead read for `key` in `read`, taken out of it (a reading error rethrown
+    // here, for the directive's own handling), or nullopt when it read nothing for it.
+    template <class Read>
+    static std::optional<Read> take_read_ahead(std::map<std::string, Read>& read,
+                                               const std::string& key) {
+        auto it = read.find(key);
+        if (it == read.end()) return std::nullopt;
+        Read r = std::move(it->second);
+        read.erase(it);
+        if (r.error) std::rethrow_exception(r.error);
+        return r;
+    }
+    // A light's map as light_image reads it (8-bit files decoded from sRGB, repeated).
+    static texture::Image load_light_map(const std::string& path);
     // Per texture node: how many nodes deep its evaluation recurses (itself included).
     std::vector<int> m_texture_depth;
     std::vector<Light> m_area_lights;  // per AreaLightSource: what each shape in its scope emits

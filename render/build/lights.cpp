@@ -11,19 +11,18 @@ namespace cmam::render::build_detail {
 
 // A light's "mapname" image, read as pbrt-v3 reads light images (8-bit files decoded from
 // sRGB).
+texture::Image Builder::load_light_map(const std::string& path) {
+    return load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat);
+}
+
 std::shared_ptr<const texture::FilteredTexture> Builder::light_image(const Entity& e,
                                                                      const pbrt::Param& p) {
     const std::string path =
         pbrt::resolve_path(m_desc.base_dir, p.loc, e.params.get_string("mapname", ""));
     try {
-        if (auto ahead = m_read_light_images.find(path); ahead != m_read_light_images.end()) {
-            ReadImage read = std::move(ahead->second);
-            m_read_light_images.erase(ahead);
-            if (read.error) std::rethrow_exception(read.error);
-            return std::make_shared<const texture::FilteredTexture>(std::move(read.image));
-        }
-        return std::make_shared<const texture::FilteredTexture>(
-            load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat));
+        auto read = take_read_ahead(m_read_light_images, path);
+        return std::make_shared<const texture::FilteredTexture>(read ? std::move(read->image)
+                                                                     : load_light_map(path));
     } catch (const RenderError& err) {
         throw SceneError(p.loc, err.what());
     }

@@ -151,11 +151,8 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
         const std::string name = in_quotes(fs::path(path).filename().string());
         auto check = [&](const pbrt::PlyCounts& c) { check_mesh_memory(fp->loc, name, c); };
         try {
-            if (auto ahead = m_read_plys.find(path); ahead != m_read_plys.end()) {
-                ReadPly read = std::move(ahead->second);
-                m_read_plys.erase(ahead);
-                if (read.error) std::rethrow_exception(read.error);
-                mesh = std::move(read.mesh);
+            if (auto read = take_read_ahead(m_read_plys, path)) {
+                mesh = std::move(read->mesh);
             } else {
                 mesh = std::make_unique<pbrt::PlyMesh>(pbrt::read_ply(path, check));
             }

@@ -108,12 +108,9 @@ const texture::FilteredTexture* Builder::load_image(const Entity& e, bool is_flo
     texture::Image level0;
     std::size_t bad = 0;  // texel values that are not finite
     try {
-        if (auto ahead = m_read_images.find(r.key); ahead != m_read_images.end()) {
-            ReadImage read = std::move(ahead->second);
-            m_read_images.erase(ahead);
-            if (read.error) std::rethrow_exception(read.error);
-            level0 = std::move(read.image);
-            bad = read.bad;
+        if (auto read = take_read_ahead(m_read_images, r.key)) {
+            level0 = std::move(read->image);
+            bad = read->bad;
         } else {
             level0 = load_texture(r.path, is_float, r.gamma, r.scale, r.wrap, nullptr, true, &bad);
         }
