@@ -327,7 +327,8 @@ std::array<Vec3, 2> SurfaceHit::normal_offsets(const Vec3& dp1, const Vec3& dp2)
     return out;
 }
 
-void SurfaceHit::uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const {
+void SurfaceHit::general_uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1,
+                                    UvDelta& o2) const {
     const std::array<UvDelta, 2> d = uv_offsets(dp1, dp2);
     o1.du = d[0].du;
     o1.dv = d[0].dv;

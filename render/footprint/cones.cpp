@@ -82,7 +82,8 @@ texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const Surfac
         a1 = normalize(along) * (r / std::abs(dn));  // elongated along the incidence plane
         a2 = normalize(cross(n, a1)) * r;
     }
-    const auto [g1, g2] = hit.uv_offsets(a1, a2);
+    UvDelta g1, g2;
+    hit.uv_offsets(a1, a2, g1, g2);
     return texture::Footprint::axes({2 * g1.du, 2 * g1.dv}, {2 * g2.du, 2 * g2.dv});
 }
 
