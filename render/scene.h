@@ -313,6 +313,7 @@ struct SurfaceHit {
         }
         general_uv_offsets(dp1, dp2, o1, o2);
     }
+    /// uv_offsets' other cases: instances, triangles without gradients, quadrics.
     void general_uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const;
     void normal_offsets(const Vec3& dp1, const Vec3& dp2, Vec3& o1, Vec3& o2) const;
 
