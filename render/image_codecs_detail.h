@@ -16,7 +16,7 @@ void check_size(RawImage& img, const SizeCheck& check, bool keep_8bit = false);
 /// OpenEXR: the header walked before OpenEXR reads it (sizes and lengths against the limit),
 /// then the pixels as float; throws RenderError with the reason.
 RawImage decode_exr(const std::string& path, const SizeCheck& check);
-/// Float channels `names` (three) of a w x h image, ZIP-compressed a scanline at a time, in memory.
+/// Float channels `names` (three) of a w x h image, ZIP-compressed, in memory.
 std::vector<unsigned char> encode_exr(int w, int h, const float* rgb,
                                       const std::vector<std::string>& names);
 
