@@ -44,9 +44,9 @@ int main(int argc, char** argv) {
     // glibc's allocator serves blocks up to 32 MB from its heap and keeps up to 64 MB of freed
     // memory for reuse. By default it maps blocks from 128 KB on (raising that only as large
     // blocks are freed) and hands freed memory over 128 KB back to the system, so that memory
-    // allocated and freed again and again (zlib's 260 KB of buffers for every block of an EXR
-    // or PNG, a loader's temporaries) is faulted in anew each time, a page at a time: coffee-
-    // splash 8.7% more CPU time, for 3 MB less at its peak (docs/performance.md).
+    // allocated and freed again and again (zlib's 260 KB of buffers for every block of an EXR,
+    // for one) is faulted in anew each time, a page at a time: coffee-splash took 8.7% more
+    // CPU time, for 3 MB less at its peak (docs/performance.md).
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, 64 << 20);
 #endif
