@@ -40,7 +40,10 @@ inline Vec3 cross(const Vec3& a, const Vec3& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 inline bool finite(const Vec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    // x * 0 is 0 for a finite x and NaN for an infinite or NaN one, and a NaN in the sum makes it
+    // unequal to itself: one test without a branch per component.
+    const float z = (v.x * 0.0f + v.y * 0.0f) + v.z * 0.0f;
+    return z == z;
 }
 inline float length(const Vec3& v) {
     return std::sqrt(dot(v, v));
