@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 
 #include "render/build_scene.h"
 #include "render/integrator.h"
@@ -10,6 +11,29 @@
 
 using namespace cmam;
 using namespace cmam::render;
+
+// finite(Vec3) is a branch-free sum of x * 0: it must agree with std::isfinite on every
+// component, at the extremes of float's range too.
+TEST(Math, FiniteVectorIsEveryComponentFinite) {
+    const float inf = std::numeric_limits<float>::infinity();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float finite_values[] = {0.0f,
+                                   -0.0f,
+                                   1.0f,
+                                   -2.5f,
+                                   std::numeric_limits<float>::max(),
+                                   -std::numeric_limits<float>::max(),
+                                   std::numeric_limits<float>::denorm_min()};
+    for (float a : finite_values)
+        for (float b : finite_values) EXPECT_TRUE(finite(Vec3(a, b, -a))) << a << " " << b;
+    for (float bad : {inf, -inf, nan}) {
+        EXPECT_FALSE(finite(Vec3(bad, 0, 0)));
+        EXPECT_FALSE(finite(Vec3(0, bad, 0)));
+        EXPECT_FALSE(finite(Vec3(0, 0, bad)));
+        EXPECT_FALSE(finite(Vec3(std::numeric_limits<float>::max(), bad, 1)));
+    }
+    EXPECT_FALSE(finite(Vec3(inf, -inf, 0)));  // infinities of both signs do not cancel
+}
 
 TEST(Fresnel, DielectricReferenceValues) {
     EXPECT_NEAR(fresnel_dielectric(1, 1, 1.5f), 0.04, 1e-6);    // normal incidence
