@@ -224,14 +224,13 @@ Rgb noise_texture(const TextureNode& n, const TexContext& ctx) {
 
 }  // namespace
 
-Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
-    if (in.node < 0) return in.value;
-    const TextureNode& n = scene.textures[static_cast<std::size_t>(in.node)];
+Rgb eval_texture_node(const Scene& scene, int node, const TexContext& ctx) {
+    const TextureNode& n = scene.textures[static_cast<std::size_t>(node)];
     switch (n.kind) {
         case TextureNode::Kind::Constant:
             return n.constant;
         case TextureNode::Kind::Image:
-            return image_texture(scene, n, in.node, ctx);
+            return image_texture(scene, n, node, ctx);
         case TextureNode::Kind::Checkerboard:
             return checkerboard(scene, n, ctx);
         case TextureNode::Kind::Bilerp: {

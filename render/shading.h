@@ -43,9 +43,15 @@ inline constexpr double kConeToArea = 0.86602540378443865;
 /// the node's uv mapping like the lookup point; None for point sampling and the CMAM.
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx);
 
-/// Evaluates a texture input (constant or node) at a shading point; float textures return
-/// their value in all three channels.
-Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx);
+/// A texture node's value at a shading point; float textures return it in all three channels.
+Rgb eval_texture_node(const Scene& scene, int node, const TexContext& ctx);
+
+/// Evaluates a texture input (constant or node) at a shading point: a constant inline (most of
+/// a material's inputs, such as a matte's sigma, read at every hit), a node through
+/// eval_texture_node.
+inline Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext& ctx) {
+    return in.node < 0 ? in.value : eval_texture_node(scene, in.node, ctx);
+}
 
 /// The shading normal of `hit` under pbrt-v3's bump mapping by the float texture `bump`: the
 /// surface displaced by d(u,v) along its normal, d's derivatives taken over half the ray
