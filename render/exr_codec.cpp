@@ -203,7 +203,7 @@ std::vector<unsigned char> encode_exr(int w, int h, const float* rgb,
             Imf::Header header(w, h);
             // zlib's level 3, as for PNGs, in place of OpenEXR's 6: a render's floats hardly
             // compress further at 6 (0.1% smaller files) for 11% more CPU time in writing. ZIP,
-            // 16 scanlines a block, not ZIPS: zlib sets up 270 KB of buffers per block, which
+            // 16 scanlines a block, not ZIPS: zlib sets up 260 KB of buffers per block, which
             // glibc may hand back to the system and fault in again each time (docs/performance.md).
             header.compression() = Imf::ZIP_COMPRESSION;
             header.zipCompressionLevel() = 3;
