@@ -307,11 +307,15 @@ struct SurfaceHit {
     void uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const {
         if (!instance && prim->kind == Primitive::Kind::Triangles && !prim->uv_gradients.empty()) {
             const std::array<Vec3, 2>& g = prim->uv_gradients[triangle];
-            o1 = {dot(g[0], dp1), dot(g[1], dp1)};
-            o2 = {dot(g[0], dp2), dot(g[1], dp2)};
+            o1 = gradient_uv_offset(g, dp1);
+            o2 = gradient_uv_offset(g, dp2);
             return;
         }
         general_uv_offsets(dp1, dp2, o1, o2);
+    }
+    /// The (u,v) offset of dP on a triangle with gradients g (Primitive::uv_gradients).
+    static UvDelta gradient_uv_offset(const std::array<Vec3, 2>& g, const Vec3& dp) {
+        return {dot(g[0], dp), dot(g[1], dp)};
     }
     /// uv_offsets' other cases: instances, triangles without gradients, quadrics.
     void general_uv_offsets(const Vec3& dp1, const Vec3& dp2, UvDelta& o1, UvDelta& o2) const;

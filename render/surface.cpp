@@ -226,7 +226,7 @@ std::array<UvDelta, N> SurfaceHit::local_uv_offsets(const std::array<Vec3, N>& d
     const Primitive& pr = *prim;
     if (pr.kind == Primitive::Kind::Triangles && !pr.uv_gradients.empty()) {
         const std::array<Vec3, 2>& g = pr.uv_gradients[triangle];
-        for (std::size_t k = 0; k < N; ++k) out[k] = {dot(g[0], dp[k]), dot(g[1], dp[k])};
+        for (std::size_t k = 0; k < N; ++k) out[k] = gradient_uv_offset(g, dp[k]);
         return out;
     }
     if (pr.kind == Primitive::Kind::Triangles) {
