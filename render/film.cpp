@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
 #include <thread>
@@ -19,6 +20,16 @@
 namespace cmam::render {
 
 namespace {
+
+// Whether an image texture filtered by `area` takes its footprint from ray cones: the camera
+// rays then carry differentials to centre the first hit's parallelogram on its stratum.
+bool cones_read_by_area(const Scene& scene) {
+    return std::any_of(scene.textures.begin(), scene.textures.end(), [](const TextureNode& n) {
+        return n.kind == TextureNode::Kind::Image && n.filter.kind == texture::FilterKind::Area &&
+               n.mapping == TextureNode::Mapping::Uv &&
+               (n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso);
+    });
+}
 
 // Traces the film's samples into a framebuffer, a span of one row at a time.
 //
@@ -47,7 +58,7 @@ class FilmTracer {
           m_stratum_y(m_ny),
           m_sub_rows(scene.tags == TagPolicy::Scanline &&
                      scene.footprint_methods.has(FootprintMethod::Cmam)),
-          m_footprints(scene.footprint_methods, scene.camera, m_spp) {}
+          m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene)) {}
 
     int samples_x() const { return m_nx; }
     bool sub_rows() const { return m_sub_rows; }

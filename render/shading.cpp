@@ -160,8 +160,13 @@ Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexC
     if (n.lod == FootprintMethod::Cmam && ctx.cmam) {
         x = cmam_texel(scene, n, node, s, t, ctx);
     } else {
-        if (n.filter.kind == texture::FilterKind::Area && n.lod == FootprintMethod::Differentials &&
-            n.mapping == TextureNode::Mapping::Uv && ctx.footprints.axes.valid) {
+        // The area filter's parallelogram on its stratum's centre (algorithms.md §5.2,
+        // "Strata"): through the differentials, or for cones the camera ray's at the first hit
+        // (the offset is zero where none was computed).
+        if (n.filter.kind == texture::FilterKind::Area && n.mapping == TextureNode::Mapping::Uv &&
+            (n.lod == FootprintMethod::Differentials
+                 ? ctx.footprints.axes.valid
+                 : n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso)) {
             s += n.su * ctx.footprints.stratum_offset.u;
             t += n.sv * ctx.footprints.stratum_offset.v;
         }

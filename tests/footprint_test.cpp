@@ -394,6 +394,57 @@ TEST(FootprintProducers, RunOnlyTheMethodsUsedAndCarryTagAndPath) {
     }
 }
 
+// With `cone_strata` (an area-filtered texture reads cones), a camera ray's first hit maps its
+// offset to the stratum's centre into (u,v) as the differentials do there, and only there: the
+// cone itself, the hit's own differential and every child are as without it.
+TEST(FootprintProducers, ConeStrataCentreTheFirstHitOnly) {
+    auto s = test::scene_from(
+        camera512("Translate 0 0 10 Rotate 50 1 0 0 Shape \"trianglemesh\" "
+                  "\"point3 P\" [-100 -100 0  100 -100 0  100 100 0  -100 100 0] "
+                  "\"point2 uv\" [0 0 1 0 1 1 0 1] \"integer indices\" [0 1 2 0 2 3]"));
+    Vec3 d;
+    const SurfaceHit h = hit_at(*s, 300, 200, &d);
+    FootprintMethods diff_only, aniso;
+    diff_only.add(FootprintMethod::Differentials);
+    aniso.add(FootprintMethod::ConesAniso);
+    const FootprintProducers differentials(diff_only, s->camera, 4), plain(aniso, s->camera, 4),
+        strata(aniso, s->camera, 4, true);
+    EXPECT_FALSE(plain.differentials());
+    EXPECT_TRUE(strata.differentials());
+    const texture::RayTag tag;
+    const RayFootprint cd = differentials.camera_ray(300, 200, d, tag, 0.25f, -0.5f),
+                       cp = plain.camera_ray(300, 200, d, tag, 0.25f, -0.5f),
+                       cs = strata.camera_ray(300, 200, d, tag, 0.25f, -0.5f);
+    EXPECT_FALSE(cp.diff.valid);
+    ASSERT_TRUE(cs.diff.valid);
+    const HitFootprint ad = differentials.at_hit(cd, d, h), ap = plain.at_hit(cp, d, h),
+                       as = strata.at_hit(cs, d, h);
+    // The same transfer as the differentials' own: the same offset, bit for bit, and not zero.
+    EXPECT_EQ(as.stratum_offset.u, ad.stratum_offset.u);
+    EXPECT_EQ(as.stratum_offset.v, ad.stratum_offset.v);
+    EXPECT_NE(as.stratum_offset.u * as.stratum_offset.u + as.stratum_offset.v * as.stratum_offset.v,
+              0);
+    EXPECT_EQ(ap.stratum_offset.u, 0);
+    EXPECT_EQ(ap.stratum_offset.v, 0);
+    // Nothing else changes: the cone's axes, no differential or dP/dx at the hit.
+    EXPECT_EQ(as.cone_aniso.a.u, ap.cone_aniso.a.u);
+    EXPECT_EQ(as.cone_aniso.b.v, ap.cone_aniso.b.v);
+    EXPECT_FALSE(as.diff.valid);
+    EXPECT_FALSE(as.axes.valid);
+    EXPECT_EQ(dot(as.dpdx, as.dpdx), 0);
+    // A child carries no differential, so its hit has no offset; nor does a hit without (u,v).
+    const RayFootprint refl = strata.reflected(cs, as, d, h);
+    EXPECT_FALSE(refl.diff.valid);
+    const HitFootprint next = strata.at_hit(refl, d, h);
+    EXPECT_EQ(next.stratum_offset.u, 0);
+    EXPECT_EQ(next.stratum_offset.v, 0);
+    EXPECT_EQ(strata.at_hit(cs, d, h, false).stratum_offset.u, 0);
+    EXPECT_FALSE(strata.passed_through(cs, as, h).diff.valid);
+    // Without cones the flag does nothing.
+    const FootprintProducers none_strata(diff_only, s->camera, 4, true);
+    EXPECT_EQ(none_strata.at_hit(cd, d, h).stratum_offset.u, ad.stratum_offset.u);
+}
+
 TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {
     auto s = test::scene_from(
         "Camera \"perspective\" WorldBegin Texture \"c\" \"spectrum\" \"checkerboard\" "

@@ -42,7 +42,8 @@ texture::Footprint HitFootprint::of(FootprintMethod method) const {
     return texture::Footprint::none();
 }
 
-FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp)
+FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp,
+                                       bool cone_strata)
     : m_methods(methods),
       m_camera(camera),
       m_steps(camera_steps(camera)),
@@ -50,7 +51,9 @@ FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& c
       m_camera_cone(camera_ray_cone(camera, m_scale)),
       m_differentials(methods.has(FootprintMethod::Differentials)),
       m_cones(methods.has(FootprintMethod::Cones) || methods.has(FootprintMethod::ConesAniso)),
-      m_cones_aniso(methods.has(FootprintMethod::ConesAniso)) {}
+      m_cones_aniso(methods.has(FootprintMethod::ConesAniso)),
+      m_cone_strata(cone_strata && m_cones),
+      m_camera_differentials(m_differentials || m_cone_strata) {}
 
 RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
                                             texture::RayTag tag, float to_stratum_x,
@@ -71,7 +74,7 @@ void FootprintProducers::start_camera_state(RayFootprint& r, float to_stratum_x,
 
 void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, const Vec3& dir,
                                           float to_stratum_x, float to_stratum_y) const {
-    if (!m_differentials)
+    if (!m_camera_differentials)
         r.diff = {};
     else if (m_camera.environment)
         r.diff = environment_differential(m_camera, fx, fy, dir, m_scale);
@@ -83,7 +86,7 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, c
 void FootprintProducers::start_environment_ray(RayFootprint& r, const Vec3 (&dirs)[3],
                                                float to_stratum_x, float to_stratum_y) const {
     r.diff = {};
-    if (m_differentials) {
+    if (m_camera_differentials) {
         r.diff.valid = true;
         r.diff.dddx = (dirs[1] - dirs[0]) * m_scale;
         r.diff.dddy = (dirs[2] - dirs[0]) * m_scale;
@@ -97,7 +100,7 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, Vec3& org, Vec3& dir,
     const auto& m = m_camera.world_from_camera;
     org = {m[3], m[7], m[11]};
     dir = {batch.dir[0][i], batch.dir[1][i], batch.dir[2][i]};
-    if (m_differentials) {
+    if (m_camera_differentials) {
         r.diff.valid = true;
         r.diff.dodx = {};
         r.diff.dody = {};
@@ -133,6 +136,16 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
             }
         } else
             f.dropped = ray.diff.valid;
+    } else if (m_cone_strata && uv && ray.diff.valid) {
+        // Only a camera ray carries a differential here (children, and rays passed through a
+        // surface without a material, get none): the stratum's centre through it, for the cones'
+        // area filter. The hit's own differential, dP/dx, dP/dy and axes stay unset, as for
+        // cones alone, so nothing else (a bump map's step, a pass-through) reads it.
+        HitDifferential hd;
+        transfer(ray.diff, dir, hit, true, hd);
+        if (hd.valid)
+            f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
+                                hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
     }
     if (!uv) return;
     if (m_cones) {

@@ -28,7 +28,8 @@ struct RayFootprint {
     // for the refracted child of path p (the CMAM keeps a cache per path).
     uint64_t path = 1;
     // From the camera sample to its stratum's centre, in stratum steps (x, y): the same screen
-    // offset at every hit of the path, mapped to (u,v) by that hit's differentials.
+    // offset at every hit of the path, mapped to (u,v) by that hit's differentials (with ray
+    // cones alone, by the camera ray's at its first hit: FootprintProducers' `cone_strata`).
     float to_stratum_x = 0, to_stratum_y = 0;
 };
 
@@ -50,9 +51,11 @@ struct HitFootprint {
     // The hit's screen derivatives dP/dx, dP/dy when the differentials are valid, zero
     // otherwise: what 3-D textures and the non-uv mappings read.
     Vec3 dpdx{}, dpdy{};
-    UvAxes axes;                    // ray differentials' Jacobian columns
-    texture::Vec2d stratum_offset;  // differentials: from the hit to the stratum's centre
-    UvAxes cone;                    // isotropic ray cone
+    UvAxes axes;  // ray differentials' Jacobian columns
+    // From the hit to its stratum's centre in (u,v): through the differentials at every hit, or
+    // through the camera ray's at the first hit for cones (`cone_strata`); zero otherwise.
+    texture::Vec2d stratum_offset;
+    UvAxes cone;  // isotropic ray cone
     UvAxes cone_aniso;
     texture::RayTag tag;  // the ray's tag at this depth
     uint64_t path = 1;
@@ -71,8 +74,12 @@ struct HitFootprint {
 class FootprintProducers {
   public:
     /// For `methods` over `camera`, `spp` samples per pixel (pbrt-v3 scales a camera sample's
-    /// footprint by 1/sqrt(spp)).
-    FootprintProducers(FootprintMethods methods, const Camera& camera, int spp);
+    /// footprint by 1/sqrt(spp)). `cone_strata`: an area-filtered texture reads ray cones, so
+    /// camera rays carry their differentials to the first hit, where they map the sample's offset
+    /// to its stratum's centre into (u,v) (algorithms.md §5.2, "Cones"); nothing else reads them
+    /// unless `methods` has the differentials.
+    FootprintProducers(FootprintMethods methods, const Camera& camera, int spp,
+                       bool cone_strata = false);
 
     /// The state of the camera ray through raster position (fx, fy), direction `dir`.
     RayFootprint camera_ray(float fx, float fy, const Vec3& dir, texture::RayTag tag,
@@ -85,8 +92,8 @@ class FootprintProducers {
     /// neighbours' one pixel right and down (the same state as start_camera_ray's).
     void start_environment_ray(RayFootprint& r, const Vec3 (&dirs)[3], float to_stratum_x,
                                float to_stratum_y) const;
-    /// Whether camera rays carry ray differentials.
-    bool differentials() const { return m_differentials; }
+    /// Whether camera rays carry ray differentials (for the differentials, or the cones' strata).
+    bool differentials() const { return m_camera_differentials; }
     /// Whether camera rays can be made together (camera_rays): the perspective camera's.
     bool batches_camera_rays() const { return !m_camera.orthographic && !m_camera.environment; }
     /// The perspective camera's rays through (fx[i], fy[i]), i < n <= 16, together
@@ -133,6 +140,8 @@ class FootprintProducers {
     float m_scale;          // 1/sqrt(spp)
     RayCone m_camera_cone;  // every camera ray's cone
     bool m_differentials, m_cones, m_cones_aniso;
+    bool m_cone_strata;           // cones' first hits centred on their strata (constructor)
+    bool m_camera_differentials;  // m_differentials || m_cone_strata
 };
 
 }  // namespace cmam::render
