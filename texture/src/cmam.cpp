@@ -91,7 +91,8 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
 }
 
 CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
-                          const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur) {
+                          const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur,
+                          const CmamCache::Entry* above_left, const CmamCache::Entry* above_right) {
     CmamRegion r;
     r.used_above = true;
     Vec2d p0{s0, t0};
@@ -103,7 +104,46 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
     } else {  // no left neighbour: a circle whose radius is the step to the sample above
         a = {b.v, -b.u};
     }
-    if (left && cur.positioned && left->tag.positioned && above.tag.positioned) {
+    auto positioned = [](const CmamCache::Entry* e) { return e && e->tag.positioned; };
+    // Samples on a regular grid (no jitter): the left and above neighbours are exactly one
+    // stratum away, and the two-neighbour solve below is the plain backward difference.
+    auto on_grid = [&](const CmamCache::Entry& e) {
+        const double dx = e.tag.x - cur.x, dy = e.tag.y - cur.y;
+        return dx == std::round(dx) && dy == std::round(dy);
+    };
+    if (left && cur.positioned && left->tag.positioned && above.tag.positioned &&
+        (positioned(above_left) || positioned(above_right)) &&
+        !(on_grid(*left) && on_grid(above))) {
+        // Jittered samples, three or four neighbours: J minimises the sum over them of
+        // |p_i - p0 - J d_i|^2, i.e. J = (sum (p_i - p0) d_i^T) (sum d_i d_i^T)^-1, with d_i
+        // their image-plane offsets (strata); then the centre moves to the stratum's as below.
+        // (With two, a jittered neighbour nearly in line with the current sample makes the
+        // solve ill-conditioned.) A Gram determinant under 1/16 (two neighbours' |det| under
+        // 1/4) keeps the plain vectors.
+        double g00 = 0, g01 = 0, g11 = 0;
+        Vec2d mx{}, my{};
+        auto add = [&](const CmamCache::Entry& e) {
+            const Vec2d d{e.tag.x - cur.x, e.tag.y - cur.y}, p = Vec2d{e.s, e.t} - p0;
+            g00 += d.u * d.u;
+            g01 += d.u * d.v;
+            g11 += d.v * d.v;
+            mx = mx + d.u * p;
+            my = my + d.v * p;
+        };
+        add(*left);
+        add(above);
+        if (positioned(above_left)) add(*above_left);
+        if (positioned(above_right)) add(*above_right);
+        const double det = g00 * g11 - g01 * g01;
+        if (det >= 1.0 / 16) {
+            const Vec2d jx = (g11 * mx - g01 * my) / det, jy = (g00 * my - g01 * mx) / det;
+            const Vec2d c{std::floor(cur.x) + 0.5 - cur.x, std::floor(cur.y) + 0.5 - cur.y};
+            r.offset = c.u * jx + c.v * jy;
+            a = jx;
+            b = jy;
+            p0 = p0 + r.offset;
+        }
+    } else if (left && cur.positioned && left->tag.positioned && above.tag.positioned) {
         // [a b] = J [dl da] with dl, da the neighbours' image-plane offsets (strata): solve for
         // J, whose columns are the steps of one stratum across and down, and move the centre
         // to the stratum's. Nearly coincident samples (|det| < 1/4) keep the plain vectors.
@@ -161,6 +201,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     cache.last = {tag, s0, t0, in_range, u, v};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
     const CmamCache::Entry* above = nullptr;  // in the row buffer, which the lookup keeps
+    const CmamCache::Entry *above_left = nullptr, *above_right = nullptr;
     if (o.two_d) {
         if (!cache.row_valid || tag.id != cache.row_id) {
             if (cache.row_valid && tag.id == cache.row_id + 1)
@@ -171,9 +212,16 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             cache.row_id = tag.id;
             cache.row_valid = true;
         }
-        if (tag.seq < cache.row_previous.size()) {
-            const CmamCache::Entry& e = cache.row_previous[tag.seq];
-            if (e.valid && e.tag.level == tag.level) above = &e;
+        // The row above's samples on either side of it too (the Jacobian's fit).
+        auto previous = [&](uint32_t seq) -> const CmamCache::Entry* {
+            if (seq >= cache.row_previous.size()) return nullptr;
+            const CmamCache::Entry& e = cache.row_previous[seq];
+            return e.valid && e.tag.level == tag.level ? &e : nullptr;
+        };
+        above = previous(tag.seq);
+        if (above) {
+            above_left = tag.seq > 0 ? previous(tag.seq - 1) : nullptr;
+            above_right = previous(tag.seq + 1);
         }
         if (tag.seq >= cache.row_current.size()) cache.row_current.resize(tag.seq + 1);
         cache.row_current[tag.seq] = cache.last;
@@ -192,7 +240,8 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     // (Built only where it is read: a CmamRegion is large enough that clearing it shows.)
     std::optional<CmamRegion> region;
     if (above)
-        region = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag);
+        region = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag,
+                                above_left, above_right);
     else if (o.hull || region_out)
         region = cmam_region(s0, t0, cached, matches, o);
     if (above) matches = std::max(matches, 1);  // a region exists: no miss

@@ -126,10 +126,14 @@ struct CmamRegion {
 /// sample above (level-0 texels): the two vectors as Jacobian columns. When the three tags carry
 /// positions (RayTag::positioned), the Jacobian is solved from the vectors and the samples'
 /// image-plane offsets (exact for an affine mapping, whatever the jitter) and the region is
-/// centred on the current sample's stratum.
+/// centred on the current sample's stratum. The row above's samples left and right of the one
+/// above (may be null; used when positioned too) make that a least-squares fit over up to four
+/// neighbours, which jittered samples nearly in line with the current one do not spoil
+/// (algorithms.md §6.3.1, "Positioned tags").
 CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
                           const CmamCache::Entry& above, const CmamOptions& options,
-                          const RayTag& current = {});
+                          const RayTag& current = {}, const CmamCache::Entry* above_left = nullptr,
+                          const CmamCache::Entry* above_right = nullptr);
 
 /// CmamRegion::width alone, what the MIP filter reads, for the current sample p0 and the
 /// `matches` matching samples p[0..]: the distance to the one, or the diagonal of the three
