@@ -176,10 +176,21 @@ Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexC
     return Rgb(x[0], x[1], x[2]);
 }
 
-Rgb checkerboard(const Scene& scene, const TextureNode& n, const TexContext& ctx) {
+Rgb checkerboard(const Scene& scene, const TextureNode& n, int node, const TexContext& ctx) {
     const MappedSt m = node_st(n, ctx, n.closed_form);
-    const texture::Footprint& fp = m.footprint;
-    const double s = m.st.u, t = m.st.v;
+    texture::Footprint fp = m.footprint;
+    double s = m.st.u, t = m.st.v;
+    if (n.closed_form && n.lod == FootprintMethod::Cmam && ctx.cmam) {
+        // The CMAM as this texture's footprint producer: its own cache of (s,t) samples gives
+        // the region the closed form filters (algorithms.md §6.3), centred on the stratum with
+        // positioned 2-D tags; a miss point-samples.
+        texture::Vec2d to_stratum;
+        fp = texture::cmam_footprint(
+            ctx.cmam->cache(ctx.object, static_cast<uint32_t>(node), ctx.footprints.path),
+            ctx.footprints.tag, s, t, scene.cmam, &to_stratum);
+        s += to_stratum.u;
+        t += to_stratum.v;
+    }
     if (fp.kind == texture::Footprint::Kind::Axes) {
         // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.
         double ds = std::max(std::abs(fp.axis_a.u), std::abs(fp.axis_b.u));
@@ -237,7 +248,7 @@ Rgb eval_texture_node(const Scene& scene, int node, const TexContext& ctx) {
         case TextureNode::Kind::Image:
             return image_texture(scene, n, node, ctx);
         case TextureNode::Kind::Checkerboard:
-            return checkerboard(scene, n, ctx);
+            return checkerboard(scene, n, node, ctx);
         case TextureNode::Kind::Bilerp: {
             const texture::Vec2d st = node_st(n, ctx, false).st;
             const float s = float(st.u), t = float(st.v);

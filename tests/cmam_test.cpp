@@ -259,6 +259,52 @@ TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
     EXPECT_FALSE(r.used_above);
 }
 
+// The CMAM as a footprint producer for textures that are not images: the same cache steps as a
+// lookup, positions in (u,v), the region as axes.
+TEST(Cmam, FootprintForTexturesThatAreNotImages) {
+    CmamOptions o;
+    CmamCache c;
+    Vec2d off{7, 7};
+    // 1-D: a miss, then the circle of radius |p1 - p0| to the most recent match.
+    EXPECT_EQ(cmam_footprint(c, {0, 0, 0}, 0.10, 0.5, o, &off).kind, Footprint::Kind::None);
+    EXPECT_EQ(off.u, 0);
+    cmam_footprint(c, {0, 0, 1}, 0.13, 0.5, o, &off);
+    const Footprint f = cmam_footprint(c, {0, 0, 2}, 0.17, 0.5, o, &off);
+    ASSERT_EQ(f.kind, Footprint::Kind::Axes);
+    EXPECT_NEAR(f.axis_a.u, 0.04, 1e-12);
+    EXPECT_NEAR(f.axis_b.v, 0.04, 1e-12);
+    EXPECT_EQ(f.axis_a.v, 0);
+    // Not adjacent (sequence number 4 after 2): a miss.
+    EXPECT_EQ(cmam_footprint(c, {0, 0, 4}, 0.25, 0.5, o, &off).kind, Footprint::Kind::None);
+    // 2-D with positioned tags: the Jacobian and the stratum's centre, as cmam_region_2d gives
+    // for the same cache entries (an affine mapping u = 0.01 x + 0.002 y, v = 0.03 y).
+    o.two_d = true;
+    CmamCache c2;
+    auto tag = [](uint32_t row, uint32_t seq, double x, double y) {
+        RayTag t{row, 0, seq};
+        t.positioned = true;
+        t.x = x;
+        t.y = y;
+        return t;
+    };
+    const double jit[2][3][2] = {{{0.3, 0.6}, {1.7, 0.2}, {2.4, 0.9}},
+                                 {{0.8, 1.1}, {1.2, 1.7}, {2.6, 1.4}}};
+    Footprint g;
+    for (uint32_t row = 0; row < 2; ++row)
+        for (uint32_t k = 0; k < 3; ++k) {
+            const double x = jit[row][k][0], y = jit[row][k][1];
+            g = cmam_footprint(c2, tag(row, k, x, y), 0.01 * x + 0.002 * y, 0.03 * y, o, &off);
+        }
+    ASSERT_EQ(g.kind, Footprint::Kind::Axes);
+    EXPECT_NEAR(g.axis_a.u, 0.01, 1e-12);
+    EXPECT_NEAR(g.axis_a.v, 0, 1e-12);
+    EXPECT_NEAR(g.axis_b.u, 0.002, 1e-12);
+    EXPECT_NEAR(g.axis_b.v, 0.03, 1e-12);
+    // The last sample (2.6, 1.4) moved to its stratum's centre (2.5, 1.5).
+    EXPECT_NEAR(off.u, 0.01 * -0.1 + 0.002 * 0.1, 1e-12);
+    EXPECT_NEAR(off.v, 0.03 * 0.1, 1e-12);
+}
+
 TEST(Cmam, FarOrNonNumericSamplesGiveTheMeanAndAreNotCached) {
     // A position beyond 2^30 texels gets the mean, as in every filter, and is not cached, so
     // the next sample's region never spans to it; a maximum anisotropy below 1 (or NaN) is 1.

@@ -329,6 +329,36 @@ TEST(Area, ConesIntegrateTheirStrataAtSeveralSamples) {
     EXPECT_LT(area, 1.5 * diff) << area << " vs " << diff;
 }
 
+TEST(Cmam, FiltersClosedFormCheckerboardsToo) {
+    // A receding closed-form checkerboard: with --lod cmam it was point-sampled (the CMAM's
+    // caches filled only for image textures); now its own cache gives the closed form a region.
+    // Measured against 64 point samples a pixel, at 1 spp: 2-D CMAM 0.037, 1-D 0.038, point
+    // sampling 0.066 (as the CMAM was), ray differentials 0.035.
+    const std::string text =
+        "LookAt 0 1 -3  0 0.2 6  0 1 0 Camera \"perspective\" \"float fov\" 40 "
+        "Film \"image\" \"integer xresolution\" 96 \"integer yresolution\" 64 "
+        "WorldBegin LightSource \"distant\" \"point from\" [0 1 0] \"point to\" [0 0 0] "
+        "Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" 60 \"float vscale\" 60 "
+        "\"rgb tex1\" [1 1 1] \"rgb tex2\" [0 0 0] Material \"matte\" \"texture Kd\" \"c\" "
+        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+        "\"point3 P\" [-20 0 -5  20 0 -5  20 0 35  -20 0 35] \"point2 uv\" [0 0 1 0 1 1 0 1] "
+        "WorldEnd";
+    auto render_with = [&](int spp, FootprintMethod lod, bool two_d) {
+        BuildOptions bo;
+        bo.spp_override = spp;
+        bo.lod = lod;
+        bo.cmam.two_d = two_d;
+        auto s = build_scene(pbrt::parse_string(text, "checks.pbrt"), bo, {});
+        return render::render(*s, {}, nullptr).rgb;
+    };
+    const auto ref = render_with(64, FootprintMethod::None, false);
+    const double none = rmse(ref, render_with(1, FootprintMethod::None, false));
+    const double one_d = rmse(ref, render_with(1, FootprintMethod::Cmam, false));
+    const double two_d = rmse(ref, render_with(1, FootprintMethod::Cmam, true));
+    EXPECT_LT(two_d, 0.7 * none) << two_d << " vs " << none;
+    EXPECT_LT(one_d, 0.7 * none) << one_d << " vs " << none;
+}
+
 TEST(Scenes, MaxAnisotropyAboveTheLimitIsClampedWithALocatedWarning) {
     const std::string text =
         "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"

@@ -174,12 +174,23 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
 
 namespace {
 
-// The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
-Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
-                  const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
-    const Image& img = tex.image();
-    const double W = img.width(), H = img.height();
-    const double s0 = u * W, t0 = v * H;
+// What one sample's step through the cache found: its matches (the cached samples as they were
+// before the step), and with the 2-D CMAM the samples above it in the row buffer, which the
+// cache keeps until the next row.
+struct CacheStep {
+    int matches = 0;
+    CmamCache::Entry cached[2];
+    Vec2d cached_uv[2];
+    const CmamCache::Entry* above = nullptr;
+    const CmamCache::Entry *above_left = nullptr, *above_right = nullptr;
+    bool in_range = false;
+};
+
+// Matches the sample at (s0, t0) (texture coordinate (u, v)) against the cache and enters it:
+// the paper's matching and cache update (§3.1), and the 2-D CMAM's row buffer.
+CacheStep advance(CmamCache& cache, RayTag tag, double s0, double t0, double u, double v,
+                  const CmamOptions& o) {
+    CacheStep st;
     // Matching (paper §3.1): the most recent sample, then both.
     int matches = 0;
     auto same = [&](const CmamCache::Entry& e, uint32_t steps_back) {
@@ -187,21 +198,22 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
                (!o.adjacent_only || e.tag.seq + steps_back == tag.seq);
     };
     if (same(cache.last, 1)) matches = same(cache.second_last, 2) ? 2 : 1;
-    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
+    st.matches = matches;
+    st.cached[0] = cache.last;
+    st.cached[1] = cache.second_last;
     // The matches' texture coordinates, read from the cache itself (read from `cached`, a
     // 16-byte read of u and v spans two of the copy's stores and waits for both).
-    const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
-                                {cache.second_last.u, cache.second_last.v}};
+    st.cached_uv[0] = {cache.last.u, cache.last.v};
+    st.cached_uv[1] = {cache.second_last.u, cache.second_last.v};
     // Shift the cache: the most recent becomes the second, the current the most recent.
     // Positions beyond 2^30 texels (or not numbers) get the mean, as in every filter; they are
     // not cached, so every region's samples lie within that range.
     const bool in_range =
         std::abs(s0) < detail::kMaxTexelCoord && std::abs(t0) < detail::kMaxTexelCoord;
+    st.in_range = in_range;
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, in_range, u, v};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
-    const CmamCache::Entry* above = nullptr;  // in the row buffer, which the lookup keeps
-    const CmamCache::Entry *above_left = nullptr, *above_right = nullptr;
     if (o.two_d) {
         if (!cache.row_valid || tag.id != cache.row_id) {
             if (cache.row_valid && tag.id == cache.row_id + 1)
@@ -218,14 +230,29 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
             const CmamCache::Entry& e = cache.row_previous[seq];
             return e.valid && e.tag.level == tag.level ? &e : nullptr;
         };
-        above = previous(tag.seq);
-        if (above) {
-            above_left = tag.seq > 0 ? previous(tag.seq - 1) : nullptr;
-            above_right = previous(tag.seq + 1);
+        st.above = previous(tag.seq);
+        if (st.above) {
+            st.above_left = tag.seq > 0 ? previous(tag.seq - 1) : nullptr;
+            st.above_right = previous(tag.seq + 1);
         }
         if (tag.seq >= cache.row_current.size()) cache.row_current.resize(tag.seq + 1);
         cache.row_current[tag.seq] = cache.last;
     }
+    return st;
+}
+
+// The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
+Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
+                  const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
+    const Image& img = tex.image();
+    const double W = img.width(), H = img.height();
+    const double s0 = u * W, t0 = v * H;
+    const CacheStep st = advance(cache, tag, s0, t0, u, v, o);
+    int matches = st.matches;
+    const CmamCache::Entry* cached = st.cached;
+    const Vec2d* cached_uv = st.cached_uv;
+    const CmamCache::Entry* above = st.above;
+    const bool in_range = st.in_range;
 
     if (info) *info = LookupInfo{};
     if (!in_range) {
@@ -241,7 +268,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     std::optional<CmamRegion> region;
     if (above)
         region = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag,
-                                above_left, above_right);
+                                st.above_left, st.above_right);
     else if (o.hull || region_out)
         region = cmam_region(s0, t0, cached, matches, o);
     if (above) matches = std::max(matches, 1);  // a region exists: no miss
@@ -355,6 +382,25 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
 }
 
 }  // namespace
+
+Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const CmamOptions& o,
+                         Vec2d* offset) {
+    *offset = {};
+    const CacheStep st = advance(cache, tag, u, v, u, v, o);
+    if (!st.in_range) return Footprint::none();
+    if (st.above) {
+        const CmamRegion r = cmam_region_2d(u, v, st.matches > 0 ? &st.cached[0] : nullptr,
+                                            *st.above, o, tag, st.above_left, st.above_right);
+        *offset = r.offset;
+        return Footprint::axes(r.a, r.b);
+    }
+    if (st.matches == 0) return Footprint::none();
+    // The 1-D CMAM: the one-match region, a circle of radius |p1 - p0| (the sample step, as a
+    // Jacobian column is; the second match, two steps back along the same scanline, would only
+    // double its width).
+    const CmamRegion r = cmam_region(u, v, st.cached, 1, o);
+    return Footprint::axes(r.a, r.b);
+}
 
 Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o) {

@@ -172,6 +172,15 @@ struct CmamResult {
 CmamResult cmam_lookup_with_info(const FilteredTexture& texture, CmamCache& cache, RayTag tag,
                                  double u, double v, const CmamOptions& options);
 
+/// The CMAM as a footprint producer for a texture that is not an image (a closed-form
+/// checkerboard): the same matching and cache update as cmam_lookup(), with positions in the
+/// texture's own (u,v) units, and the region as two axes in those units: the 2-D CMAM's
+/// Jacobian columns, or for the 1-D CMAM the circle of radius |p1 - p0| to the most recent
+/// match (algorithms.md §6.3.3); none on a miss. `offset` receives the move to the sample's
+/// stratum centre (positioned 2-D tags), else zero.
+Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v,
+                         const CmamOptions& options, Vec2d* offset);
+
 /// Convenience object for a ray tracer: one per textured object and worker thread.
 class Cmam {
   public:
