@@ -33,6 +33,17 @@ class CmamRowState {
         if (m_last < m_caches.size() && m_caches[m_last].key == key &&
             m_caches[m_last].path == path)
             return m_caches[m_last].cache;  // a row mostly stays on one object
+        return find_or_add(key, path);
+    }
+    void clear() {
+        m_caches.clear();
+        m_last = 0;
+    }
+
+  private:
+    // The search past the last entry found, out of line so that the test above stays inline
+    // wherever a texture asks for its cache.
+    [[gnu::noinline]] texture::CmamCache& find_or_add(uint64_t key, uint64_t path) {
         for (std::size_t i = 0; i < m_caches.size(); ++i)
             if (m_caches[i].key == key && m_caches[i].path == path) {
                 m_last = i;
@@ -41,12 +52,6 @@ class CmamRowState {
         m_last = m_caches.size();
         return m_caches.push_back({key, path, texture::CmamCache{}}), m_caches.back().cache;
     }
-    void clear() {
-        m_caches.clear();
-        m_last = 0;
-    }
-
-  private:
     struct Entry {
         uint64_t key, path;
         texture::CmamCache cache;

@@ -174,13 +174,11 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
 
 namespace {
 
-// What one sample's step through the cache found: its matches (the cached samples as they were
-// before the step), and with the 2-D CMAM the samples above it in the row buffer, which the
-// cache keeps until the next row.
+// What one sample's step through the cache found: how many of the cached samples (as they were
+// before the step, which the caller copies) match, and with the 2-D CMAM the samples above it
+// in the row buffer, which the cache keeps until the next row.
 struct CacheStep {
     int matches = 0;
-    CmamCache::Entry cached[2];
-    Vec2d cached_uv[2];
     const CmamCache::Entry* above = nullptr;
     const CmamCache::Entry *above_left = nullptr, *above_right = nullptr;
     bool in_range = false;
@@ -188,9 +186,8 @@ struct CacheStep {
 
 // Matches the sample at (s0, t0) (texture coordinate (u, v)) against the cache and enters it:
 // the paper's matching and cache update (§3.1), and the 2-D CMAM's row buffer.
-CacheStep advance(CmamCache& cache, RayTag tag, double s0, double t0, double u, double v,
-                  const CmamOptions& o) {
-    CacheStep st;
+[[gnu::always_inline]] inline CacheStep advance(CmamCache& cache, RayTag tag, double s0, double t0,
+                                                double u, double v, const CmamOptions& o) {
     // Matching (paper §3.1): the most recent sample, then both.
     int matches = 0;
     auto same = [&](const CmamCache::Entry& e, uint32_t steps_back) {
@@ -198,19 +195,12 @@ CacheStep advance(CmamCache& cache, RayTag tag, double s0, double t0, double u, 
                (!o.adjacent_only || e.tag.seq + steps_back == tag.seq);
     };
     if (same(cache.last, 1)) matches = same(cache.second_last, 2) ? 2 : 1;
-    st.matches = matches;
-    st.cached[0] = cache.last;
-    st.cached[1] = cache.second_last;
-    // The matches' texture coordinates, read from the cache itself (read from `cached`, a
-    // 16-byte read of u and v spans two of the copy's stores and waits for both).
-    st.cached_uv[0] = {cache.last.u, cache.last.v};
-    st.cached_uv[1] = {cache.second_last.u, cache.second_last.v};
-    // Shift the cache: the most recent becomes the second, the current the most recent.
     // Positions beyond 2^30 texels (or not numbers) get the mean, as in every filter; they are
     // not cached, so every region's samples lie within that range.
     const bool in_range =
         std::abs(s0) < detail::kMaxTexelCoord && std::abs(t0) < detail::kMaxTexelCoord;
-    st.in_range = in_range;
+    CacheStep st{matches, nullptr, nullptr, nullptr, in_range};
+    // Shift the cache: the most recent becomes the second, the current the most recent.
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, in_range, u, v};
     // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
@@ -247,10 +237,14 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
     const double s0 = u * W, t0 = v * H;
+    // The cached samples before the step. Their texture coordinates are read from the cache
+    // itself (read from the copies, a 16-byte read of u and v spans two of their stores and
+    // waits for both).
+    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
+    const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
+                                {cache.second_last.u, cache.second_last.v}};
     const CacheStep st = advance(cache, tag, s0, t0, u, v, o);
     int matches = st.matches;
-    const CmamCache::Entry* cached = st.cached;
-    const Vec2d* cached_uv = st.cached_uv;
     const CmamCache::Entry* above = st.above;
     const bool in_range = st.in_range;
 
@@ -386,11 +380,12 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
 Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const CmamOptions& o,
                          Vec2d* offset) {
     *offset = {};
+    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
     const CacheStep st = advance(cache, tag, u, v, u, v, o);
     if (!st.in_range) return Footprint::none();
     if (st.above) {
-        const CmamRegion r = cmam_region_2d(u, v, st.matches > 0 ? &st.cached[0] : nullptr,
-                                            *st.above, o, tag, st.above_left, st.above_right);
+        const CmamRegion r = cmam_region_2d(u, v, st.matches > 0 ? &cached[0] : nullptr, *st.above,
+                                            o, tag, st.above_left, st.above_right);
         *offset = r.offset;
         return Footprint::axes(r.a, r.b);
     }
@@ -398,7 +393,7 @@ Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const
     // The 1-D CMAM: the one-match region, a circle of radius |p1 - p0| (the sample step, as a
     // Jacobian column is; the second match, two steps back along the same scanline, would only
     // double its width).
-    const CmamRegion r = cmam_region(u, v, st.cached, 1, o);
+    const CmamRegion r = cmam_region(u, v, cached, 1, o);
     return Footprint::axes(r.a, r.b);
 }
 
