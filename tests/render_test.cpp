@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <optional>
 
 #include "pbrt/parser.h"
 #include "render/build_scene.h"
@@ -224,21 +225,30 @@ TEST(Scenes, EveryBundledSceneBuilds) {
 }
 
 namespace {
-// Rows 100..180 of the paper's scene 1 (the floor from just below the horizon), rendered with
-// the given footprint source, filter and samples per pixel.
-std::vector<float> scene1_floor(int spp, FootprintMethod lod, texture::FilterKind filter,
-                                bool two_d = false) {
-    static const pbrt::SceneDesc d =
-        pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/paper/scene1.pbrt");
+// A scene rendered with the given samples per pixel, footprint source, filter (none: the
+// scene's) and 1-D or 2-D CMAM, its film cut to rows [y0, y1) when y1 > 0.
+std::vector<float> render_desc(const pbrt::SceneDesc& d, int spp, FootprintMethod lod,
+                               std::optional<texture::FilterKind> filter, bool two_d, int y0 = 0,
+                               int y1 = 0) {
     BuildOptions bo;
     bo.spp_override = spp;
     bo.lod = lod;
     bo.filter = filter;
     bo.cmam.two_d = two_d;
     auto s = build_scene(d, bo, {});
-    s->film.y0 = 100;
-    s->film.y1 = 180;
+    if (y1 > 0) {
+        s->film.y0 = y0;
+        s->film.y1 = y1;
+    }
     return render::render(*s, {}, nullptr).rgb;
+}
+// Rows 100..180 of the paper's scene 1 (the floor from just below the horizon), rendered with
+// the given footprint source, filter and samples per pixel.
+std::vector<float> scene1_floor(int spp, FootprintMethod lod, texture::FilterKind filter,
+                                bool two_d = false) {
+    static const pbrt::SceneDesc d =
+        pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/paper/scene1.pbrt");
+    return render_desc(d, spp, lod, filter, two_d, 100, 180);
 }
 double rmse(const std::vector<float>& a, const std::vector<float>& b) {
     double se = 0;
@@ -343,13 +353,9 @@ TEST(Cmam, FiltersClosedFormCheckerboardsToo) {
         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
         "\"point3 P\" [-20 0 -5  20 0 -5  20 0 35  -20 0 35] \"point2 uv\" [0 0 1 0 1 1 0 1] "
         "WorldEnd";
+    const pbrt::SceneDesc d = pbrt::parse_string(text, "checks.pbrt");
     auto render_with = [&](int spp, FootprintMethod lod, bool two_d) {
-        BuildOptions bo;
-        bo.spp_override = spp;
-        bo.lod = lod;
-        bo.cmam.two_d = two_d;
-        auto s = build_scene(pbrt::parse_string(text, "checks.pbrt"), bo, {});
-        return render::render(*s, {}, nullptr).rgb;
+        return render_desc(d, spp, lod, std::nullopt, two_d);
     };
     const auto ref = render_with(64, FootprintMethod::None, false);
     const double none = rmse(ref, render_with(1, FootprintMethod::None, false));

@@ -25,6 +25,13 @@ RayCone camera_ray_cone(const Camera& c, float scale) {
     return camera_cone(c, scale);
 }
 
+// The ray's offset to its stratum's centre (screen, in stratum steps) mapped into (u,v) by a
+// hit's differential.
+texture::Vec2d to_stratum(const HitDifferential& hd, const RayFootprint& ray) {
+    return {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
+            hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
+}
+
 }  // namespace
 
 texture::Footprint HitFootprint::of(FootprintMethod method) const {
@@ -131,8 +138,7 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
             f.dpdy = hd.dpdy;
             if (uv) {
                 f.axes = {{hd.dudx, hd.dvdx}, {hd.dudy, hd.dvdy}, true};
-                f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
-                                    hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
+                f.stratum_offset = to_stratum(hd, ray);
             }
         } else
             f.dropped = ray.diff.valid;
@@ -143,9 +149,7 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
         // cones alone, so nothing else (a bump map's step, a pass-through) reads it.
         HitDifferential hd;
         transfer(ray.diff, dir, hit, true, hd);
-        if (hd.valid)
-            f.stratum_offset = {hd.dudx * ray.to_stratum_x + hd.dudy * ray.to_stratum_y,
-                                hd.dvdx * ray.to_stratum_x + hd.dvdy * ray.to_stratum_y};
+        if (hd.valid) f.stratum_offset = to_stratum(hd, ray);
     }
     if (!uv) return;
     if (m_cones) {

@@ -105,55 +105,59 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
         a = {b.v, -b.u};
     }
     auto positioned = [](const CmamCache::Entry* e) { return e && e->tag.positioned; };
-    // Samples on a regular grid (no jitter): the left and above neighbours are exactly one
-    // stratum away, and the two-neighbour solve below is the plain backward difference.
-    auto on_grid = [&](const CmamCache::Entry& e) {
-        const double dx = e.tag.x - cur.x, dy = e.tag.y - cur.y;
-        return dx == std::round(dx) && dy == std::round(dy);
-    };
-    if (left && cur.positioned && left->tag.positioned && above.tag.positioned &&
-        (positioned(above_left) || positioned(above_right)) &&
-        !(on_grid(*left) && on_grid(above))) {
-        // Jittered samples, three or four neighbours: J minimises the sum over them of
-        // |p_i - p0 - J d_i|^2, i.e. J = (sum (p_i - p0) d_i^T) (sum d_i d_i^T)^-1, with d_i
-        // their image-plane offsets (strata); then the centre moves to the stratum's as below.
-        // (With two, a jittered neighbour nearly in line with the current sample makes the
-        // solve ill-conditioned.) A Gram determinant under 1/16 (two neighbours' |det| under
-        // 1/4) keeps the plain vectors.
-        double g00 = 0, g01 = 0, g11 = 0;
-        Vec2d mx{}, my{};
-        auto add = [&](const CmamCache::Entry& e) {
-            const Vec2d d{e.tag.x - cur.x, e.tag.y - cur.y}, p = Vec2d{e.s, e.t} - p0;
-            g00 += d.u * d.u;
-            g01 += d.u * d.v;
-            g11 += d.v * d.v;
-            mx = mx + d.u * p;
-            my = my + d.v * p;
+    if (left && cur.positioned && left->tag.positioned && above.tag.positioned) {
+        // J, whose columns are the steps of one stratum across and down, from the neighbours'
+        // vectors p_i - p0 and image-plane offsets d_i (strata); false when they are too nearly
+        // in line to give one (the plain vectors are kept).
+        Vec2d jx, jy;
+        bool solved;
+        // Samples on a regular grid (no jitter): the left and above neighbours are exactly one
+        // stratum away, and the two-neighbour solve is the plain backward difference.
+        auto on_grid = [&](const CmamCache::Entry& e) {
+            const double dx = e.tag.x - cur.x, dy = e.tag.y - cur.y;
+            return dx == std::round(dx) && dy == std::round(dy);
         };
-        add(*left);
-        add(above);
-        if (positioned(above_left)) add(*above_left);
-        if (positioned(above_right)) add(*above_right);
-        const double det = g00 * g11 - g01 * g01;
-        if (det >= 1.0 / 16) {
-            const Vec2d jx = (g11 * mx - g01 * my) / det, jy = (g00 * my - g01 * mx) / det;
-            const Vec2d c{std::floor(cur.x) + 0.5 - cur.x, std::floor(cur.y) + 0.5 - cur.y};
-            r.offset = c.u * jx + c.v * jy;
-            a = jx;
-            b = jy;
-            p0 = p0 + r.offset;
+        if ((positioned(above_left) || positioned(above_right)) &&
+            !(on_grid(*left) && on_grid(above))) {
+            // Jittered samples, three or four neighbours: J minimises the sum over them of
+            // |p_i - p0 - J d_i|^2, i.e. J = (sum (p_i - p0) d_i^T) (sum d_i d_i^T)^-1. (With
+            // two, a jittered neighbour nearly in line with the current sample makes the solve
+            // ill-conditioned.) A Gram determinant under 1/16 (two neighbours' |det| under 1/4)
+            // gives none.
+            double g00 = 0, g01 = 0, g11 = 0;
+            Vec2d mx{}, my{};
+            auto add = [&](const CmamCache::Entry& e) {
+                const Vec2d d{e.tag.x - cur.x, e.tag.y - cur.y}, p = Vec2d{e.s, e.t} - p0;
+                g00 += d.u * d.u;
+                g01 += d.u * d.v;
+                g11 += d.v * d.v;
+                mx = mx + d.u * p;
+                my = my + d.v * p;
+            };
+            add(*left);
+            add(above);
+            if (positioned(above_left)) add(*above_left);
+            if (positioned(above_right)) add(*above_right);
+            const double det = g00 * g11 - g01 * g01;
+            solved = det >= 1.0 / 16;
+            if (solved) {
+                jx = (g11 * mx - g01 * my) / det;
+                jy = (g00 * my - g01 * mx) / det;
+            }
+        } else {
+            // [a b] = J [dl da]: J = [a b] [dl da]^-1. Nearly coincident samples (|det| < 1/4)
+            // give none.
+            const Vec2d dl{left->tag.x - cur.x, left->tag.y - cur.y};
+            const Vec2d da{above.tag.x - cur.x, above.tag.y - cur.y};
+            const double det = cross(dl, da);
+            solved = std::abs(det) >= 0.25;
+            if (solved) {
+                // inverse of [dl da] = [[da.v -da.u] [-dl.v dl.u]] / det
+                jx = (da.v * a - dl.v * b) / det;
+                jy = (dl.u * b - da.u * a) / det;
+            }
         }
-    } else if (left && cur.positioned && left->tag.positioned && above.tag.positioned) {
-        // [a b] = J [dl da] with dl, da the neighbours' image-plane offsets (strata): solve for
-        // J, whose columns are the steps of one stratum across and down, and move the centre
-        // to the stratum's. Nearly coincident samples (|det| < 1/4) keep the plain vectors.
-        const Vec2d dl{left->tag.x - cur.x, left->tag.y - cur.y};
-        const Vec2d da{above.tag.x - cur.x, above.tag.y - cur.y};
-        const double det = cross(dl, da);
-        if (std::abs(det) >= 0.25) {
-            // inverse of [dl da] = [[da.v -da.u] [-dl.v dl.u]] / det
-            const Vec2d jx = (da.v * a - dl.v * b) / det;
-            const Vec2d jy = (dl.u * b - da.u * a) / det;
+        if (solved) {  // the axes are J's columns, the centre the stratum's
             const Vec2d c{std::floor(cur.x) + 0.5 - cur.x, std::floor(cur.y) + 0.5 - cur.y};
             r.offset = c.u * jx + c.v * jy;
             a = jx;
