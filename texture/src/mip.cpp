@@ -146,7 +146,9 @@ Texel MipPyramid::trilinear_lod(double u, double v, double lambda) const {
     return trilinear_levels(u, v, l, static_cast<float>(lambda - l));
 }
 
-Texel MipPyramid::trilinear_levels(double u, double v, int l, float f) const {
+// Flattened: both levels' bilinear reads inline (two calls, each returning its texel through
+// memory, were a fifth of a MIP lookup's instructions).
+[[gnu::flatten]] Texel MipPyramid::trilinear_levels(double u, double v, int l, float f) const {
     if (l >= levels() - 1) return level(levels() - 1).mean();
     const Image &fine = level(l), &coarse = level(l + 1);
     const double s = u * fine.width() - 0.5, t = v * fine.height() - 0.5;
