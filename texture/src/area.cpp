@@ -247,6 +247,11 @@ inline __m128 knot4(const float* d) {
 // does not depend on how many there are. `Guard`: the edge may end on the table's right edge
 // x = W (a part of an edge split there), where a position rounded to W would read two knots
 // past the row; a piece then starts in texel W - 1 at the latest.
+//
+// A steep edge's whole rows go alternately to two sums (`acc[0]` the first piece, the even rows
+// and the last piece; `acc[1]` the odd rows), added at the end: one channel then walks two rows
+// at a time, a row a lane (rows_paired), with each lane's operations those of its row's piece
+// for any channel count, so a channel's result is still the same for every channel count.
 template <int NC, bool Guard = false>
 struct EdgeWalk {
     const float* row;
@@ -257,7 +262,10 @@ struct EdgeWalk {
     bool one_row;
     double x, xnext;
     __m128 h_row;
-    __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
+    struct Sum {
+        __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();  // channels 0-1, 2-3
+    };
+    Sum acc[2];
     int64_t k_last = 0;  // Guard: W - 1
 
     EdgeWalk(const float* table, std::size_t stride_, Vec2d p_, Vec2d q_, double sign_,
@@ -279,7 +287,7 @@ struct EdgeWalk {
     // The piece of the current row from xa to xb, of height h (hv: h as a float vector). `Short`:
     // the caller knows it spans at most one knot.
     template <bool Short>
-    [[gnu::always_inline]] void piece(double xa, double xb, __m128 hv) {
+    [[gnu::always_inline]] void piece(double xa, double xb, __m128 hv, Sum& sum_to) {
         const double x0 = std::min(xa, xb), x1 = std::max(xa, xb);
         int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
         if constexpr (Guard) k0 = std::min(k0, k_last);
@@ -299,56 +307,112 @@ struct EdgeWalk {
             const __m128 v = _mm_add_ps(
                 _mm_mul_ps(hv, m0),
                 _mm_mul_ps(_mm_set1_ps(static_cast<float>(h_per_x * l1)), _mm_sub_ps(m1, m0)));
-            lo = _mm_add_pd(lo, _mm_cvtps_pd(v));
-            if constexpr (NC > 2) hi = _mm_add_pd(hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+            sum_to.lo = _mm_add_pd(sum_to.lo, _mm_cvtps_pd(v));
+            if constexpr (NC > 2)
+                sum_to.hi = _mm_add_pd(sum_to.hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
         } else {  // partial first and last texels, whole ones between
             alignas(16) double sum[4] = {0, 0, 0, 0};
             integral_inside<NC>(row, x0, x1, sum);
-            lo = _mm_add_pd(lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum)));
+            sum_to.lo = _mm_add_pd(sum_to.lo, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum)));
             if constexpr (NC > 2)
-                hi = _mm_add_pd(hi, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum + 2)));
+                sum_to.hi =
+                    _mm_add_pd(sum_to.hi, _mm_mul_pd(_mm_set1_pd(h_per_x), _mm_load_pd(sum + 2)));
         }
     }
     // The first row's piece; the walk is then at the first whole row.
     void first() {
         if (one_row) {
-            piece<false>(p.u, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - p.v))));
+            piece<false>(p.u, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - p.v))), acc[0]);
             return;
         }
         xnext = p.u + (double(j + 1) - p.v) * dxdy;
-        piece<false>(x, xnext, _mm_set1_ps(static_cast<float>(sign * (double(j + 1) - p.v))));
+        piece<false>(x, xnext, _mm_set1_ps(static_cast<float>(sign * (double(j + 1) - p.v))),
+                     acc[0]);
         ++j;
         row += stride;
     }
     // One whole row (j < j_last).
     template <bool Steep>
-    [[gnu::always_inline]] void step() {
+    [[gnu::always_inline]] void step(Sum& sum_to) {
         x = xnext;
         xnext = p.u + (double(j + 1) - p.v) * dxdy;
-        piece<Steep>(x, xnext, h_row);
+        piece<Steep>(x, xnext, h_row, sum_to);
         ++j;
         row += stride;
     }
     template <bool Steep>
     void rows() {
-        while (j < j_last) step<Steep>();
+        if constexpr (Steep) {
+            if constexpr (NC == 1) rows_paired();
+            for (; j + 1 < j_last;) {
+                step<true>(acc[0]);
+                step<true>(acc[1]);
+            }
+            if (j < j_last) step<true>(acc[0]);
+        } else {
+            while (j < j_last) step<false>(acc[0]);
+        }
     }
-    // The last row's piece (none when first() had the whole edge); the sums into acc.
-    void finish(double* acc) {
+    // One channel, a steep edge: two whole rows at a time, row j in lane 0 (added to acc[0]) and
+    // row j + 1 in lane 1 (to acc[1]), each lane's operations those of piece<true>; an odd row
+    // left over is step()'s.
+    void rows_paired() {
+        if (j + 1 >= j_last) return;
+        const __m128d pu = _mm_set1_pd(p.u), pv = _mm_set1_pd(p.v), d = _mm_set1_pd(dxdy),
+                      hpx = _mm_set1_pd(h_per_x), half = _mm_set1_pd(0.5), one = _mm_set1_pd(1);
+        const __m128i k_max = _mm_set1_epi32(static_cast<int32_t>(k_last));
+        // The pair's two sums, lane by lane; lane 0 continues acc[0] (which holds the first
+        // piece), lane 1 acc[1].
+        __m128d sums = _mm_unpacklo_pd(acc[0].lo, acc[1].lo);
+        __m128d top = _mm_set1_pd(xnext);  // lane 1: the row boundary above row j
+        for (; j + 1 < j_last; j += 2, row += 2 * stride) {
+            // The boundaries below rows j and j + 1 (xnext of their steps), and above them.
+            const __m128d jj = _mm_setr_pd(double(j + 1), double(j + 2));
+            const __m128d below = _mm_add_pd(pu, _mm_mul_pd(_mm_sub_pd(jj, pv), d));
+            const __m128d above = _mm_shuffle_pd(top, below, 1);  // (top[1], below[0])
+            top = below;
+            const __m128d x0 = _mm_min_pd(below, above), x1 = _mm_max_pd(above, below);
+            __m128i k0 = _mm_cvttpd_epi32(x0);  // x0 >= 0: truncation is floor
+            if constexpr (Guard) {
+                const __m128i over = _mm_cmpgt_epi32(k0, k_max);
+                k0 = _mm_or_si128(_mm_and_si128(over, k_max), _mm_andnot_si128(over, k0));
+            }
+            const __m128d dk0 = _mm_cvtepi32_pd(k0);
+            const __m128d b0 = _mm_min_pd(x1, _mm_add_pd(dk0, one)), l1 = _mm_sub_pd(x1, b0);
+            const __m128 f0 = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(half, _mm_add_pd(x0, b0)), dk0));
+            const __m128 f1 = _mm_cvtpd_ps(_mm_mul_pd(half, l1));
+            const __m128 w = _mm_cvtpd_ps(_mm_mul_pd(hpx, l1));
+            const float* da = row + _mm_cvtsi128_si32(k0);
+            const float* db = row + stride + _mm_cvtsi128_si32(_mm_srli_si128(k0, 4));
+            const __m128 d0 = _mm_unpacklo_ps(_mm_load_ss(da), _mm_load_ss(db)),
+                         d1 = _mm_unpacklo_ps(_mm_load_ss(da + 1), _mm_load_ss(db + 1)),
+                         d2 = _mm_unpacklo_ps(_mm_load_ss(da + 2), _mm_load_ss(db + 2));
+            const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
+            const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
+            const __m128 v = _mm_add_ps(_mm_mul_ps(h_row, m0), _mm_mul_ps(w, _mm_sub_ps(m1, m0)));
+            sums = _mm_add_pd(sums, _mm_cvtps_pd(v));
+        }
+        xnext = _mm_cvtsd_f64(_mm_unpackhi_pd(top, top));
+        acc[0].lo = _mm_move_sd(acc[0].lo, sums);
+        acc[1].lo = _mm_move_sd(acc[1].lo, _mm_unpackhi_pd(sums, sums));
+    }
+    // The last row's piece (none when first() had the whole edge); the sums into `out`.
+    void finish(double* out) {
         if (!one_row)
-            piece<false>(xnext, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - double(j)))));
-        alignas(16) double out[4];
-        _mm_store_pd(out, lo);
-        _mm_store_pd(out + 2, hi);
-        for (int c = 0; c < NC; ++c) acc[c] += out[c];
+            piece<false>(xnext, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - double(j)))),
+                         acc[0]);
+        alignas(16) double sum[4];
+        _mm_store_pd(sum, _mm_add_pd(acc[0].lo, acc[1].lo));
+        _mm_store_pd(sum + 2, _mm_add_pd(acc[0].hi, acc[1].hi));
+        for (int c = 0; c < NC; ++c) out[c] += sum[c];
     }
-    void walk(double* acc) {
+    void walk(double* out) {
         first();
         if (steep())
             rows<true>();
         else
             rows<false>();
-        finish(acc);
+        finish(out);
     }
 };
 
@@ -785,8 +849,8 @@ __m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, d
 // The 3x3 rule, the 4x4 one or their blend (w4 the 4x4 rule's weight) from a block around the
 // region; false when it would not fit in one.
 template <int NC>
-bool block_rules(const Image& img, double s, double t, double as, double at, double bs, double bt,
-                 double w4, int* texels, Texel& out) {
+[[gnu::noinline]] bool block_rules(const Image& img, double s, double t, double as, double at,
+                                   double bs, double bt, double w4, int* texels, Texel& out) {
     const double reach = w4 > 0 ? GaussRule<4>::x[3] : GaussRule<3>::x[2];
     TexelBlock block;
     if (!read_block<NC>(img, s, t, reach * (std::abs(as) + std::abs(bs)),
@@ -811,8 +875,8 @@ bool block_rules(const Image& img, double s, double t, double as, double at, dou
 
 // The same rule point by point (any block size; also the path without SSE2).
 template <int N>
-Texel rule_points(const Image& img, double s, double t, double as, double at, double bs,
-                  double bt) {
+[[gnu::cold]] Texel rule_points(const Image& img, double s, double t, double as, double at,
+                                double bs, double bt) {
     using R = GaussRule<N>;
     Texel out{};
     for (int ib = 0; ib < N; ++ib)
