@@ -61,6 +61,13 @@ double period_shift(double x, int n, WrapMode mode) {
     return double(floor_to_int(q)) * double(period);
 }
 
+// ceil(x) for 0 <= x < 2^62, inline (std::ceil is a library call without SSE4.1, and every edge
+// takes one).
+inline int64_t ceil_nonneg(double x) {
+    const auto i = static_cast<int64_t>(x);
+    return i + (static_cast<double>(i) < x ? 1 : 0);
+}
+
 int64_t floor_div(int64_t a, int64_t b) {  // b > 0
     int64_t q = a / b;
     return q - ((a % b != 0) && (a < 0) ? 1 : 0);
@@ -273,7 +280,7 @@ struct EdgeWalk {
         : stride(stride_), p(p_), q(q_), dxdy(dxdy_), h_per_x(h_per_x_), sign(sign_) {
         k_last = width - 1;
         j = floor_to_int(p.v);
-        j_last = static_cast<int64_t>(std::ceil(q.v)) - 1;  // >= j, as q.v > p.v
+        j_last = ceil_nonneg(q.v) - 1;  // >= j, as q.v > p.v
         one_row = j == j_last;
         row = table + static_cast<std::size_t>(j) * stride;
         h_row = _mm_set1_ps(static_cast<float>(sign));
@@ -509,7 +516,7 @@ void RowPrefixTable::edge_split(Vec2d p, Vec2d q, double sign, double dxdy, doub
         if (sx == 0) continue;
         // The row totals D_j[W] times the part's height in each row.
         int64_t j = floor_to_int(a1.v);
-        const int64_t j_last = static_cast<int64_t>(std::ceil(b1.v)) - 1;
+        const int64_t j_last = ceil_nonneg(b1.v) - 1;
         const float* total = m_d.data() + static_cast<std::size_t>(j) * stride + m_w * NC;
         double sum[NC];
         for (int c = 0; c < NC; ++c) sum[c] = 0;
