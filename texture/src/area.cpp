@@ -62,8 +62,8 @@ double period_shift(double x, int n, WrapMode mode) {
 }
 
 // ceil(x) for 0 <= x < 2^62, inline (std::ceil is a library call without SSE4.1, and every edge
-// takes one).
-inline int64_t ceil_nonneg(double x) {
+// takes one). Only the SSE2 walks use it.
+[[maybe_unused]] inline int64_t ceil_nonneg(double x) {
     const auto i = static_cast<int64_t>(x);
     return i + (static_cast<double>(i) < x ? 1 : 0);
 }
