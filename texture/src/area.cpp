@@ -566,7 +566,7 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         const Edge& E = edges[e];
         const Vec2d p = E.p, q = E.q;
         const double u_lo = std::min(p.u, q.u), u_hi = std::max(p.u, q.u);
-        if (p.v >= 0 && q.v <= m_h && u_lo >= 0 && u_hi < m_w) {
+        if (p.v >= 0 && q.v <= m_h && u_lo >= 0 && u_hi < m_w) [[likely]] {
             // The common case, the edge within the table: rows and knots read directly.
             edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
             continue;
@@ -689,7 +689,7 @@ AreaResult integrate_on(const FilteredTexture& tex, int l, const Vec2d* p, int n
     const Image& lev = l > 0 ? pyr.level(l) : img;
     const double kx = double(lev.width()) / img.width(), ky = double(lev.height()) / img.height();
     const double perimeter_l = perimeter * std::max(kx, ky);
-    if (l == pyr.levels() - 1) {
+    if (l == pyr.levels() - 1) [[unlikely]] {
         // The coarsest level: a periodic texture's integral over a region spanning many periods
         // is its mean (up to the boundary, 1/perimeter of it); a single texel is constant. With
         // one periodic axis and one clamped or black (the library allows it; a scene's "wrap"
@@ -912,7 +912,8 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
     const double ds = 0.5 * (std::abs(as) + std::abs(bs)), dt = 0.5 * (std::abs(at) + std::abs(bt));
     constexpr double kMax = detail::kMaxTexelCoord;
     *texels = 1;
-    if (!(std::abs(s) + ds < kMax && std::abs(t) + dt < kMax)) return img.mean();  // as bilinear()
+    if (!(std::abs(s) + ds < kMax && std::abs(t) + dt < kMax)) [[unlikely]]
+        return img.mean();  // as bilinear()
     // A periodic axis: move the centre to the base period (exactly: an integer multiple of the
     // period is subtracted), so the texels' indices need no division to wrap.
     s -= period_shift(s, img.width(), img.wrap_s());
@@ -950,7 +951,8 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
                 fits = block_rules<4>(img, s, t, as, at, bs, bt, w4, texels, out);
                 break;
         }
-        if (fits) return out;
+        if (fits) [[likely]]
+            return out;
     }
 #endif
     Texel out{};
@@ -1020,7 +1022,7 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
 
 AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Vec2d a, Vec2d b) {
     if (!(std::isfinite(u) && std::isfinite(v) && std::isfinite(a.u) && std::isfinite(a.v) &&
-          std::isfinite(b.u) && std::isfinite(b.v))) {
+          std::isfinite(b.u) && std::isfinite(b.v))) [[unlikely]] {
         AreaResult r;  // as every filter: the texture's mean
         r.value = tex.image().mean();
         r.knots = 1;
@@ -1051,7 +1053,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
         }
     }
     const AreaRegion g = area_region(tex, u, v, a, b);
-    if (!within_range(g.corners, 4, g.area)) {
+    if (!within_range(g.corners, 4, g.area)) [[unlikely]] {
         AreaResult r;  // beyond 2^30 texels no sum keeps any precision: the mean, as every filter
         r.value = tex.image().mean();
         r.knots = 1;
