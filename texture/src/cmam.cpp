@@ -241,19 +241,10 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
     const double s0 = u * W, t0 = v * H;
-    // The cached samples before the step, copied only where a region is built here (the 2-D
-    // CMAM, the hull weighting, a caller's region); the Points footprint needs only their texture
-    // coordinates, read from the cache itself (read from the copies, a 16-byte read of u and v
-    // spans two of their stores and waits for both).
-    union Before {
-        CmamCache::Entry e[2];
-        Before() {}  // left uninitialised: written below where it is read
-    } before;
-    const CmamCache::Entry* cached = before.e;
-    if (o.two_d || o.hull || region_out) {
-        before.e[0] = cache.last;
-        before.e[1] = cache.second_last;
-    }
+    // The cached samples before the step. Their texture coordinates are read from the cache
+    // itself (read from the copies, a 16-byte read of u and v spans two of their stores and
+    // waits for both).
+    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
     const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
                                 {cache.second_last.u, cache.second_last.v}};
     const CacheStep st = advance(cache, tag, s0, t0, u, v, o);
