@@ -14,6 +14,29 @@
 
 namespace cmam::texture {
 
+namespace {
+// Row j's prefix sums of (texel - mean) into `out` from entry 1 on (entry 0 stays 0): accumulated
+// in double, stored as float. The channel count is a constant, so the sums stay in registers, and
+// the row is read a tile row at a time (eight contiguous texels in Image's layout).
+template <int NC>
+void prefix_row(const Image& image, int j, const double* mean, float* out) {
+    const int w = image.width();
+    const float* row = image.row(j);
+    double acc[NC];
+    for (int c = 0; c < NC; ++c) acc[c] = 0;
+    for (int i0 = 0; i0 < w; i0 += Image::kTile) {
+        const float* t = row + Image::column_offset(i0) * NC;
+        float* o = out + static_cast<std::size_t>(i0 + 1) * NC;
+        const int n = std::min(Image::kTile, w - i0);
+        for (int k = 0; k < n; ++k, t += NC, o += NC)
+            for (int c = 0; c < NC; ++c) {
+                acc[c] += double(t[c]) - mean[c];
+                o[c] = static_cast<float>(acc[c]);
+            }
+    }
+}
+}  // namespace
+
 RowPrefixTable::RowPrefixTable(const Image& image)
     : m_w(image.width()),
       m_h(image.height()),
@@ -23,15 +46,22 @@ RowPrefixTable::RowPrefixTable(const Image& image)
       m_mean(image.mean()) {
     const std::size_t stride = static_cast<std::size_t>(m_w + 1) * m_c;
     m_d = TexelBuffer(stride * static_cast<std::size_t>(m_h));  // zero-filled
+    const double mean[4] = {m_mean[0], m_mean[1], m_mean[2], m_mean[3]};
     for (int j = 0; j < m_h; ++j) {
         float* row = m_d.data() + stride * static_cast<std::size_t>(j);
-        double acc[4] = {0, 0, 0, 0};  // accumulated in double, stored as float
-        for (int i = 0; i < m_w; ++i) {
-            const float* t = image.texel(i, j);
-            for (int c = 0; c < m_c; ++c) {
-                acc[c] += double(t[c]) - m_mean[c];
-                row[static_cast<std::size_t>(i + 1) * m_c + c] = static_cast<float>(acc[c]);
-            }
+        switch (m_c) {
+            case 1:
+                prefix_row<1>(image, j, mean, row);
+                break;
+            case 2:
+                prefix_row<2>(image, j, mean, row);
+                break;
+            case 3:
+                prefix_row<3>(image, j, mean, row);
+                break;
+            default:
+                prefix_row<4>(image, j, mean, row);
+                break;
         }
     }
 }
