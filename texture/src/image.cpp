@@ -110,6 +110,27 @@ Image Image::from_rows(int width, int height, int channels,
     return Image(Rows{}, width, height, channels, fill, wrap_s, wrap_t);
 }
 
+namespace {
+// One row of `width` texels from `src` (row-major) into its tiles from `dst` (the row's texel
+// 0), adding each texel to `sum` in order: eight texels of a tile row are contiguous, and the
+// channel count is a constant, so the sums stay in registers.
+template <int NC>
+void tile_row(const float* src, float* dst, int width, double* sum) {
+    double s[NC];
+    for (int c = 0; c < NC; ++c) s[c] = sum[c];
+    for (int i0 = 0; i0 < width; i0 += Image::kTile) {
+        float* d = dst + Image::column_offset(i0) * NC;
+        const int n = std::min(Image::kTile, width - i0);
+        for (int k = 0; k < n; ++k, src += NC, d += NC)
+            for (int c = 0; c < NC; ++c) {
+                d[c] = src[c];
+                s[c] += src[c];
+            }
+    }
+    for (int c = 0; c < NC; ++c) sum[c] = s[c];
+}
+}  // namespace
+
 Image::Image(Rows, int width, int height, int channels,
              const std::function<void(int, float*)>& fill, WrapMode wrap_s, WrapMode wrap_t)
     : m_width(width), m_height(height), m_channels(channels), m_wrap_s(wrap_s), m_wrap_t(wrap_t) {
@@ -124,17 +145,24 @@ Image::Image(Rows, int width, int height, int channels,
     m_row_offsets.resize(2 * static_cast<std::size_t>(height));
     for (std::size_t k = 0; k < m_row_offsets.size(); ++k)
         m_row_offsets[k] = row_offset(static_cast<int64_t>(k % height)) * channels;
-    std::array<double, 4> sum{};
+    double sum[4] = {0, 0, 0, 0};
     std::vector<float> row(static_cast<std::size_t>(width) * channels);
     for (int j = 0; j < height; ++j) {
         fill(j, row.data());
-        for (int i = 0; i < width; ++i) {
-            const float* src = &row[static_cast<std::size_t>(i) * channels];
-            float* dst = const_cast<float*>(texel(i, j));
-            for (int c = 0; c < channels; ++c) {
-                dst[c] = src[c];
-                sum[c] += src[c];
-            }
+        float* dst = m_texels.data() + row_offset(j) * channels;
+        switch (channels) {
+            case 1:
+                tile_row<1>(row.data(), dst, width, sum);
+                break;
+            case 2:
+                tile_row<2>(row.data(), dst, width, sum);
+                break;
+            case 3:
+                tile_row<3>(row.data(), dst, width, sum);
+                break;
+            default:
+                tile_row<4>(row.data(), dst, width, sum);
+                break;
         }
     }
     double n = static_cast<double>(width) * height;
