@@ -33,18 +33,35 @@ namespace {
 // Halving in both axes, the common case: each output texel is the mean of a 2x2 block, in the
 // same operations and order as the general weights below (every weight 1/2), so the same floats
 // at a fraction of the cost.
+// Output row k of `w` texels from source rows 2k and 2k + 1. Texels 2i and 2i + 1 are neighbours
+// within one tile row (tiles are eight wide), and the channel count is a constant.
+template <int C>
+void halve_row(const Image& src, int k, int w, float* row) {
+    const float *r0 = src.row(2 * k), *r1 = src.row(2 * k + 1);
+    for (int i = 0; i < w; ++i) {
+        const std::ptrdiff_t at = Image::column_offset(2 * i) * C;
+        const float *a = r0 + at, *b = a + C, *c = r1 + at, *d = c + C;
+        float* o = row + static_cast<std::size_t>(i) * C;
+        for (int ch = 0; ch < C; ++ch) {
+            const double top = 0.5 * a[ch] + 0.5 * b[ch], bottom = 0.5 * c[ch] + 0.5 * d[ch];
+            o[ch] = static_cast<float>(0.5 * top + 0.5 * bottom);
+        }
+    }
+}
+
 Image halve(const Image& src) {
     const int w = src.width() / 2, C = src.channels();
     // Written row by row into the level: no second copy of it.
     auto fill = [&](int k, float* row) {
-        for (int i = 0; i < w; ++i) {
-            const float *a = src.texel(2 * i, 2 * k), *b = src.texel(2 * i + 1, 2 * k),
-                        *c = src.texel(2 * i, 2 * k + 1), *d = src.texel(2 * i + 1, 2 * k + 1);
-            float* o = row + static_cast<std::size_t>(i) * C;
-            for (int ch = 0; ch < C; ++ch) {
-                const double top = 0.5 * a[ch] + 0.5 * b[ch], bottom = 0.5 * c[ch] + 0.5 * d[ch];
-                o[ch] = static_cast<float>(0.5 * top + 0.5 * bottom);
-            }
+        switch (C) {
+            case 1:
+                return halve_row<1>(src, k, w, row);
+            case 2:
+                return halve_row<2>(src, k, w, row);
+            case 3:
+                return halve_row<3>(src, k, w, row);
+            default:
+                return halve_row<4>(src, k, w, row);
         }
     };
     return Image::from_rows(w, src.height() / 2, C, fill, src.wrap_s(), src.wrap_t());
