@@ -30,9 +30,6 @@ std::vector<Span> area_weights(int N, int n) {
 }  // namespace
 
 namespace {
-// Halving in both axes, the common case: each output texel is the mean of a 2x2 block, in the
-// same operations and order as the general weights below (every weight 1/2), so the same floats
-// at a fraction of the cost.
 // Output row k of `w` texels from source rows 2k and 2k + 1. Texels 2i and 2i + 1 are neighbours
 // within one tile row (tiles are eight wide), and the channel count is a constant.
 template <int C>
@@ -49,6 +46,9 @@ void halve_row(const Image& src, int k, int w, float* row) {
     }
 }
 
+// Halving in both axes, the common case: each output texel is the mean of a 2x2 block, in the
+// same operations and order as the general weights below (every weight 1/2), so the same floats
+// at a fraction of the cost.
 Image halve(const Image& src) {
     const int w = src.width() / 2, C = src.channels();
     // Written row by row into the level: no second copy of it.
