@@ -25,6 +25,14 @@ namespace {
 // What the process may use (memory.h): the machine, its cgroup and ulimit -v.
 std::atomic<std::size_t> g_image_memory_limit{memory_limit()};
 
+// A row of `w` pixels of NC bytes each into OUT floats each through the table of the bytes'
+// values (OUT = 3 from one or two bytes repeats the first, the grey value).
+template <int NC, int OUT>
+void decode_row(const unsigned char* b, int w, const float* table, float* row) {
+    for (int x = 0; x < w; ++x, b += NC, row += OUT)
+        for (int c = 0; c < OUT; ++c) row[c] = table[b[NC >= 3 ? c : 0]];
+}
+
 }  // namespace
 
 void set_image_memory_limit(std::size_t bytes) {
@@ -92,12 +100,29 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
         const int y = h - 1 - j;  // flip: v = 0 is the bottom row (pbrt-v3)
         const std::size_t k0 = static_cast<std::size_t>(y) * w * nc;
         if (by_table) {
+            // (One float from one or two bytes: a float or kept-grey texture of a grey file;
+            // else three floats.)
             const unsigned char* b = raw.bytes.data() + k0;
-            for (int x = 0; x < w; ++x, b += nc) {
-                float* dst = &row[static_cast<std::size_t>(x) * out_c];
-                for (int c = 0; c < out_c; ++c) dst[c] = table[b[nc >= 3 ? c : 0]];
+            switch (out_c == 1 ? nc : 4 + nc) {
+                case 1:
+                    return decode_row<1, 1>(b, w, table, row);
+                case 2:
+                    return decode_row<2, 1>(b, w, table, row);
+                case 5:
+                    return decode_row<1, 3>(b, w, table, row);
+                case 6:
+                    return decode_row<2, 3>(b, w, table, row);
+                case 7:
+                    return decode_row<3, 3>(b, w, table, row);
+                case 8:
+                    return decode_row<4, 3>(b, w, table, row);
+                default:  // any other layout
+                    for (int x = 0; x < w; ++x, b += nc)
+                        for (int c = 0; c < out_c; ++c)
+                            row[static_cast<std::size_t>(x) * out_c + c] =
+                                table[b[nc >= 3 ? c : 0]];
+                    return;
             }
-            return;
         }
         for (int x = 0; x < w; ++x) {
             const std::size_t k = k0 + static_cast<std::size_t>(x) * nc;

@@ -143,8 +143,8 @@ TEST(ImageIo, EightBitFilesCanKeepTheirBytes) {
         paths.push_back((d.path / name).string());
         write_image(paths.back(), 7, 5, gradient(7, 5));
     }
-    for (const char* name : {"gray1.png", "gray16.png", "palette.png", "rgba.png", "gray.jpg",
-                             "uint16.tif", "float32.tif"})
+    for (const char* name : {"gray1.png", "gray16.png", "gray_alpha.png", "palette.png", "rgba.png",
+                             "gray.jpg", "uint16.tif", "float32.tif"})
         paths.push_back(std::string(CMAM_TEST_DATA_DIR) + "/images/" + name);
     int eight_bit = 0;
     for (const std::string& p : paths) {
@@ -164,14 +164,15 @@ TEST(ImageIo, EightBitFilesCanKeepTheirBytes) {
         }
         for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(kept.sample(i), plain.pixels[i]) << i;
     }
-    EXPECT_EQ(eight_bit, 8);
+    EXPECT_EQ(eight_bit, 9);
 }
 
 // load_texture decodes 8-bit samples through a table of their 256 values: each texel must be
 // the sample decoded on its own (sRGB, then the scale), for spectrum and float textures, grey
 // and colour files, flipped so that row 0 is the file's bottom row.
 TEST(ImageIo, TextureTexelsAreTheirSamplesDecoded) {
-    for (const char* name : {"gray1.png", "gray.jpg", "palette.png", "rgba.png", "gray16.png"}) {
+    for (const char* name :
+         {"gray1.png", "gray.jpg", "gray_alpha.png", "palette.png", "rgba.png", "gray16.png"}) {
         SCOPED_TRACE(name);
         const std::string p = std::string(CMAM_TEST_DATA_DIR) + "/images/" + name;
         const RawImage raw = read_image(p);
