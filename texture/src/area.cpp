@@ -49,20 +49,7 @@ RowPrefixTable::RowPrefixTable(const Image& image)
     const double mean[4] = {m_mean[0], m_mean[1], m_mean[2], m_mean[3]};
     for (int j = 0; j < m_h; ++j) {
         float* row = m_d.data() + stride * static_cast<std::size_t>(j);
-        switch (m_c) {
-            case 1:
-                prefix_row<1>(image, j, mean, row);
-                break;
-            case 2:
-                prefix_row<2>(image, j, mean, row);
-                break;
-            case 3:
-                prefix_row<3>(image, j, mean, row);
-                break;
-            default:
-                prefix_row<4>(image, j, mean, row);
-                break;
-        }
+        detail::with_channels(m_c, [&]<int NC>() { prefix_row<NC>(image, j, mean, row); });
     }
 }
 
@@ -659,20 +646,7 @@ Texel RowPrefixTable::integral_in_range(const Vec2d* v0, int n, double area2) co
     const double sx = period_shift(xmin, m_w, m_wrap_s), sy = period_shift(ymin, m_h, m_wrap_t);
     for (int i = 0; i < n; ++i) v[i] = {v0[i].u - sx, v0[i].v - sy};
     double acc[4] = {0, 0, 0, 0};
-    switch (m_c) {
-        case 1:
-            integrate<1>(v, n, acc);
-            break;
-        case 2:
-            integrate<2>(v, n, acc);
-            break;
-        case 3:
-            integrate<3>(v, n, acc);
-            break;
-        default:
-            integrate<4>(v, n, acc);
-            break;
-    }
+    detail::with_channels(m_c, [&]<int NC>() { integrate<NC>(v, n, acc); });
     const double sign = area2 < 0 ? -1 : 1;
     for (int c = 0; c < m_c; ++c) out[c] = static_cast<float>(sign * acc[c] + m_mean[c] * area);
     return out;
@@ -966,21 +940,9 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
     static_assert(kAreaBlendHi <= 4.5);
     {
         Texel out;
-        bool fits;
-        switch (img.channels()) {
-            case 1:
-                fits = block_rules<1>(img, s, t, as, at, bs, bt, w4, texels, out);
-                break;
-            case 2:
-                fits = block_rules<2>(img, s, t, as, at, bs, bt, w4, texels, out);
-                break;
-            case 3:
-                fits = block_rules<3>(img, s, t, as, at, bs, bt, w4, texels, out);
-                break;
-            default:
-                fits = block_rules<4>(img, s, t, as, at, bs, bt, w4, texels, out);
-                break;
-        }
+        const bool fits = detail::with_channels(img.channels(), [&]<int NC>() {
+            return block_rules<NC>(img, s, t, as, at, bs, bt, w4, texels, out);
+        });
         if (fits) [[likely]]
             return out;
     }

@@ -150,20 +150,8 @@ Image::Image(Rows, int width, int height, int channels,
     for (int j = 0; j < height; ++j) {
         fill(j, row.data());
         float* dst = m_texels.data() + row_offset(j) * channels;
-        switch (channels) {
-            case 1:
-                tile_row<1>(row.data(), dst, width, sum);
-                break;
-            case 2:
-                tile_row<2>(row.data(), dst, width, sum);
-                break;
-            case 3:
-                tile_row<3>(row.data(), dst, width, sum);
-                break;
-            default:
-                tile_row<4>(row.data(), dst, width, sum);
-                break;
-        }
+        detail::with_channels(channels,
+                              [&]<int NC>() { tile_row<NC>(row.data(), dst, width, sum); });
     }
     double n = static_cast<double>(width) * height;
     for (int c = 0; c < channels; ++c) m_mean[c] = static_cast<float>(sum[c] / n);

@@ -35,6 +35,23 @@ inline void sat_min_extent(Box2d& r, double max_aniso) {
     r = {centre - half, centre + half};
 }
 
+/// f.template operator()<NC>() with the channel count `nc` (1 to 4; anything else is taken as 4)
+/// a compile-time constant: the per-texel loops of a table, a level or a copy keep their sums in
+/// registers and unroll over the channels. `f` is typically a lambda `[&]<int NC>() { ... }`.
+template <class F>
+[[gnu::always_inline]] inline decltype(auto) with_channels(int nc, F&& f) {
+    switch (nc) {
+        case 1:
+            return f.template operator()<1>();
+        case 2:
+            return f.template operator()<2>();
+        case 3:
+            return f.template operator()<3>();
+        default:
+            return f.template operator()<4>();
+    }
+}
+
 /// floor(log2(x)) for x >= 1 (infinity included), exactly, from the binary exponent: a level
 /// chosen this way does not wait for a logarithm.
 inline int floor_log2(double x) {

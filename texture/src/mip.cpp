@@ -53,16 +53,7 @@ Image halve(const Image& src) {
     const int w = src.width() / 2, C = src.channels();
     // Written row by row into the level: no second copy of it.
     auto fill = [&](int k, float* row) {
-        switch (C) {
-            case 1:
-                return halve_row<1>(src, k, w, row);
-            case 2:
-                return halve_row<2>(src, k, w, row);
-            case 3:
-                return halve_row<3>(src, k, w, row);
-            default:
-                return halve_row<4>(src, k, w, row);
-        }
+        detail::with_channels(C, [&]<int NC>() { halve_row<NC>(src, k, w, row); });
     };
     return Image::from_rows(w, src.height() / 2, C, fill, src.wrap_s(), src.wrap_t());
 }
