@@ -14,6 +14,7 @@
 
 #include "app/command.h"
 #include "app/common.h"
+#include "app/film_overrides.h"
 #include "eval/evaluation.h"
 #include "pbrt/error.h"
 #include "render/scene.h"
@@ -28,6 +29,7 @@ struct EvalArgs {
     std::string spp = "1,4,16", out = "eval-out";
     int reference_spp = 1024, timing_runs = 1;
     bool quiet = false;
+    std::string resolution, crop;  // empty: each scene's film
 };
 
 // What a method name is, from the evaluation's own tables (for --help and errors).
@@ -66,6 +68,12 @@ eval::EvalOptions eval_options(const EvalArgs& a) {
     if (o.spp.empty()) throw UsageError("--spp: give at least one sample count");
     note_spp_rounding(a.reference_spp, "--reference-spp");
     o.timing_runs = a.timing_runs;
+    // Checked here, before any scene is read; applied to each scene as it is.
+    const FilmOverrides film(a.resolution, a.crop);
+    if (!film.empty())
+        o.adjust_scene = [film](pbrt::SceneDesc& desc, const pbrt::WarningSink& warn) {
+            film.apply(desc, warn);
+        };
     return o;
 }
 
@@ -123,6 +131,12 @@ void add_eval_options(CLI::App& cmd, EvalArgs& a) {
                    "and range (1: single runs, marked as such)")
         ->capture_default_str()
         ->check(CLI::Range(1, 100));
+    cmd.add_option("--resolution", a.resolution,
+                   "Film resolution WxH, or W alone to keep each scene's aspect ratio, for the "
+                   "ground truth and every method (a quicker evaluation of a big scene)");
+    cmd.add_option("--crop", a.crop,
+                   "Evaluate only X0,X1,Y0,Y1 of each image: the Film's cropwindow, fractions of "
+                   "the width and height from the top left (replaces the scene's)");
     cmd.add_option("-o,--output", a.out,
                    "Output directory; a report already there is replaced (its own files only)")
         ->capture_default_str();

@@ -3,7 +3,6 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +12,7 @@
 
 #include "app/command.h"
 #include "app/common.h"
+#include "app/film_overrides.h"
 #include "pbrt/parser.h"
 #include "render/build_scene.h"
 #include "render/image_io.h"
@@ -51,59 +51,6 @@ struct RenderArgs {
     std::string resolution, crop;
     std::string max_memory;  // empty: the machine's memory (render::memory_limit())
 };
-
-pbrt::Param film_param(const char* type, const char* name, std::vector<double> values) {
-    pbrt::Param p;
-    p.type = std::string(type) == "integer" ? pbrt::ParamType::Integer : pbrt::ParamType::Float;
-    p.type_name = type;
-    p.name = name;
-    p.numbers = std::move(values);
-    return p;
-}
-
-// --resolution W or WxH: the film's resolution, as if the Film said so. W alone keeps the
-// scene's aspect ratio (and so the camera's framing); another aspect frames more or less of the
-// scene, as in pbrt-v3, with a warning.
-void override_resolution(pbrt::SceneDesc& desc, const std::string& text) {
-    const int xres = desc.film.params.get_int("xresolution", 640),
-              yres = desc.film.params.get_int("yresolution", 480);
-    // Whole numbers read without wrapping around (sscanf's %d once made 4294967328 a width of 32).
-    auto whole = [](std::string_view s, long long& v) {
-        const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-        return ec == std::errc() && end == s.data() + s.size() && v > 0;
-    };
-    const std::size_t cut = text.find_first_of("xX");
-    long long w = 0, h = 0;
-    if (cut == std::string::npos && whole(text, w))
-        h = std::max(1LL, std::llround(double(w) * yres / xres));
-    else if (!(cut != std::string::npos && whole(std::string_view(text).substr(0, cut), w) &&
-               whole(std::string_view(text).substr(cut + 1), h)))
-        throw UsageError("--resolution: expected WIDTHxHEIGHT or WIDTH, got \"" + text + "\"");
-    if (w > render::kMaxFilmSide || h > render::kMaxFilmSide || w * h > render::kMaxFilmPixels)
-        throw UsageError("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
-                         " is above cmam's limits of " + std::to_string(render::kMaxFilmSide) +
-                         " pixels a side and " + std::to_string(render::kMaxFilmPixels) +
-                         " in all");
-    if (std::abs(double(w) / h - double(xres) / yres) > 1.0 / std::min(w, h))
-        warn("--resolution " + std::to_string(w) + "x" + std::to_string(h) +
-             " has another aspect ratio than the scene's " + std::to_string(xres) + "x" +
-             std::to_string(yres) + " film: the camera frames " +
-             (double(w) / h > double(xres) / yres ? "more" : "less") +
-             " of the scene horizontally (give the width alone to keep the aspect)");
-    desc.film.params.add(film_param("integer", "xresolution", {double(w)}));
-    desc.film.params.add(film_param("integer", "yresolution", {double(h)}));
-}
-
-// --crop x0,x1,y0,y1: the Film's cropwindow (fractions of the image, y down, as pbrt-v3); it
-// replaces the scene's.
-void override_crop(pbrt::SceneDesc& desc, const std::vector<double>& c) {
-    if (c.size() != 4) throw UsageError("--crop needs four numbers: X0,X1,Y0,Y1");
-    for (double v : c)
-        if (!(v >= 0 && v <= 1))
-            throw UsageError("--crop: values are fractions of the image, in [0, 1]");
-    if (!(c[0] < c[1] && c[2] < c[3])) throw UsageError("--crop: needs X0 < X1 and Y0 < Y1");
-    desc.film.params.add(film_param("float", "cropwindow", c));
-}
 
 bool is_float_format(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
@@ -221,9 +168,9 @@ void print_summary(const std::string& out, const render::Framebuffer& fb, int sp
 
 int run_render(const RenderArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
+    const FilmOverrides film(a.resolution, a.crop);
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
-    if (!a.resolution.empty()) override_resolution(desc, a.resolution);
-    if (!a.crop.empty()) override_crop(desc, parse_numbers(a.crop, "--crop"));
+    film.apply(desc, print_warning);
     note_spp_rounding(a.spp);
     std::optional<std::size_t> max_memory;
     if (!a.max_memory.empty() && !(max_memory = render::parse_bytes(a.max_memory)))

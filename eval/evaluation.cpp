@@ -178,10 +178,23 @@ std::string safe_name(std::string s) {
 }  // namespace
 
 std::string reference_key(const std::string& scene_path, int reference_spp) {
-    pbrt::SceneDesc desc = pbrt::parse_file(scene_path);
+    return reference_key(pbrt::parse_file(scene_path), reference_spp);
+}
+
+std::string reference_key(const pbrt::SceneDesc& desc, int reference_spp) {
     uint64_t h = 0xcbf29ce484222325ull;
     h = fnv1a(h, renderer_version());
     h = fnv1a(h, std::to_string(reference_spp));
+    // The film as rendered: a resolution or crop window given on the command line is not in the
+    // files. (pbrt-v3's defaults where the scene gives none.)
+    std::string film = std::to_string(desc.film.params.get_int("xresolution", 640)) + "x" +
+                       std::to_string(desc.film.params.get_int("yresolution", 480));
+    for (double c : desc.film.params.get_floats("cropwindow").value_or(std::vector<double>{})) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, ",%.17g", c);
+        film += buf;
+    }
+    h = fnv1a(h, film);
     for (const std::string& src : desc.sources) h = fnv1a(h, read_file(src));
     // Every file a texture or a shape names (images, PLY meshes).
     auto add_files = [&](const pbrt::Entity& e) {
@@ -225,7 +238,8 @@ class SceneEvaluation {
             sr.warnings.push_back(w);
             if (o.warn) o.warn(w);
         };
-        const pbrt::SceneDesc desc = pbrt::parse_file(scene_path, warn);
+        pbrt::SceneDesc desc = pbrt::parse_file(scene_path, warn);
+        if (o.adjust_scene) o.adjust_scene(desc, warn);
         fs::path dir = fs::path(o.out_dir) / sr.name;
         fs::create_directories(dir);
         const GroundTruth gt = ground_truth(sr, desc, warn);
@@ -261,7 +275,7 @@ class SceneEvaluation {
     // Ground truth: point-sampled textures (bilinear at level 0), jittered strata; cached.
     GroundTruth ground_truth(SceneReport& sr, const pbrt::SceneDesc& desc,
                              const pbrt::WarningSink& warn) {
-        const std::string key = reference_key(sr.path, o.reference_spp);
+        const std::string key = reference_key(desc, o.reference_spp);
         const fs::path cache = fs::path(o.out_dir) / "cache";
         const CacheFiles cached{cache / (sr.name + "-" + key + "-beauty.exr"),
                                 cache / (sr.name + "-" + key + "-texture.exr"),

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "eval/error.h"
+#include "pbrt/error.h"
+#include "pbrt/scene_desc.h"
 #include "render/build_scene.h"
 #include "render/scene.h"
 
@@ -49,6 +51,10 @@ struct EvalOptions {
     std::function<void(const std::string&)> warn;
     /// Receives the message of a scene that failed; the evaluation goes on with the others.
     std::function<void(const std::string& scene, const std::string& message)> scene_failed;
+    /// Applied to each scene's description once it is parsed, before anything is rendered (the
+    /// command line's --resolution and --crop), with the scene's warning sink; an exception
+    /// fails that scene. The film it makes is part of the ground truth's key.
+    std::function<void(pbrt::SceneDesc&, const pbrt::WarningSink&)> adjust_scene;
 };
 
 struct ResultRow {
@@ -98,8 +104,11 @@ int rendered_spp(int spp);
 EvalResult run_eval(const EvalOptions& options);
 
 /// Key of a scene's ground truth: a hash of every file it reads (scene files, textures, PLY),
-/// the renderer's version and the reference sample count, as 16 hex digits.
+/// its film's resolution and crop window, the renderer's version and the reference sample count,
+/// as 16 hex digits.
 std::string reference_key(const std::string& scene_path, int reference_spp);
+/// The same for a scene already parsed (and perhaps adjusted: EvalOptions::adjust_scene).
+std::string reference_key(const pbrt::SceneDesc& desc, int reference_spp);
 
 /// The renderer's version string (part of every cache key).
 const char* renderer_version();

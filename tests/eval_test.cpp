@@ -101,6 +101,67 @@ TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
     EXPECT_FALSE(eval::run_eval(o).scenes[0].reference_cached);
 }
 
+// EvalOptions::adjust_scene changes each scene's film before anything is rendered (the command
+// line's --resolution and --crop): the ground truth and the methods have its size, its warnings
+// reach the scene's, and the film it makes is part of the ground truth's key, so a cached ground
+// truth of another film is not taken for it.
+TEST(Eval, AdjustedFilmIsRenderedAndKeyed) {
+    const test::TempDir tmp("cmam_eval_adjust");
+    const fs::path& dir = tmp.path;
+    const fs::path scene = dir / "tiny.pbrt";
+    std::ofstream(scene) << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50\n"
+                         << "Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 16\n"
+                         << "Integrator \"whitted\"\nWorldBegin\n"
+                         << "LightSource \"distant\" \"point from\" [0 1 -1]\n"
+                         << "Shape \"sphere\"\nWorldEnd\n";
+    auto film = [](int w, int h) {
+        return [w, h](pbrt::SceneDesc& desc, const pbrt::WarningSink& warn) {
+            for (const auto& [name, value] : {std::pair{"xresolution", w}, {"yresolution", h}}) {
+                pbrt::Param p;
+                p.type = pbrt::ParamType::Integer;
+                p.type_name = "integer";
+                p.name = name;
+                p.numbers = {double(value)};
+                desc.film.params.add(p);
+            }
+            warn("warning: film changed");
+        };
+    };
+    eval::EvalOptions o;
+    o.scenes = {scene.string()};
+    o.methods = {*eval::parse_method("none")};
+    o.spp = {1};
+    o.reference_spp = 1;
+    o.out_dir = (dir / "out").string();
+    o.adjust_scene = film(12, 8);
+    eval::EvalResult r = eval::run_eval(o);
+    ASSERT_EQ(r.scenes.size(), 1u);
+    EXPECT_EQ(r.scenes[0].width, 12);
+    EXPECT_EQ(r.scenes[0].height, 8);
+    EXPECT_FALSE(r.scenes[0].reference_cached);
+    EXPECT_EQ(r.scenes[0].warnings, std::vector<std::string>{"warning: film changed"});
+    const render::RawImage img = render::read_image(o.out_dir + "/" + r.rows.at(0).image);
+    EXPECT_EQ(img.width, 12);
+    EXPECT_EQ(img.height, 8);
+    // The same film again: from the cache; another film, or none: not.
+    r = eval::run_eval(o);
+    ASSERT_EQ(r.scenes.size(), 1u);
+    EXPECT_TRUE(r.scenes[0].reference_cached);
+    o.adjust_scene = film(6, 4);
+    r = eval::run_eval(o);
+    ASSERT_EQ(r.scenes.size(), 1u) << "a ground truth of another film was taken from the cache";
+    EXPECT_FALSE(r.scenes[0].reference_cached);
+    EXPECT_EQ(r.scenes[0].width, 6);
+    o.adjust_scene = nullptr;
+    r = eval::run_eval(o);
+    ASSERT_EQ(r.scenes.size(), 1u);
+    EXPECT_FALSE(r.scenes[0].reference_cached);
+    EXPECT_EQ(r.scenes[0].width, 24);
+    // The key of the file as written is the key of its parsed scene.
+    EXPECT_EQ(eval::reference_key(scene.string(), 1),
+              eval::reference_key(pbrt::parse_file(scene.string()), 1));
+}
+
 // A scene that fails is reported and skipped; the others give their rows and the report. Each
 // warning of a scene arrives once, however many renders build it. A second report into the same
 // folder removes the images of methods it no longer has, and nothing else.
