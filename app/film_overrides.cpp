@@ -61,8 +61,8 @@ FilmOverrides::FilmOverrides(const std::string& resolution, const std::string& c
 
 void FilmOverrides::apply(pbrt::SceneDesc& desc, const pbrt::WarningSink& warn) const {
     if (m_width > 0) {
-        const int xres = desc.film.params.get_int("xresolution", 640),
-                  yres = desc.film.params.get_int("yresolution", 480);
+        const int xres = desc.film.params.get_int("xresolution", render::kDefaultFilmWidth),
+                  yres = desc.film.params.get_int("yresolution", render::kDefaultFilmHeight);
         const long long w = m_width, h = m_height > 0
                                              ? m_height
                                              : std::max(1LL, std::llround(double(w) * yres / xres));

@@ -186,9 +186,10 @@ std::string reference_key(const pbrt::SceneDesc& desc, int reference_spp) {
     h = fnv1a(h, renderer_version());
     h = fnv1a(h, std::to_string(reference_spp));
     // The film as rendered: a resolution or crop window given on the command line is not in the
-    // files. (pbrt-v3's defaults where the scene gives none.)
-    std::string film = std::to_string(desc.film.params.get_int("xresolution", 640)) + "x" +
-                       std::to_string(desc.film.params.get_int("yresolution", 480));
+    // files.
+    std::string film =
+        std::to_string(desc.film.params.get_int("xresolution", render::kDefaultFilmWidth)) + "x" +
+        std::to_string(desc.film.params.get_int("yresolution", render::kDefaultFilmHeight));
     for (double c : desc.film.params.get_floats("cropwindow").value_or(std::vector<double>{})) {
         char buf[32];
         std::snprintf(buf, sizeof buf, ",%.17g", c);

@@ -29,6 +29,9 @@ struct CameraRay {
     Vec3 org, dir;
 };
 
+/// A Film's resolution where the scene gives none: pbrt-v3's (its CreateFilm), 1280x720.
+constexpr int kDefaultFilmWidth = 1280, kDefaultFilmHeight = 720;
+
 /// pbrt-v3 perspective camera (fov spans the shorter image axis; left-handed camera space), its
 /// orthographic camera (the screen window is the view in camera units, rays along +z), or its
 /// environment camera (the whole sphere in lat-long: theta = pi y / yres from camera +y,
@@ -39,7 +42,7 @@ struct Camera {
     bool environment = false;
     float tan_half_fov = 1;            // perspective; 1 for orthographic
     float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
-    int xres = 640, yres = 480;
+    int xres = kDefaultFilmWidth, yres = kDefaultFilmHeight;
 
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
     CameraRay generate_ray(float px, float py) const;
@@ -60,8 +63,9 @@ constexpr long long kMaxSamplesPerRow = 1LL << 26;  // samples per pixel x the f
 constexpr float kMaxRayCoordinate = 1e18f;
 
 struct FilmSettings {
-    int xres = 640, yres = 480;
-    int x0 = 0, y0 = 0, x1 = 640, y1 = 480;  // cropped pixel bounds [x0,x1) x [y0,y1)
+    int xres = kDefaultFilmWidth, yres = kDefaultFilmHeight;
+    // The cropped pixel bounds [x0,x1) x [y0,y1).
+    int x0 = 0, y0 = 0, x1 = kDefaultFilmWidth, y1 = kDefaultFilmHeight;
     std::string filename = "pbrt.exr";
     float scale = 1;  // pbrt-v3's Film "scale": every pixel's radiance is multiplied by it
     int width() const { return x1 - x0; }

@@ -38,6 +38,25 @@ TEST(Camera, CentreAndEdgesOfASquareImage) {
     expect_dir(d, Vec3(0, 1, 1));
 }
 
+// A scene without a Film, or with a Film that gives no resolution, is 1280x720 as in pbrt-v3
+// (its CreateFilm; pbrt-v2 had 640x480), so its camera frames the 16:9 view pbrt-v3 renders.
+TEST(Camera, TheDefaultFilmIsPbrtV3s) {
+    for (const char* film : {"", "Film \"image\" \"string filename\" \"x.exr\" "}) {
+        auto s = test::scene_from(std::string(film) +
+                                  "Camera \"perspective\" \"float fov\" 60 WorldBegin WorldEnd");
+        EXPECT_EQ(s->film.width(), 1280);
+        EXPECT_EQ(s->film.height(), 720);
+        // The fov spans the shorter axis, the height: the right edge is 16/9 times as far out.
+        const float t = float(std::tan(30 * kDeg));
+        expect_dir(s->camera.generate_ray(640, 0).dir, Vec3(0, t, 1));
+        expect_dir(s->camera.generate_ray(1280, 360).dir, Vec3(16.0f / 9 * t, 0, 1));
+    }
+    auto s = test::scene_from(
+        "Film \"image\" \"integer xresolution\" 300 Camera \"perspective\" WorldBegin WorldEnd");
+    EXPECT_EQ(s->film.width(), 300);
+    EXPECT_EQ(s->film.height(), 720);
+}
+
 TEST(Camera, FovSpansTheShorterAxis) {
     for (auto [xr, yr] : {std::pair{200, 100}, std::pair{100, 200}}) {
         auto s = test::scene_from(

@@ -120,8 +120,8 @@ TEST(HostileInput, FilmAndSampleCountsAboveTheLimitsAreLocatedErrors) {
         {"Film \"image\" \"integer yresolution\" 65537",
          "t.pbrt:1:14: error: yresolution must be between 1 and 65536, got 65537"},
         {"Sampler \"stratified\" \"integer xsamples\" 1024 \"integer ysamples\" 1024",
-         "t.pbrt:1:1: error: 1048576 samples per pixel along 640 pixels (the film's larger side) "
-         "= 671088640 samples, above cmam's limit of 67108864"},
+         "t.pbrt:1:1: error: 1048576 samples per pixel along 1280 pixels (the film's larger side) "
+         "= 1342177280 samples, above cmam's limit of 67108864"},
         {"Film \"image\" \"integer xresolution\" 16384 \"integer yresolution\" 16384\n"
          "Sampler \"stratified\" \"integer xsamples\" 64 \"integer ysamples\" 64",
          "no error"},

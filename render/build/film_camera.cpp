@@ -29,8 +29,8 @@ void Builder::film() {
                                                   std::to_string(n));
         return n;
     };
-    f.xres = side("xresolution", 640);
-    f.yres = side("yresolution", 480);
+    f.xres = side("xresolution", kDefaultFilmWidth);
+    f.yres = side("yresolution", kDefaultFilmHeight);
     const long long pixels = static_cast<long long>(f.xres) * f.yres;
     if (pixels > kMaxFilmPixels)
         throw SceneError(loc_of(e, "xresolution"),
