@@ -151,6 +151,47 @@ TEST(Materials, UberIsDiffusePlusPlasticsLobePlusGlassesSpecularLobes) {
     EXPECT_FLOAT_EQ(u.f(wo, wi).b, m.f(wo, wi).b);
 }
 
+// The microfacet roughness a material is built with (one value: cmam's distribution is isotropic,
+// the mean of pbrt-v3's two where it has two), with pbrt-v3's defaults and fallbacks: uber's
+// "roughness" is 0.1, its "uroughness" falls back on it and its "vroughness" on "uroughness";
+// metal's each fall back on "roughness" (0.01); substrate has only the two (0.1 each), and a
+// "roughness" given to it is ignored with a warning, as pbrt-v3 reports it unused.
+TEST(Materials, RoughnessDefaultsAndFallbacksArePbrtV3s) {
+    auto roughness = [](const std::string& material, std::vector<std::string>* warnings = nullptr) {
+        const std::string text =
+            "Camera \"perspective\"\nWorldBegin\n" + material + "\nShape \"sphere\"\nWorldEnd\n";
+        auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {}, [&](const std::string& w) {
+            if (warnings) warnings->push_back(w);
+        });
+        EXPECT_LT(s->materials.at(0).roughness.node, 0);
+        return s->materials.at(0).roughness.value.r;
+    };
+    EXPECT_FLOAT_EQ(roughness("Material \"uber\""), 0.1f);
+    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float roughness\" 0.3"), 0.3f);
+    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float uroughness\" 0.2"), 0.2f);
+    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float vroughness\" 0.3"), 0.5f * (0.1f + 0.3f));
+    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float roughness\" 0.4 \"float vroughness\" 0.2"),
+                    0.5f * (0.4f + 0.2f));
+    EXPECT_FLOAT_EQ(roughness("Material \"metal\""), 0.01f);
+    EXPECT_FLOAT_EQ(roughness("Material \"metal\" \"float uroughness\" 0.2"),
+                    0.5f * (0.2f + 0.01f));
+    EXPECT_FLOAT_EQ(
+        roughness("Material \"metal\" \"float roughness\" 0.3 \"float vroughness\" 0.1"),
+        0.5f * (0.3f + 0.1f));
+    EXPECT_FLOAT_EQ(roughness("Material \"substrate\""), 0.1f);
+    EXPECT_FLOAT_EQ(roughness("Material \"substrate\" \"float uroughness\" 0.3"),
+                    0.5f * (0.3f + 0.1f));
+    std::vector<std::string> warnings;
+    EXPECT_FLOAT_EQ(roughness("Material \"substrate\" \"float roughness\" 0.5", &warnings), 0.1f);
+    EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
+                            [](const std::string& w) {
+                                return w.find(
+                                           "t.pbrt:3:22: warning: \"roughness\" is not a "
+                                           "parameter of substrate") != std::string::npos;
+                            }),
+              1);
+}
+
 TEST(Materials, MetalUsesTheConductorsNormalIncidenceReflectance) {
     // pbrt-v3's default metal is copper; ((n-1)^2 + k^2) / ((n+1)^2 + k^2) per channel.
     const Bsdf b = bsdf_of("Material \"metal\"");

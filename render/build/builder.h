@@ -191,7 +191,9 @@ class Builder {
     void noise_texture(const pbrt::TextureDesc& t, TextureNode& n);
 
     // --- materials (materials.cpp) --------------------------------------------------------
-    TexInput rough_input(const Entity& e, const TextureScope& s, float def);
+    // How a material falls back where "uroughness" or "vroughness" is absent (materials.cpp).
+    enum class RoughFallback { Uber, Metal, Substrate };
+    TexInput rough_input(const Entity& e, const TextureScope& s, float def, RoughFallback f);
     Material material(const pbrt::MaterialDesc& d);
     // Each fills in the material of its type (or types).
     using MaterialBuild = void (Builder::*)(const pbrt::MaterialDesc& d, Material& m);

@@ -4,17 +4,30 @@
 
 namespace cmam::render::build_detail {
 
-// pbrt-v3's "roughness", or the mean of "uroughness" and "vroughness" (cmam's microfacet
-// distribution is isotropic).
-TexInput Builder::rough_input(const Entity& e, const TextureScope& s, float def) {
-    if (e.params.find("uroughness") || e.params.find("vroughness")) {
-        TexInput u = float_input(e, s, "uroughness", def), v = float_input(e, s, "vroughness", def);
-        if (u.node < 0 && v.node < 0) return TexInput{-1, Rgb(0.5f * (u.value.r + v.value.r))};
-        warn(e.loc, "textured uroughness/vroughness: uroughness is used for both");
-        (void)e.params.get_float("roughness", def);
-        return u;
+// A material's microfacet roughness as one value: cmam's microfacet distribution is isotropic, so
+// where pbrt-v3 has two, "uroughness" and "vroughness", their mean. An absent one falls back as in
+// pbrt-v3: uber's u on "roughness" and its v on u, metal's each on "roughness"; substrate has no
+// "roughness" (pbrt-v3 reports it unused), each of its two defaulting to `def`.
+TexInput Builder::rough_input(const Entity& e, const TextureScope& s, float def, RoughFallback f) {
+    const bool has_u = e.params.find("uroughness"), has_v = e.params.find("vroughness");
+    if (f == RoughFallback::Substrate) {
+        if (const pbrt::Param* r = e.params.find("roughness")) {
+            warn(r->loc,
+                 "\"roughness\" is not a parameter of substrate (pbrt-v3 ignores it; "
+                 "its roughness is \"uroughness\" and \"vroughness\"); ignored");
+            (void)float_input(e, s, "roughness", def);
+        }
+    } else if (!has_u && !has_v) {
+        return float_input(e, s, "roughness", def);
     }
-    return float_input(e, s, "roughness", def);
+    const TexInput r = f == RoughFallback::Substrate ? TexInput{-1, Rgb(def)}
+                                                     : float_input(e, s, "roughness", def);
+    const TexInput u = has_u ? float_input(e, s, "uroughness", def) : r;
+    const TexInput v =
+        has_v ? float_input(e, s, "vroughness", def) : (f == RoughFallback::Uber ? u : r);
+    if (u.node < 0 && v.node < 0) return TexInput{-1, Rgb(0.5f * (u.value.r + v.value.r))};
+    warn(e.loc, "textured uroughness/vroughness: uroughness is used for both");
+    return u;
 }
 
 void Builder::matte_material(const pbrt::MaterialDesc& d, Material& m) {
@@ -65,7 +78,7 @@ void Builder::uber_material(const pbrt::MaterialDesc& d, Material& m) {
     m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
     m.kr = spectrum_input(e, s, "Kr", Rgb(0));
     m.kt = spectrum_input(e, s, "Kt", Rgb(0));
-    m.roughness = rough_input(e, s, 0);
+    m.roughness = rough_input(e, s, 0.1f, RoughFallback::Uber);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
     const char* eta = e.params.find("eta") ? "eta" : "index";
     m.eta = float_input(e, s, eta, 1.5f, true);
@@ -84,7 +97,8 @@ void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
     m.type = Material::Type::Plastic;
     m.kd = spectrum_input(e, s, "Kd", Rgb(t == "substrate" ? 0.5f : 0.25f));
     m.ks = spectrum_input(e, s, "Ks", Rgb(t == "substrate" ? 0.5f : 0.25f));
-    m.roughness = t == "substrate" ? rough_input(e, s, 0.1f) : float_input(e, s, "roughness", 0.1f);
+    m.roughness = t == "substrate" ? rough_input(e, s, 0.1f, RoughFallback::Substrate)
+                                   : float_input(e, s, "roughness", 0.1f);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
     if (t == "translucent") {
         (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
@@ -104,7 +118,7 @@ void Builder::metal_material(const pbrt::MaterialDesc& d, Material& m) {
     m.type = Material::Type::Metal;
     m.eta = spectrum_input(e, s, "eta", Rgb(0.2004f, 0.9240f, 1.1022f));
     m.k = spectrum_input(e, s, "k", Rgb(3.9129f, 2.4528f, 2.1421f));
-    m.roughness = rough_input(e, s, 0.01f);
+    m.roughness = rough_input(e, s, 0.01f, RoughFallback::Metal);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
 }
 
