@@ -98,6 +98,24 @@ TEST(EnvironmentMap, ConstantMapLightsADiffusePlaneWithKdTimesL) {
     EXPECT_NEAR(mean_red(fb), 0.5 * 0.7 * 2, 0.012);
 }
 
+// An 8-bit light map's values are its bytes over 255, not decoded from sRGB: pbrt-v3 reads the
+// maps of its infinite, goniometric and projection lights with ReadImage, which decodes nothing
+// (only an image texture has "gamma"). A PNG written from linear 0.2 stores sRGB-encoded bytes
+// near 0.48, which the light's map then holds.
+TEST(EnvironmentMap, EightBitMapsAreTheirBytesAsPbrtV3ReadsThem) {
+    const std::string map = write_map("grey.png", 16, 8, [](int, int) { return Rgb(0.2f); });
+    const RawImage raw = read_image(map);
+    ASSERT_TRUE(raw.is_8bit);
+    const float stored = raw.pixels.at(0);
+    ASSERT_NEAR(stored, 0.48f, 0.01f);
+    auto s = test::scene_from(
+        camera_and_plane("LightSource \"infinite\" \"string mapname\" \"" + map + "\""), "t.pbrt",
+        1);
+    const EnvironmentMap& env = *s->lights.at(0).env;
+    for (const Vec3 d : {Vec3(0, 0, 1), Vec3(1, 0.3f, -0.2f), Vec3(-0.5f, -1, 0.1f)})
+        EXPECT_NEAR(env.radiance(normalize(d)).g, stored, 1e-6f);
+}
+
 TEST(EnvironmentMap, OrientationFollowsPbrtV3) {
     // The file's top half (theta < pi/2: +z in the light's frame) is bright; its left half
     // (phi < pi: +y side) is red, its right half blue.

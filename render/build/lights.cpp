@@ -9,10 +9,11 @@
 
 namespace cmam::render::build_detail {
 
-// A light's "mapname" image, read as pbrt-v3 reads light images (8-bit files decoded from
-// sRGB).
+// A light's "mapname" image, read as pbrt-v3 reads light images: its values as stored, an 8-bit
+// file's bytes over 255 with no sRGB decoding (pbrt-v3's infinite, goniometric and projection
+// lights read the file with ReadImage, which decodes nothing; only image textures have "gamma").
 texture::Image Builder::load_light_map(const std::string& path) {
-    return load_texture(path, false, std::nullopt, 1.0f, texture::WrapMode::Repeat);
+    return load_texture(path, false, false, 1.0f, texture::WrapMode::Repeat);
 }
 
 std::shared_ptr<const texture::FilteredTexture> Builder::light_image(const Entity& e,
