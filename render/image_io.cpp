@@ -71,7 +71,11 @@ texture::Image load_texture(const std::string& path, bool is_float, std::optiona
                             float scale, texture::WrapMode wrap, bool* gamma_used, bool keep_grey,
                             std::size_t* non_finite) {
     RawImage raw = read_image(path, true);
-    bool gamma = gamma_opt.value_or(raw.is_8bit);
+    // pbrt-v3's imagemap decodes the files it reads as 8-bit, PNG and TGA, by default: a 16-bit
+    // PNG too, which it reads as 8-bit (cmam keeps its 16 bits). Other 8-bit files (JPEG, BMP,
+    // ...), which pbrt-v3 cannot read, are decoded too; other files are linear.
+    const std::string ext = codec::lower_extension(path);
+    const bool gamma = gamma_opt.value_or(raw.is_8bit || ext == ".png" || ext == ".tga");
     if (gamma_used) *gamma_used = gamma;
     const int w = raw.width, h = raw.height, nc = raw.channels;
     const bool grey = !is_float && keep_grey && nc < 3;  // grey, or grey and alpha

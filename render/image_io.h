@@ -43,7 +43,8 @@ RawImage read_image(const std::string& path, bool keep_8bit = false);
 void set_image_memory_limit(std::size_t bytes);
 
 /// Reads a texture as pbrt-v3's imagemap does: flipped so that row 0 is v = 0, decoded from
-/// sRGB when `gamma` (default: when the file stores 8-bit data), multiplied by `scale`. Float
+/// sRGB when `gamma` (default: for a PNG or TGA file, as pbrt-v3, and any other file storing
+/// 8-bit data), multiplied by `scale`. Float
 /// textures (`is_float`) keep one channel, the luminance of the stored RGB (decoded after
 /// taking the luminance, as pbrt-v3 does); others keep RGB, grey files replicated to three
 /// channels, or with `keep_grey` kept as one (the renderer's spectrum textures: a third of the
