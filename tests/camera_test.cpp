@@ -2,6 +2,7 @@
 // Its realistic camera is that pinhole, of the fov its lens system gives.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -55,6 +56,32 @@ TEST(Camera, TheDefaultFilmIsPbrtV3s) {
         "Film \"image\" \"integer xresolution\" 300 Camera \"perspective\" WorldBegin WorldEnd");
     EXPECT_EQ(s->film.width(), 300);
     EXPECT_EQ(s->film.height(), 720);
+}
+
+// A scene without a Camera directive renders, with a warning, through pbrt-v3's default camera:
+// perspective, fov 90, at the origin looking along +z; a LookAt given without a Camera is dropped
+// with the other transforms at WorldBegin, as in pbrt-v3.
+TEST(Camera, TheDefaultCameraIsPbrtV3s) {
+    for (const char* before : {"", "LookAt 0 0 5  0 0 0  0 1 0 "}) {
+        SCOPED_TRACE(before);
+        std::vector<std::string> warnings;
+        auto s = render::build_scene(
+            pbrt::parse_string(std::string(before) +
+                                   "Film \"image\" \"integer xresolution\" 100 "
+                                   "\"integer yresolution\" 100 WorldBegin WorldEnd",
+                               "t.pbrt"),
+            {}, [&](const std::string& w) { warnings.push_back(w); });
+        const render::CameraRay centre = s->camera.generate_ray(50, 50);
+        EXPECT_NEAR(centre.org.x, 0, 1e-6);
+        EXPECT_NEAR(centre.org.z, 0, 1e-6);
+        expect_dir(centre.dir, Vec3(0, 0, 1));
+        expect_dir(s->camera.generate_ray(50, 0).dir, Vec3(0, 1, 1));  // fov 90: 45 degrees up
+        EXPECT_EQ(std::count(warnings.begin(), warnings.end(),
+                             "t.pbrt:1:" + std::string(*before ? "28" : "1") +
+                                 ": warning: no Camera given: pbrt-v3's default, a perspective "
+                                 "camera (fov 90) at the origin looking along +z"),
+                  1);
+    }
 }
 
 TEST(Camera, FovSpansTheShorterAxis) {

@@ -65,8 +65,17 @@ void Builder::film() {
 }
 
 void Builder::camera() {
-    const Entity& e = m_desc.camera;
-    if (!e.given) throw SceneError(m_desc.film.loc, "the scene has no Camera directive");
+    // No Camera directive: pbrt-v3's default camera, perspective with its default fov (90) and the
+    // identity transform, at the origin looking along +z (a LookAt or other transform given
+    // before WorldBegin without a Camera is dropped, as pbrt-v3 drops it).
+    Entity e = m_desc.camera;
+    if (!e.given) {
+        e.type = "perspective";
+        e.loc = m_desc.film.loc;
+        warn(e.loc,
+             "no Camera given: pbrt-v3's default, a perspective camera (fov 90) at the origin "
+             "looking along +z");
+    }
     if (e.type != "perspective" && e.type != "orthographic" && e.type != "environment" &&
         e.type != "realistic")
         throw SceneError(e.loc, "unsupported Camera " + in_quotes(e.type) +
