@@ -129,6 +129,34 @@ TEST(Scenes, PbrtV3LightAndSamplerParametersAreReadOrWarned) {
     }
 }
 
+// The samplers cmam renders as stratified take pbrt-v3's sample counts: "random" 4 per pixel by
+// default (the others 16), and Sobol, (0,2)-sequence and maxmindist round a count up to a power
+// of two, with a warning, as pbrt-v3 does; the k x k grid is then the nearest square.
+TEST(Scenes, SamplerCountsArePbrtV3s) {
+    auto grid = [](const std::string& sampler, std::vector<std::string>* warnings = nullptr) {
+        auto s = build_scene(
+            pbrt::parse_string("Camera \"perspective\"\n" + sampler + "\nWorldBegin\nWorldEnd\n",
+                               "t.pbrt"),
+            {}, [&](const std::string& w) {
+                if (warnings) warnings->push_back(w);
+            });
+        EXPECT_EQ(s->sampler.xsamples, s->sampler.ysamples);
+        return s->sampler.xsamples;
+    };
+    EXPECT_EQ(grid("Sampler \"random\""), 2);
+    EXPECT_EQ(grid("Sampler \"halton\""), 4);
+    EXPECT_EQ(grid("Sampler \"sobol\""), 4);
+    EXPECT_EQ(grid("Sampler \"halton\" \"integer pixelsamples\" 24"), 5);  // 24: 5x5
+    std::vector<std::string> warnings;
+    EXPECT_EQ(grid("Sampler \"sobol\" \"integer pixelsamples\" 24", &warnings), 6);  // 32: 6x6
+    EXPECT_EQ(std::count(warnings.begin(), warnings.end(),
+                         "t.pbrt:2:17: warning: pixelsamples 24 rounded up to a power of two, 32, "
+                         "as pbrt-v3's \"sobol\" sampler does"),
+              1);
+    EXPECT_EQ(grid("Sampler \"02sequence\" \"integer pixelsamples\" 9"), 4);  // 16: 4x4
+    EXPECT_EQ(grid("Sampler \"maxmindist\" \"integer pixelsamples\" 16"), 4);
+}
+
 TEST(Analytic, FilmScaleMultipliesRadianceNotAovs) {
     // pbrt-v3's Film "scale": the same scene at scale 2.5 is 2.5 times as bright; the texture
     // AOV is unscaled.

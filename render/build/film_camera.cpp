@@ -1,6 +1,7 @@
 // render — scene building: film, camera (and the check of its rays), sampler, pixel filter
 // and integrator settings.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -227,12 +228,22 @@ void Builder::sampler() {
         e.params.check_unused("Sampler \"stratified\"", m_warn, {"dimensions", "pixelsamples"});
     } else if (e.type == "halton" || e.type == "random" || e.type == "sobol" ||
                e.type == "02sequence" || e.type == "lowdiscrepancy" || e.type == "maxmindist") {
-        int n = e.params.get_int("pixelsamples", 16);
+        // pbrt-v3's defaults: 4 samples per pixel for random, 16 for the others.
+        int n = e.params.get_int("pixelsamples", e.type == "random" ? 4 : 16);
         if (n <= 0) throw SceneError(e.loc, "pixelsamples must be positive");
         if (n > kMaxSamplesPerPixel)
             throw SceneError(loc_of(e, "pixelsamples"),
                              "pixelsamples " + std::to_string(n) + " is above cmam's limit of " +
                                  std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
+        // Sobol, (0,2)-sequence and maxmindist samplers take a power of two, rounding up as
+        // pbrt-v3 does (with its warning); the grid below comes from that count.
+        if (e.type != "halton" && e.type != "random" && !std::has_single_bit(unsigned(n))) {
+            const int up = static_cast<int>(std::bit_ceil(unsigned(n)));
+            warn(loc_of(e, "pixelsamples"),
+                 "pixelsamples " + std::to_string(n) + " rounded up to a power of two, " +
+                     std::to_string(up) + ", as pbrt-v3's " + in_quotes(e.type) + " sampler does");
+            n = up;
+        }
         int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
         s.xsamples = s.ysamples = k;
         // With --spp the count comes from there (set below), not from pixelsamples.
