@@ -473,6 +473,22 @@ TEST(AreaLight, NsamplesUnderDirectLightingAveragesThatManyShadowRays) {
     EXPECT_EQ(direct->lights[0].samples, 16);
     EXPECT_EQ(whitted->lights[0].samples, 1);
     EXPECT_EQ(one->lights[0].samples, 1);
+    // pbrt-v3's area and infinite lights read "samples" first, then "nsamples".
+    for (const char* light : {"AreaLightSource \"diffuse\"", "LightSource \"infinite\""}) {
+        SCOPED_TRACE(light);
+        auto samples = [&](const std::string& params) {
+            std::string text = camera_and_plane(
+                "AttributeBegin " + std::string(light) + " " + params +
+                " Shape \"trianglemesh\" \"point3 P\" [-2 -2 1  -2 2 1  2 2 1  2 -2 1] "
+                "\"integer indices\" [0 1 2 0 2 3] AttributeEnd");
+            text.insert(text.find("WorldBegin"), "Integrator \"directlighting\" ");
+            return test::scene_from(text, "t.pbrt", 1)->lights.at(0).samples;
+        };
+        EXPECT_EQ(samples("\"integer samples\" 4"), 4);
+        EXPECT_EQ(samples("\"integer samples\" 4 \"integer nsamples\" 8"), 4);
+        EXPECT_EQ(samples("\"integer nsamples\" 8"), 8);
+        EXPECT_EQ(samples(""), 1);
+    }
     const auto [m16, s16] = radiance_stats(*direct);
     const auto [m1, s1] = radiance_stats(*whitted);
     EXPECT_NEAR(m16, m1, 4 * s1 / std::sqrt(4000.0));

@@ -185,11 +185,13 @@ void Builder::read_ahead() {
     });
 }
 
-// Shadow rays per shading point for a light: its nsamples under pbrt-v3's directlighting
-// integrator, which reads them; 1 otherwise, as pbrt-v3's whitted and path take.
+// Shadow rays per shading point for a light: under pbrt-v3's directlighting integrator, which
+// reads them, its "samples", or else its "nsamples" (pbrt-v3's infinite and diffuse area lights
+// read both, "samples" first); 1 otherwise, as pbrt-v3's whitted and path take.
 int Builder::light_samples(const Entity& e) const {
-    if (!m_light_samples || !e.params.find("nsamples")) return 1;
-    return std::clamp(e.params.get_int("nsamples", 1), 1, 1 << 16);
+    const char* name = e.params.find("samples") ? "samples" : "nsamples";
+    if (!m_light_samples || !e.params.find(name)) return 1;
+    return std::clamp(e.params.get_int(name, 1), 1, 1 << 16);
 }
 
 void Builder::warn(const pbrt::FileLoc& loc, const std::string& msg) {
