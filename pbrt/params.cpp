@@ -307,7 +307,9 @@ void ParamSet::check_unused(const std::string& what, const WarningSink& warn,
                                                " is not supported by cmam; ignored"));
             continue;
         }
-        throw SceneError(p.loc, "unknown parameter " + in_quotes(p.name) + " for " + what);
+        if (warn)
+            warn(format_warning(p.loc, "unknown parameter " + in_quotes(p.name) + " for " + what +
+                                           " (pbrt-v3 reports it unused); ignored"));
     }
 }
 

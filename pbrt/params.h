@@ -81,9 +81,10 @@ class ParamSet {
     std::optional<std::vector<double>> get_point2s(const std::string& name) const;
 
     const Param* find(const std::string& name) const;
-    /// Throws SceneError at the first parameter nobody asked for, naming `what` ("shape
-    /// \"sphere\""). Names listed in `ignored` are pbrt-v3 parameters cmam does not support:
-    /// they get a warning instead.
+    /// Warns of every parameter nobody asked for, naming `what` ("shape \"sphere\""): a name
+    /// listed in `ignored` is a pbrt-v3 parameter cmam does not support; any other is one
+    /// pbrt-v3 does not know either (a misspelt name), which pbrt-v3 reports unused and renders
+    /// without, as cmam does.
     void check_unused(const std::string& what, const WarningSink& warn,
                       const std::vector<std::string>& ignored = {}) const;
 
