@@ -314,21 +314,65 @@ void ParamSet::check_unused(const std::string& what, const WarningSink& warn,
 }
 
 namespace {
-// CIE 1931 2-degree colour matching functions, multi-lobe Gaussian fit
-// (Wyman, Sloan & Shirley, JCGT 2013), wavelength in nm.
-double g(double x, double mu, double s1, double s2) {
-    double t = (x - mu) / (x < mu ? s1 : s2);
-    return std::exp(-0.5 * t * t);
-}
-double cie_x(double l) {
-    return 1.056 * g(l, 599.8, 37.9, 31.0) + 0.362 * g(l, 442.0, 16.0, 26.7) -
-           0.065 * g(l, 501.1, 20.4, 26.2);
-}
-double cie_y(double l) {
-    return 0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1);
-}
-double cie_z(double l) {
-    return 1.217 * g(l, 437.0, 11.8, 36.0) + 0.681 * g(l, 459.0, 26.0, 13.8);
+// The CIE 1931 2-degree standard observer's colour matching functions x, y and z, every 5 nm
+// from 360 to 830 nm, as the CIE tabulates them (the table Debian's colord-data package ships as
+// CIE1931-2deg-XYZ.cmf). pbrt-v3 integrates spectra against the same observer.
+constexpr int kCieCount = 95;
+constexpr double kCieX[kCieCount] = {
+    0.0001299,    0.0002321,    0.0004149,    0.0007416,    0.001368,     0.002236,
+    0.004243,     0.00765,      0.01431,      0.02319,      0.04351,      0.07763,
+    0.13438,      0.21477,      0.2839,       0.3285,       0.34828,      0.34806,
+    0.3362,       0.3187,       0.2908,       0.2511,       0.19536,      0.1421,
+    0.09564,      0.05795001,   0.03201,      0.0147,       0.0049,       0.0024,
+    0.0093,       0.0291,       0.06327,      0.1096,       0.1655,       0.2257499,
+    0.2904,       0.3597,       0.4334499,    0.5120501,    0.5945,       0.6784,
+    0.7621,       0.8425,       0.9163,       0.9786,       1.0263,       1.0567,
+    1.0622,       1.0456,       1.0026,       0.9384,       0.8544499,    0.7514,
+    0.6424,       0.5419,       0.4479,       0.3608,       0.2835,       0.2187,
+    0.1649,       0.1212,       0.0874,       0.0636,       0.04677,      0.0329,
+    0.0227,       0.01584,      0.01135916,   0.008110916,  0.005790346,  0.004109457,
+    0.002899327,  0.00204919,   0.001439971,  0.0009999493, 0.0006900786, 0.0004760213,
+    0.0003323011, 0.0002348261, 0.0001661505, 0.000117413,  8.307527e-05, 5.870652e-05,
+    4.150994e-05, 2.935326e-05, 2.067383e-05, 1.455977e-05, 1.025398e-05, 7.221456e-06,
+    5.085868e-06, 3.581652e-06, 2.522525e-06, 1.776509e-06, 1.251141e-06};
+constexpr double kCieY[kCieCount] = {
+    3.917e-06,  6.965e-06,  1.239e-05,  2.202e-05,  3.9e-05,    6.4e-05,    0.00012,    0.000217,
+    0.000396,   0.00064,    0.00121,    0.00218,    0.004,      0.0073,     0.0116,     0.01684,
+    0.023,      0.0298,     0.038,      0.048,      0.06,       0.0739,     0.09098,    0.1126,
+    0.13902,    0.1693,     0.20802,    0.2586,     0.323,      0.4073,     0.503,      0.6082,
+    0.71,       0.7932,     0.862,      0.9148501,  0.954,      0.9803,     0.9949501,  1.0,
+    0.995,      0.9786,     0.952,      0.9154,     0.87,       0.8163,     0.757,      0.6949,
+    0.631,      0.5668,     0.503,      0.4412,     0.381,      0.321,      0.265,      0.217,
+    0.175,      0.1382,     0.107,      0.0816,     0.061,      0.04458,    0.032,      0.0232,
+    0.017,      0.01192,    0.00821,    0.005723,   0.004102,   0.002929,   0.002091,   0.001484,
+    0.001047,   0.00074,    0.00052,    0.0003611,  0.0002492,  0.0001719,  0.00012,    8.48e-05,
+    6e-05,      4.24e-05,   3e-05,      2.12e-05,   1.499e-05,  1.06e-05,   7.4657e-06, 5.2578e-06,
+    3.7029e-06, 2.6078e-06, 1.8366e-06, 1.2934e-06, 9.1093e-07, 6.4153e-07, 4.5181e-07};
+constexpr double kCieZ[kCieCount] = {0.0006061,  0.001086,    0.001946,   0.003486,    0.006450001,
+                                     0.01054999, 0.02005001,  0.03621,    0.06785001,  0.1102,
+                                     0.2074,     0.3713,      0.6456,     1.0390501,   1.3856,
+                                     1.62296,    1.74706,     1.7826,     1.77211,     1.7441,
+                                     1.6692,     1.5281,      1.28764,    1.0419,      0.8129501,
+                                     0.6162,     0.46518,     0.3533,     0.272,       0.2123,
+                                     0.1582,     0.1117,      0.07824999, 0.05725001,  0.04216,
+                                     0.02984,    0.0203,      0.0134,     0.008749999, 0.005749999,
+                                     0.0039,     0.002749999, 0.0021,     0.0018,      0.001650001,
+                                     0.0014,     0.0011,      0.001,      0.0008,      0.0006,
+                                     0.00034,    0.00024,     0.00019,    0.0001,      4.999999e-05,
+                                     3e-05,      2e-05,       1e-05,      0,           0,
+                                     0,          0,           0,          0,           0,
+                                     0,          0,           0,          0,           0,
+                                     0,          0,           0,          0,           0,
+                                     0,          0,           0,          0,           0,
+                                     0,          0,           0,          0,           0,
+                                     0,          0,           0,          0,           0,
+                                     0,          0,           0,          0,           0};
+
+// The observer at wavelength l (nm, within [360, 830]), linear between the 5 nm entries.
+double cie(const double* table, double l) {
+    const double f = (l - 360) / 5;
+    const int i = std::min(static_cast<int>(f), kCieCount - 2);
+    return table[i] + (f - i) * (table[i + 1] - table[i]);
 }
 
 double interpolate(const std::vector<std::pair<double, double>>& s, double l) {
@@ -345,17 +389,21 @@ double interpolate(const std::vector<std::pair<double, double>>& s, double l) {
 Rgb spectrum_to_rgb(const std::vector<double>& pairs) {
     std::vector<std::pair<double, double>> s;
     for (std::size_t i = 0; i + 1 < pairs.size(); i += 2) s.emplace_back(pairs[i], pairs[i + 1]);
+    // Sums over 1 nm steps, as pbrt-v3's RGBSpectrum::FromSampled, divided as it divides them:
+    // by the integral of y times 471 / 470 (its 471 samples over 470 nm), so a constant 1 has
+    // Y = 470 / 471, not 1, in pbrt-v3 and here alike.
     double x = 0, y = 0, z = 0, yint = 0;
-    for (double l = 360; l <= 830; l += 1) {
-        double v = interpolate(s, l);
-        x += v * cie_x(l);
-        y += v * cie_y(l);
-        z += v * cie_z(l);
-        yint += cie_y(l);
+    for (int nm = 360; nm <= 830; ++nm) {
+        const double l = nm, v = interpolate(s, l), cy = cie(kCieY, l);
+        x += v * cie(kCieX, l);
+        y += v * cy;
+        z += v * cie(kCieZ, l);
+        yint += cy;
     }
-    x /= yint;
-    y /= yint;
-    z /= yint;
+    const double k = 470.0 / (471.0 * yint);
+    x *= k;
+    y *= k;
+    z *= k;
     // XYZ to linear sRGB (the matrix pbrt-v3 uses).
     return Rgb{static_cast<float>(3.240479 * x - 1.537150 * y - 0.498535 * z),
                static_cast<float>(-0.969256 * x + 1.875991 * y + 0.041556 * z),

@@ -94,8 +94,9 @@ class ParamSet {
     const Param* find_typed(const std::string& name, std::initializer_list<ParamType> types) const;
 };
 
-/// Converts a sampled spectrum (wavelength, value pairs in nm) to linear sRGB, via CIE XYZ
-/// (analytic fit of the CIE 1931 2-degree observer), normalised so a constant 1 has Y = 1.
+/// Converts a sampled spectrum (wavelength, value pairs in nm) to linear sRGB as pbrt-v3 does:
+/// CIE XYZ against the tabulated CIE 1931 2-degree observer at 1 nm steps, normalised as
+/// pbrt-v3 normalises it (a constant 1 has Y = 470/471), then its XYZ-to-sRGB matrix.
 /// The pairs are as ParamSet::add accepts them: at least one, finite, wavelengths increasing.
 Rgb spectrum_to_rgb(const std::vector<double>& lambda_value_pairs);
 /// pbrt-v3's "blackbody" [T scale]: Planck's spectrum at T kelvin divided by its peak, times

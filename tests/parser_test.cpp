@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -257,6 +258,26 @@ TEST(Parser, BlackbodyIsPlancksSpectrumNormalisedToItsPeak) {
     EXPECT_THROW_MSG(parse_world("LightSource \"point\" \"blackbody I\" [-5 1]"), SceneError,
                      "t.pbrt:3:21: error: blackbody \"I\" temperature must be a positive finite "
                      "number of kelvin, got -5");
+}
+
+// Spectra become RGB as in pbrt-v3: XYZ against the tabulated CIE 1931 2-degree observer, a
+// constant 1 at Y = 470/471 (pbrt-v3's normalisation), then its XYZ-to-sRGB matrix. A spike at
+// one wavelength gives XYZ in the ratios of the observer's table there (x, y, z at 450 nm:
+// 0.3362, 0.038, 1.77211; at 600 nm: 1.0622, 0.631, 0.0008), which a fitted observer misses by
+// percents.
+TEST(Parser, SpectraConvertThroughTheTabulatedCieObserver) {
+    auto xyz = [](const std::vector<double>& pairs) {
+        const Rgb c = spectrum_to_rgb(pairs);
+        return std::array<double, 3>{0.412453 * c[0] + 0.357580 * c[1] + 0.180423 * c[2],
+                                     0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2],
+                                     0.019334 * c[0] + 0.119193 * c[1] + 0.950227 * c[2]};
+    };
+    EXPECT_NEAR(xyz({300, 1, 900, 1})[1], 470.0 / 471, 1e-5);
+    const auto b = xyz({449, 0, 450, 1, 451, 0}), o = xyz({599, 0, 600, 1, 601, 0});
+    EXPECT_NEAR(b[0] / b[2], 0.3362 / 1.77211, 1e-4);
+    EXPECT_NEAR(b[1] / b[2], 0.038 / 1.77211, 1e-4);
+    EXPECT_NEAR(o[1] / o[0], 0.631 / 1.0622, 1e-4);
+    EXPECT_NEAR(o[2] / o[0], 0.0008 / 1.0622, 1e-4);
 }
 
 TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {
