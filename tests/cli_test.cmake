@@ -178,7 +178,7 @@ expect_failure("cmam: error: --methods: give at least one method" "an eval witho
 cmam_run(eval ${demo} --methods none --spp 1 --reference-spp 1 --resolution 16 --crop 0.5,1,0,1
          --quiet -o ${OUT}/ev_res)
 if(NOT rc EQUAL 0 OR NOT EXISTS ${OUT}/ev_res/small/none-spp1.png)
-  message(FATAL_ERROR "eval --resolution 16 --crop must evaluate the demo: ${rc} ${err}")
+  message(FATAL_ERROR "eval --resolution 16 --crop must evaluate the small scene: ${rc} ${err}")
 endif()
 # The PNG's IHDR holds the width and the height, 4 bytes each, at bytes 16-23.
 file(GLOB images ${OUT}/ev_res/small/*.png)
