@@ -409,7 +409,7 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
                 const float m = 1 - std::clamp(c, 0.0f, 1.0f), m5 = (m * m) * (m * m) * m;
                 out += ks * (f0 + (Rgb(1) - f0) * m5) * common;
             } else {
-                out += ks * (fresnel_dielectric(c, 1.5f, 1.0f) * common);
+                out += ks * (fresnel_dielectric(c, lobe_eta_i, lobe_eta_t) * common);
             }
         }
     }
@@ -496,6 +496,8 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.kt = clamp0(eval_texture(scene, m.kt, ctx));
             b.eta = index_of(eval_texture(scene, m.eta, ctx).r);
+            b.lobe_eta_i = 1;  // pbrt-v3's uber: its microfacet lobe's Fresnel is air to eta
+            b.lobe_eta_t = b.eta;
             break;
         }
         case Material::Type::Metal: {

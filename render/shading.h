@@ -66,9 +66,12 @@ struct Bsdf {
     // Diffuse lobe (Lambertian, or Oren-Nayar when on_b != 0)
     Rgb kd{};
     float on_a = 1, on_b = 0;
-    // Microfacet reflection (plastic): Trowbridge-Reitz, Fresnel dielectric(1.5 -> 1)
+    // Microfacet reflection: Trowbridge-Reitz with a dielectric Fresnel term from lobe_eta_i to
+    // lobe_eta_t, as pbrt-v3 makes it: plastic's from 1.5 to 1 (so it reaches 1 past about 42
+    // degrees), uber's from 1 to its eta.
     Rgb ks{};
     float alpha = 0;
+    float lobe_eta_i = 1.5f, lobe_eta_t = 1.0f;
     // Specular lobes
     Rgb kr{}, kt{};
     bool fresnel_noop = false;  // mirror

@@ -151,6 +151,35 @@ TEST(Materials, UberIsDiffusePlusPlasticsLobePlusGlassesSpecularLobes) {
     EXPECT_FLOAT_EQ(u.f(wo, wi).b, m.f(wo, wi).b);
 }
 
+// pbrt-v3's uber gives its microfacet lobe a dielectric Fresnel term from air to its eta, where
+// plastic's goes from 1.5 to 1 (and so reaches 1 past about 42 degrees): an uber of index 1 has
+// no glossy reflection at all, and against a plastic of the same Ks and roughness its lobe is
+// F(1 -> 1.5) over plastic's F(1.5 -> 1), here with the half vector on the normal and the light
+// 60 degrees off it (plastic's term 1 there).
+TEST(Materials, UbersGlossyFresnelIsAirToItsEta) {
+    const std::string lobe = "\"rgb Kd\" [0 0 0] \"rgb Ks\" [1 1 1] \"float roughness\" 0.3";
+    const Bsdf u1 = bsdf_of("Material \"uber\" " + lobe + " \"float index\" 1"),
+               u15 = bsdf_of("Material \"uber\" " + lobe + " \"float index\" 1.5"),
+               p = bsdf_of("Material \"plastic\" " + lobe);
+    const float s = std::sin(60 * 3.14159265f / 180), c = std::cos(60 * 3.14159265f / 180);
+    for (const auto& [wo_l, wi_l] :
+         {std::pair{Vec3(s, 0, c), Vec3(-s, 0, c)}, std::pair{Vec3(0, 0, 1), Vec3(0, 0, 1)}}) {
+        auto world = [&](const Vec3& l) {
+            return l.x * p.frame.s + l.y * p.frame.t + l.z * p.frame.n;
+        };
+        const Vec3 wo = world(wo_l), wi = world(wi_l);
+        EXPECT_NEAR(u1.f(wo, wi).g, 0.0f, 1e-9f);
+        const float fp = p.f(wo, wi).g, fu = u15.f(wo, wi).g;
+        ASSERT_GT(fp, 0);
+        const float cos_h = wo_l.z;  // the half vector is the normal
+        EXPECT_NEAR(fu / fp,
+                    fresnel_dielectric(cos_h, 1, 1.5f) / fresnel_dielectric(cos_h, 1.5f, 1), 1e-4f);
+    }
+    // At 60 degrees plastic's term is total reflection, uber's about 0.09.
+    EXPECT_EQ(fresnel_dielectric(c, 1.5f, 1), 1.0f);
+    EXPECT_NEAR(fresnel_dielectric(c, 1, 1.5f), 0.089f, 0.001f);
+}
+
 // The microfacet roughness a material is built with (one value: cmam's distribution is isotropic,
 // the mean of pbrt-v3's two where it has two), with pbrt-v3's defaults and fallbacks: uber's
 // "roughness" is 0.1, its "uroughness" falls back on it and its "vroughness" on "uroughness";

@@ -68,8 +68,8 @@ void Builder::plastic_material(const pbrt::MaterialDesc& d, Material& m) {
     m.remap_roughness = e.params.get_bool("remaproughness", true);
 }
 
-// pbrt-v3's uber: a diffuse lobe, a microfacet lobe (plastic's), and specular
-// reflection and transmission with dielectric Fresnel (glass's).
+// pbrt-v3's uber: a diffuse lobe, a microfacet lobe (with a dielectric Fresnel term from air to
+// its eta), and specular reflection and transmission with dielectric Fresnel (glass's).
 void Builder::uber_material(const pbrt::MaterialDesc& d, Material& m) {
     const Entity& e = d.entity;
     const TextureScope& s = d.scope;
