@@ -226,8 +226,11 @@ SubdividedMesh loop_subdivide(const std::vector<float>& positions, const std::ve
                        : weigh_ring(p, ring, iv, 1 / (n + 3 / (8 * loop_beta(ring.size()))));
     }
 
-    // Normals from the limit tangents, on the side of the triangles' winding (the area-weighted
-    // normal of the triangles around the vertex, which is also the fallback).
+    // Normals from the limit tangents, on the side opposite the triangles' winding (the
+    // area-weighted normal of the triangles around the vertex, negated, is also the fallback).
+    // That is pbrt-v3's side: it crosses the tangents of a one-ring it walks against the
+    // winding, so a mesh wound outwards gets normals pointing in, and as its triangles take a
+    // given normal's side for the surface's, a loopsubdiv glass is entered from inside.
     std::vector<std::vector<std::pair<int, int>>> fans(p.size());
     std::vector<P3> winding(p.size());
     for (std::size_t f = 0; f < tris.size(); f += 3) {
@@ -250,7 +253,7 @@ SubdividedMesh loop_subdivide(const std::vector<float>& positions, const std::ve
                    ? limit_normal(limit, static_cast<int>(v), ring, boundary)
                    : winding[v];
         if (!(dot(n, n) > 0) || !std::isfinite(dot(n, n))) n = winding[v];
-        if (dot(n, winding[v]) < 0) n = -1.0 * n;
+        if (dot(n, winding[v]) > 0) n = -1.0 * n;
         for (double x : {limit[v].x, limit[v].y, limit[v].z})
             out.positions.push_back(static_cast<float>(x));
         for (double x : {n.x, n.y, n.z}) out.normals.push_back(static_cast<float>(x));

@@ -11,8 +11,8 @@ namespace cmam::render {
 
 struct SubdividedMesh {
     std::vector<float> positions;  // xyz per vertex
-    std::vector<float> normals;    // xyz per vertex, on the side the triangles' winding gives
-    std::vector<int> indices;      // three per triangle, wound as the control mesh
+    std::vector<float> normals;  // xyz per vertex, against the triangles' winding (pbrt-v3's side)
+    std::vector<int> indices;    // three per triangle, wound as the control mesh
 };
 
 /// The control mesh (`positions` xyz per vertex, `indices` three per triangle, each index in

@@ -94,6 +94,36 @@ TEST(Triangle, ShadingNormalsOrientTheGeometricNormal) {
     EXPECT_NEAR(h.ng.z, -1, 1e-6);
 }
 
+// pbrt-v3's triangle takes a given normal's side for the surface's, flipped by ReverseOrientation
+// alone: a mirroring transform maps the normal (as a normal) and flips nothing else, whereas a
+// mesh without normals, and a quadric, turn with ReverseOrientation xor the mirror.
+TEST(Triangle, GivenNormalsFlipForReverseOrientationNotForAMirror) {
+    const std::string tri =
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0  4 0 0  0 4 0] \"integer indices\" [0 1 2]";
+    const std::string up = tri + " \"normal N\" [0 0 1  0 0 1  0 0 1]";
+    struct Case {
+        const char* prefix;
+        const std::string& shape;
+        float z;  // the hit's shading normal's z
+    };
+    // Seen from +z through a mirror in x (Scale -1 1 1), the triangle lies at x <= 0.
+    const Case cases[] = {{"", up, 1},
+                          {"Scale -1 1 1 ", up, 1},
+                          {"ReverseOrientation ", up, -1},
+                          {"Scale -1 1 1 ReverseOrientation ", up, -1},
+                          {"", tri, 1},
+                          {"Scale -1 1 1 ", tri, 1},  // the winding turns, and the flip with it
+                          {"ReverseOrientation ", tri, -1},
+                          {"Scale -1 1 1 ReverseOrientation ", tri, -1}};
+    for (const Case& c : cases) {
+        auto s = world(std::string(c.prefix) + c.shape);
+        const float x = std::string(c.prefix).find("Scale") != std::string::npos ? -1 : 1;
+        SurfaceHit h = hit(*s, Vec3(x, 1, 5), Vec3(0, 0, -1));
+        EXPECT_NEAR(h.ns.z, c.z, 1e-6) << c.prefix << c.shape;
+        EXPECT_NEAR(h.ng.z, c.z, 1e-6) << c.prefix << c.shape;
+    }
+}
+
 TEST(PlyMesh, IntersectsWithItsUv) {
     const test::TempDir dir("cmam_quad");
     const std::filesystem::path p = dir.path / "quad.ply";

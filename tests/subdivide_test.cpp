@@ -25,21 +25,22 @@ Vec3 at(const std::vector<float>& v, std::size_t i) {
 
 TEST(LoopSubdivision, TetrahedronLimitIsAFifthOfEachVertex) {
     // Valence 3: beta = 3/16, gamma = 1 / (3 + 3 / (8 beta)) = 1/5, and the three neighbours sum
-    // to -p: the limit point is 0.4 p + 0.2 (-p) = p / 5. The normal points along p, outwards.
+    // to -p: the limit point is 0.4 p + 0.2 (-p) = p / 5. The normal lies along p, pointing in
+    // as pbrt-v3's do (against the outward winding).
     const SubdividedMesh m = loop_subdivide(kTetraP, kTetraIdx, 0);
     ASSERT_EQ(m.positions.size(), kTetraP.size());
     ASSERT_EQ(m.indices, kTetraIdx);
     for (std::size_t v = 0; v < 4; ++v) {
         const Vec3 p = at(m.positions, v), p0 = at(kTetraP, v), n = normalize(at(m.normals, v));
         EXPECT_NEAR(length(p - p0 / 5), 0, 1e-6) << v;
-        EXPECT_NEAR(dot(n, normalize(p0)), 1, 1e-5) << v;
+        EXPECT_NEAR(dot(n, normalize(p0)), -1, 1e-5) << v;
     }
 }
 
 TEST(LoopSubdivision, OneLevelOfTheTetrahedronIsItsMidpointMeshScaledByAQuarter) {
     // Even vertices: (1 - 3 beta) p + beta (-p) = p / 4; odd: 3/8 (a + b) + 1/8 (c + d) =
     // (a + b) / 4. The old vertices keep valence 3, so their limit lies on the ray through
-    // them, inside the scaled mesh; every normal points outwards.
+    // them, inside the scaled mesh; every normal points in (pbrt-v3's side).
     const SubdividedMesh m = loop_subdivide(kTetraP, kTetraIdx, 1);
     EXPECT_EQ(m.indices.size(), 4 * kTetraIdx.size());
     EXPECT_EQ(m.positions.size(), 3u * (4 + 6));  // V + E
@@ -47,9 +48,9 @@ TEST(LoopSubdivision, OneLevelOfTheTetrahedronIsItsMidpointMeshScaledByAQuarter)
         const Vec3 p = at(m.positions, v), p0 = at(kTetraP, v);
         EXPECT_NEAR(dot(normalize(p), normalize(p0)), 1, 1e-6) << v;
         EXPECT_LT(length(p), length(p0) / 4 + 1e-6) << v;
-        EXPECT_GT(dot(at(m.normals, v), p0), 0) << v;
+        EXPECT_LT(dot(at(m.normals, v), p0), 0) << v;
     }
-    for (std::size_t v = 4; v < 10; ++v) EXPECT_GT(dot(at(m.normals, v), at(m.positions, v)), 0);
+    for (std::size_t v = 4; v < 10; ++v) EXPECT_LT(dot(at(m.normals, v), at(m.positions, v)), 0);
 }
 
 TEST(LoopSubdivision, TrianglesQuadrupleAndAClosedMeshKeepsEulersCharacteristic) {
@@ -65,7 +66,8 @@ TEST(LoopSubdivision, TrianglesQuadrupleAndAClosedMeshKeepsEulersCharacteristic)
 TEST(LoopSubdivision, BoundaryFollowsTheBoundaryRules) {
     // One triangle: every vertex and edge is on the boundary. Level 0 limit: 3/5 p + 1/5 of
     // the two others; one level: corners 3/4 p + 1/8 (q0 + q1), edges at their midpoints, then
-    // the limit. The surface stays in the plane, its normals +z as the winding says.
+    // the limit. The surface stays in the plane, its normals -z, against the winding (+z): pbrt-v3
+    // crosses the boundary tangents in the order that gives that side.
     const std::vector<float> P = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     const SubdividedMesh m0 = loop_subdivide(P, {0, 1, 2}, 0);
     EXPECT_NEAR(length(at(m0.positions, 0) - Vec3(0.2f, 0.2f, 0)), 0, 1e-6);
@@ -75,11 +77,11 @@ TEST(LoopSubdivision, BoundaryFollowsTheBoundaryRules) {
     for (std::size_t v = 0; v < m2.positions.size() / 3; ++v) {
         EXPECT_EQ(at(m2.positions, v).z, 0);
         const Vec3 n = normalize(at(m2.normals, v));
-        EXPECT_NEAR(n.z, 1, 1e-6) << v;
+        EXPECT_NEAR(n.z, -1, 1e-6) << v;
     }
-    // Reversed winding: the normals follow it.
+    // Reversed winding: the normals turn with it.
     const SubdividedMesh r = loop_subdivide(P, {0, 2, 1}, 1);
-    for (std::size_t v = 0; v < r.normals.size() / 3; ++v) EXPECT_LT(at(r.normals, v).z, 0);
+    for (std::size_t v = 0; v < r.normals.size() / 3; ++v) EXPECT_GT(at(r.normals, v).z, 0);
 }
 
 TEST(LoopSubdivision, RegularPlanarGridInteriorStaysPut) {
@@ -98,7 +100,7 @@ TEST(LoopSubdivision, RegularPlanarGridInteriorStaysPut) {
     const SubdividedMesh m = loop_subdivide(P, idx, 0);
     const int centre = 2 * n + 2;
     EXPECT_NEAR(length(at(m.positions, centre) - at(P, centre)), 0, 1e-6);
-    EXPECT_NEAR(normalize(at(m.normals, centre)).z, 1, 1e-6);
+    EXPECT_NEAR(normalize(at(m.normals, centre)).z, -1, 1e-6);
 }
 
 TEST(LoopSubdivision, SceneShapeSubdividesWithNormalsAndNoUv) {

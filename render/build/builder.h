@@ -227,9 +227,13 @@ class Builder {
     bool degenerate_uvs(const pbrt::Entity& e, const std::vector<float>& P,
                         const std::vector<float>& N, const std::vector<float>& UV,
                         const std::vector<int>& idx);
+    // How a placed mesh's normals turn with the shape's orientation: as a quadric's (every
+    // flip of Primitive::flip), or as normals a mesh was given (ReverseOrientation alone).
+    enum class NormalSide { Quadric, Given };
     bool place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                     const std::vector<float>& N, const std::vector<float>& UV,
-                    const std::vector<int>& idx, Primitive& prim);
+                    const std::vector<int>& idx, Primitive& prim,
+                    NormalSide side = NormalSide::Given);
     void emit_area_light(const pbrt::ShapeDesc& s, Primitive& prim);
     void instances();
     QuadricParams quadric_params(const Entity& e);

@@ -79,7 +79,8 @@ bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     mesh_primitive(s, prim);
     const QuadricMesh mesh = tessellate(e.type, quadric_params(e));
     e.params.check_unused("shape " + in_quotes(e.type), m_warn, {"alpha", "shadowalpha"});
-    return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim);
+    return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim,
+                      NormalSide::Quadric);
 }
 
 // A mesh of `c.vertices` vertices and `c.faces` faces takes, once read and placed: its arrays
@@ -248,9 +249,16 @@ bool Builder::subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>
 
 // Places an object-space mesh (3 floats per position and normal, 2 per (u,v), 3 indices per
 // triangle) in the world as `prim`'s triangles; false when no triangle has an area.
+//
+// Normals map as normals (the inverse transpose) and are then flipped with the primitive
+// (`flip`, ReverseOrientation xor a transform that swaps handedness), which is how pbrt-v3
+// orients a quadric's normal and so the tessellated quadrics' (NormalSide::Quadric). Normals a
+// mesh was given (trianglemesh "N", a PLY's, loopsubdiv's limit normals) pbrt-v3 flips for
+// ReverseOrientation alone (its triangle negates the shading bitangent then, nothing for the
+// handedness): under a mirroring transform they are stored negated, so that `flip` restores them.
 bool Builder::place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                          const std::vector<float>& N, const std::vector<float>& UV,
-                         const std::vector<int>& idx, Primitive& prim) {
+                         const std::vector<int>& idx, Primitive& prim, NormalSide side) {
     std::size_t nv = P.size() / 3;
     prim.positions.resize(nv);
     for (std::size_t i = 0; i < nv; ++i) {
@@ -261,10 +269,12 @@ bool Builder::place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
         const Mat4 inv_t =
             inverse_or_error(s.world_from_object, s.entity.loc, "the shape's transform is singular")
                 .transposed();
+        const float sign =
+            side == NormalSide::Given && s.world_from_object.swaps_handedness() ? -1.0f : 1.0f;
         prim.normals.resize(nv);
         for (std::size_t i = 0; i < nv; ++i) {
             auto w = inv_t.apply_vector({N[3 * i], N[3 * i + 1], N[3 * i + 2]});
-            prim.normals[i] = Vec3(float(w[0]), float(w[1]), float(w[2]));
+            prim.normals[i] = sign * Vec3(float(w[0]), float(w[1]), float(w[2]));
         }
     }
     if (!UV.empty()) {
