@@ -77,10 +77,13 @@ void Builder::spot_light(const pbrt::LightDesc& d, const Rgb& scale, Light& l) {
     auto from = finite_point(e, "from", {0, 0, 0});
     auto to = finite_point(e, "to", {0, 0, 1});
     // pbrt-v3 names the falloff "conedeltaangle"; "conedelta" is accepted too, for scenes
-    // written for earlier cmam versions.
-    const char* delta_name = e.params.find("conedelta") && !e.params.find("conedeltaangle")
-                                 ? "conedelta"
-                                 : "conedeltaangle";
+    // written for earlier cmam versions, with a warning: pbrt-v3 ignores it (and takes 5).
+    const bool old_name = e.params.find("conedelta") && !e.params.find("conedeltaangle");
+    const char* delta_name = old_name ? "conedelta" : "conedeltaangle";
+    if (old_name)
+        warn(loc_of(e, "conedelta"),
+             "light \"spot\": \"conedelta\" is read as the falloff (cmam's earlier name for "
+             "\"conedeltaangle\"); pbrt-v3 does not know it and would take the default, 5 degrees");
     double cone = finite_float(e, "coneangle", 30), delta = finite_float(e, delta_name, 5);
     l.position = to_vec(m.apply_point(from));
     Vec3 axis = to_vec(m.apply_vector({to[0] - from[0], to[1] - from[1], to[2] - from[2]}));
