@@ -121,11 +121,12 @@ TEST(Scenes, PbrtV3LightAndSamplerParametersAreReadOrWarned) {
         EXPECT_NEAR(s->lights[0].cos_falloff_start, std::cos(20 * 3.14159265 / 180), 1e-6) << name;
         const bool old_name = std::string(name) == "conedelta";
         ASSERT_EQ(warnings.size(), old_name ? 3u : 2u) << name;
-        if (old_name)
+        if (old_name) {
             EXPECT_EQ(warnings[1],
                       "t.pbrt:5:81: warning: light \"spot\": \"conedelta\" is read as the falloff "
                       "(cmam's earlier name for \"conedeltaangle\"); pbrt-v3 does not know it and "
                       "would take the default, 5 degrees");
+        }
         EXPECT_EQ(warnings[0],
                   "t.pbrt:3:22: warning: parameter \"pixelsamples\" of Sampler \"stratified\" "
                   "is not supported by cmam; ignored");
