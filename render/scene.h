@@ -132,6 +132,10 @@ struct Material {
     Type type = Type::Matte;
     TexInput kd{-1, Rgb(0.5f)}, ks, kr, kt, sigma, roughness, eta;
     TexInput k;  // metal: the conductor's absorption (eta is its index of refraction)
+    // The microfacet roughness along v where it differs from `roughness` (along u): pbrt-v3's
+    // "vroughness" beside "uroughness", an anisotropic distribution (equal to `roughness` else).
+    TexInput vroughness;
+    bool anisotropic = false;
     // Mix: pbrt-v3's blend, amount x the first material + (1 - amount) x the second (indices
     // into Scene::materials; -1 is the default matte).
     int mix[2] = {-1, -1};
@@ -146,7 +150,7 @@ struct Material {
     bool reads_textures() const {
         if (type == Type::Mix) return true;
         for (const TexInput* in :
-             {&kd, &ks, &kr, &kt, &sigma, &roughness, &eta, &k, &amount, &bump})
+             {&kd, &ks, &kr, &kt, &sigma, &roughness, &vroughness, &eta, &k, &amount, &bump})
             if (in->node >= 0) return true;
         return false;
     }

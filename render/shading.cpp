@@ -334,6 +334,20 @@ float tr_lambda(const Vec3& w, float alpha) {
     float tan2 = std::max(0.0f, 1 - cos2) / cos2;
     return (-1 + std::sqrt(1 + alpha * alpha * tan2)) / 2;
 }
+// The anisotropic form, alpha_x along the local x and alpha_y along y (pbrt-v3's, with
+// cos^2 phi tan^2 theta written as x^2 / z^2 and sin^2 phi tan^2 theta as y^2 / z^2).
+float tr_d(const Vec3& wh, float ax, float ay) {
+    const float cos2 = wh.z * wh.z;
+    if (cos2 == 0) return 0;
+    const float e = (wh.x * wh.x / (ax * ax) + wh.y * wh.y / (ay * ay)) / cos2;
+    return 1 / (kPi * ax * ay * cos2 * cos2 * (1 + e) * (1 + e));
+}
+float tr_lambda(const Vec3& w, float ax, float ay) {
+    const float cos2 = w.z * w.z;
+    if (cos2 == 0) return 0;
+    const float a2tan2 = (w.x * w.x * ax * ax + w.y * w.y * ay * ay) / cos2;
+    return (-1 + std::sqrt(1 + a2tan2)) / 2;
+}
 
 // pbrt-v3's remapping of a roughness to the microfacet alpha. A material's roughness is mostly a
 // constant, and a thread shades one material after another: the last value's alpha is kept, per
@@ -355,7 +369,9 @@ Bsdf::Outgoing Bsdf::outgoing(const Vec3& wo_w) const {
     Outgoing o;
     o.local = frame.to_local(wo_w);
     o.w_ng = dot(wo_w, ng);
-    o.lambda = has_glossy() ? tr_lambda(o.local, alpha) : 0;
+    o.lambda = !has_glossy() ? 0
+               : anisotropic ? tr_lambda(o.local, alpha, alpha_y)
+                             : tr_lambda(o.local, alpha);
     return o;
 }
 
@@ -403,8 +419,11 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
         if (cos_i != 0 && cos_o != 0 && (wh.x != 0 || wh.y != 0 || wh.z != 0)) {
             wh = normalize(wh);
             const float c = dot(wi, faceforward(wh, Vec3(0, 0, 1)));
-            float g = 1 / (1 + o.lambda + tr_lambda(wi, alpha));
-            const float common = tr_d(wh, alpha) * g / (4 * cos_i * cos_o);
+            const float lambda_i =
+                anisotropic ? tr_lambda(wi, alpha, alpha_y) : tr_lambda(wi, alpha);
+            const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+            float g = 1 / (1 + o.lambda + lambda_i);
+            const float common = d * g / (4 * cos_i * cos_o);
             if (conductor) {
                 const float m = 1 - std::clamp(c, 0.0f, 1.0f), m5 = (m * m) * (m * m) * m;
                 out += ks * (f0 + (Rgb(1) - f0) * m5) * common;
@@ -452,6 +471,21 @@ namespace {
 float index_of(float eta) {
     return eta > 0 && std::isfinite(eta) ? eta : std::numeric_limits<float>::quiet_NaN();
 }
+
+// The microfacet alpha of a material's roughness at a shading point (pbrt-v3's remapping, or the
+// roughness itself, not below `floor`), and along v for an anisotropic one.
+void set_alphas(Bsdf& b, const Scene& scene, const Material& m, const TexContext& ctx,
+                float floor) {
+    auto alpha_of = [&](const TexInput& in) {
+        const float rough = eval_texture(scene, in, ctx).r;
+        return m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, floor);
+    };
+    b.alpha = alpha_of(m.roughness);
+    if (m.anisotropic) {
+        b.alpha_y = alpha_of(m.vroughness);
+        b.anisotropic = true;
+    }
+}
 }  // namespace
 
 std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const SurfaceHit& hit,
@@ -475,8 +509,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
         case Material::Type::Plastic: {
             b.kd = clamp0(eval_texture(scene, m.kd, ctx));
             b.ks = clamp0(eval_texture(scene, m.ks, ctx));
-            float rough = eval_texture(scene, m.roughness, ctx).r;
-            b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : rough;
+            set_alphas(b, scene, m, ctx, -std::numeric_limits<float>::infinity());
             break;
         }
         case Material::Type::Mirror:
@@ -491,8 +524,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
         case Material::Type::Uber: {
             b.kd = clamp0(eval_texture(scene, m.kd, ctx));
             b.ks = clamp0(eval_texture(scene, m.ks, ctx));
-            float rough = eval_texture(scene, m.roughness, ctx).r;
-            b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
+            set_alphas(b, scene, m, ctx, 1e-3f);
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.kt = clamp0(eval_texture(scene, m.kt, ctx));
             b.eta = index_of(eval_texture(scene, m.eta, ctx).r);
@@ -509,14 +541,25 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.conductor = true;
             b.f0 = clamp0(Rgb(r0(n.r, k.r), r0(n.g, k.g), r0(n.b, k.b)));
             b.ks = Rgb(1);
-            float rough = eval_texture(scene, m.roughness, ctx).r;
-            b.alpha = m.remap_roughness ? roughness_to_alpha(rough) : std::max(rough, 1e-3f);
+            set_alphas(b, scene, m, ctx, 1e-3f);
             break;
         }
         case Material::Type::None:
         case Material::Type::Mix:  // the integrator picks one of its materials first
             made.reset();
-            break;
+            return made;
+    }
+    if (b.anisotropic) {
+        // pbrt-v3's shading frame: s along dp/du in the shading plane (its sign, which pbrt-v3's
+        // triangles with normals turn, does not change the distribution), t = n x s. Where dp/du
+        // has no direction in that plane the frame stays an arbitrary one.
+        const Vec3 dpdu = hit.partials().dpdu;
+        const Vec3 s = dpdu - dot(dpdu, hit.ns) * hit.ns;
+        const float len = length(s);
+        if (len > 0 && std::isfinite(len)) {
+            b.frame.s = s / len;
+            b.frame.t = cross(hit.ns, b.frame.s);
+        }
     }
     return made;
 }

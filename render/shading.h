@@ -61,7 +61,7 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
 
 /// A BSDF instantiated at a hit (pbrt-v3 BxDF combinations of the supported materials).
 struct Bsdf {
-    Frame frame;  // shading frame, z = shading normal
+    Frame frame;  // shading frame, z = shading normal (s along dp/du when anisotropic)
     Vec3 ng;      // geometric normal
     // Diffuse lobe (Lambertian, or Oren-Nayar when on_b != 0)
     Rgb kd{};
@@ -70,7 +70,9 @@ struct Bsdf {
     // lobe_eta_t, as pbrt-v3 makes it: plastic's from 1.5 to 1 (so it reaches 1 past about 42
     // degrees), uber's from 1 to its eta.
     Rgb ks{};
-    float alpha = 0;
+    float alpha = 0;    // along the frame's s (the surface's dp/du) when anisotropic
+    float alpha_y = 0;  // along t, when anisotropic (pbrt-v3's "uroughness" and "vroughness")
+    bool anisotropic = false;
     float lobe_eta_i = 1.5f, lobe_eta_t = 1.0f;
     // Specular lobes
     Rgb kr{}, kt{};

@@ -180,38 +180,48 @@ TEST(Materials, UbersGlossyFresnelIsAirToItsEta) {
     EXPECT_NEAR(fresnel_dielectric(c, 1, 1.5f), 0.089f, 0.001f);
 }
 
-// The microfacet roughness a material is built with (one value: cmam's distribution is isotropic,
-// the mean of pbrt-v3's two where it has two), with pbrt-v3's defaults and fallbacks: uber's
-// "roughness" is 0.1, its "uroughness" falls back on it and its "vroughness" on "uroughness";
-// metal's each fall back on "roughness" (0.01); substrate has only the two (0.1 each), and a
-// "roughness" given to it is ignored with a warning, as pbrt-v3 reports it unused.
+// The microfacet roughness a material is built with, along u and v, with pbrt-v3's defaults and
+// fallbacks: uber's "roughness" is 0.1, its "uroughness" falls back on it and its "vroughness" on
+// "uroughness"; metal's each fall back on "roughness" (0.01); substrate has only the two (0.1
+// each), and a "roughness" given to it is ignored with a warning, as pbrt-v3 reports it unused.
+// The material is anisotropic where the two differ.
 TEST(Materials, RoughnessDefaultsAndFallbacksArePbrtV3s) {
+    struct Rough {
+        float u, v;
+        bool anisotropic;
+    };
     auto roughness = [](const std::string& material, std::vector<std::string>* warnings = nullptr) {
         const std::string text =
             "Camera \"perspective\"\nWorldBegin\n" + material + "\nShape \"sphere\"\nWorldEnd\n";
         auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {}, [&](const std::string& w) {
             if (warnings) warnings->push_back(w);
         });
-        EXPECT_LT(s->materials.at(0).roughness.node, 0);
-        return s->materials.at(0).roughness.value.r;
+        const Material& m = s->materials.at(0);
+        EXPECT_LT(m.roughness.node, 0);
+        EXPECT_LT(m.vroughness.node, 0);
+        return Rough{m.roughness.value.r, m.vroughness.value.r, m.anisotropic};
     };
-    EXPECT_FLOAT_EQ(roughness("Material \"uber\""), 0.1f);
-    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float roughness\" 0.3"), 0.3f);
-    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float uroughness\" 0.2"), 0.2f);
-    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float vroughness\" 0.3"), 0.5f * (0.1f + 0.3f));
-    EXPECT_FLOAT_EQ(roughness("Material \"uber\" \"float roughness\" 0.4 \"float vroughness\" 0.2"),
-                    0.5f * (0.4f + 0.2f));
-    EXPECT_FLOAT_EQ(roughness("Material \"metal\""), 0.01f);
-    EXPECT_FLOAT_EQ(roughness("Material \"metal\" \"float uroughness\" 0.2"),
-                    0.5f * (0.2f + 0.01f));
-    EXPECT_FLOAT_EQ(
-        roughness("Material \"metal\" \"float roughness\" 0.3 \"float vroughness\" 0.1"),
-        0.5f * (0.3f + 0.1f));
-    EXPECT_FLOAT_EQ(roughness("Material \"substrate\""), 0.1f);
-    EXPECT_FLOAT_EQ(roughness("Material \"substrate\" \"float uroughness\" 0.3"),
-                    0.5f * (0.3f + 0.1f));
+    auto expect = [](const Rough& r, float u, float v, const char* what) {
+        EXPECT_FLOAT_EQ(r.u, u) << what;
+        EXPECT_FLOAT_EQ(r.v, v) << what;
+        EXPECT_EQ(r.anisotropic, u != v) << what;
+    };
+    expect(roughness("Material \"uber\""), 0.1f, 0.1f, "uber");
+    expect(roughness("Material \"uber\" \"float roughness\" 0.3"), 0.3f, 0.3f, "uber r");
+    expect(roughness("Material \"uber\" \"float uroughness\" 0.2"), 0.2f, 0.2f, "uber u");
+    expect(roughness("Material \"uber\" \"float vroughness\" 0.3"), 0.1f, 0.3f, "uber v");
+    expect(roughness("Material \"uber\" \"float roughness\" 0.4 \"float vroughness\" 0.2"), 0.4f,
+           0.2f, "uber r v");
+    expect(roughness("Material \"metal\""), 0.01f, 0.01f, "metal");
+    expect(roughness("Material \"metal\" \"float uroughness\" 0.2"), 0.2f, 0.01f, "metal u");
+    expect(roughness("Material \"metal\" \"float roughness\" 0.3 \"float vroughness\" 0.1"), 0.3f,
+           0.1f, "metal r v");
+    expect(roughness("Material \"substrate\""), 0.1f, 0.1f, "substrate");
+    expect(roughness("Material \"substrate\" \"float uroughness\" 0.3"), 0.3f, 0.1f, "substrate u");
+    expect(roughness("Material \"plastic\" \"float roughness\" 0.2"), 0.2f, 0.2f, "plastic");
     std::vector<std::string> warnings;
-    EXPECT_FLOAT_EQ(roughness("Material \"substrate\" \"float roughness\" 0.5", &warnings), 0.1f);
+    expect(roughness("Material \"substrate\" \"float roughness\" 0.5", &warnings), 0.1f, 0.1f,
+           "substrate r");
     EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
                             [](const std::string& w) {
                                 return w.find(
@@ -219,6 +229,83 @@ TEST(Materials, RoughnessDefaultsAndFallbacksArePbrtV3s) {
                                            "parameter of substrate") != std::string::npos;
                             }),
               1);
+}
+
+// An anisotropic microfacet lobe (pbrt-v3's Trowbridge-Reitz with alpha_x along dp/du and alpha_y
+// across): its value against pbrt-v3's formula in angles, the highlight stretched along u, and the
+// isotropic lobe's value where the two alphas are equal.
+TEST(Materials, AnisotropicRoughnessStretchesTheHighlightAlongDpdu) {
+    // A plane z = 0 whose u runs along +y: dp/du = (0, 4, 0), not the arbitrary frame's s (+x).
+    auto bsdf = [](const std::string& rough) {
+        const std::string text =
+            "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+            "Material \"metal\" \"bool remaproughness\" false " +
+            rough +
+            "\nShape \"trianglemesh\" \"point3 P\" [-2 -2 0  2 -2 0  2 2 0  -2 2 0] "
+            "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 0 1 1 1 1 0]\nWorldEnd\n";
+        auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
+        const std::optional<SurfaceHit> h =
+            s->intersect(Vec3(0.3f, 0.2f, 5), Vec3(0, 0, -1), 0, 100);
+        EXPECT_TRUE(h.has_value());
+        const std::optional<Bsdf> b =
+            make_bsdf(*s, s->materials.at(0), h.value_or(SurfaceHit{}), TexContext{});
+        EXPECT_TRUE(b.has_value());
+        return b.value_or(Bsdf{});
+    };
+    const float ax = 0.3f, ay = 0.05f;
+    const Bsdf b = bsdf("\"float uroughness\" 0.3 \"float vroughness\" 0.05");
+    ASSERT_TRUE(b.anisotropic);
+    EXPECT_FLOAT_EQ(b.alpha, ax);
+    EXPECT_FLOAT_EQ(b.alpha_y, ay);
+    EXPECT_NEAR(std::abs(b.frame.s.y), 1, 1e-6);  // along dp/du
+    EXPECT_NEAR(std::abs(b.frame.t.x), 1, 1e-6);
+    // The microfacet term against pbrt-v3's D and Smith G in angles (theta, and phi from u, +y
+    // here, for the half vector and each direction).
+    auto pbrt_d = [&](const Vec3& wh) {
+        const double cos_t = wh.z, sin_t = std::sqrt(1 - cos_t * cos_t),
+                     tan2 = sin_t * sin_t / (cos_t * cos_t);
+        const double phi = std::atan2(wh.x, wh.y);
+        const double e = (std::cos(phi) * std::cos(phi) / (ax * ax) +
+                          std::sin(phi) * std::sin(phi) / (ay * ay)) *
+                         tan2;
+        return 1 / (3.14159265358979 * ax * ay * std::pow(cos_t, 4) * (1 + e) * (1 + e));
+    };
+    auto pbrt_lambda = [&](const Vec3& w) {
+        const double cos_t = w.z, tan_t = std::sqrt(1 - cos_t * cos_t) / cos_t;
+        const double phi = std::atan2(w.x, w.y);
+        const double a = std::sqrt(std::cos(phi) * std::cos(phi) * ax * ax +
+                                   std::sin(phi) * std::sin(phi) * ay * ay);
+        return (-1 + std::sqrt(1 + a * a * tan_t * tan_t)) / 2;
+    };
+    const Vec3 wo = normalize(Vec3(0.3f, -0.2f, 1)), wi = normalize(Vec3(-0.1f, 0.25f, 1));
+    const Vec3 wh = normalize(wo + wi);
+    // Local and world frames agree up to the signs of s and t, which D and G do not see.
+    const double expected =
+        pbrt_d(wh) / (1 + pbrt_lambda(wo) + pbrt_lambda(wi)) / (4 * wo.z * wi.z);
+    const Bsdf white = [&] {
+        Bsdf w = b;
+        w.f0 = Rgb(1);  // Schlick's term is then 1 at every angle
+        return w;
+    }();
+    EXPECT_NEAR(white.f(wo, wi).r / expected, 1, 1e-4);  // float arithmetic
+    // Tilting the half vector 10 degrees along u keeps far more of the lobe than along v.
+    const Vec3 n(0, 0, 1);
+    auto mirrored = [&](const Vec3& h) { return normalize(2 * dot(n, h) * h - n); };
+    const float t = std::tan(10 * 3.14159265f / 180);
+    const float along_u = white.f(n, mirrored(normalize(Vec3(0, t, 1)))).r;
+    const float along_v = white.f(n, mirrored(normalize(Vec3(t, 0, 1)))).r;
+    EXPECT_GT(along_u, 50 * along_v);
+    // Equal alphas: the isotropic lobe's value (the same formula, rounded differently).
+    Bsdf iso = bsdf("\"float roughness\" 0.2");
+    ASSERT_FALSE(iso.anisotropic);
+    iso.f0 = Rgb(1);
+    Bsdf same = iso;
+    same.anisotropic = true;
+    same.alpha_y = same.alpha;
+    for (const Vec3& d : {Vec3(0.3f, -0.2f, 1), Vec3(-0.7f, 0.1f, 0.4f), Vec3(0.05f, 0.5f, 1)}) {
+        const Vec3 w = normalize(d);
+        EXPECT_NEAR(same.f(wo, w).r / iso.f(wo, w).r, 1, 1e-5);
+    }
 }
 
 TEST(Materials, MetalUsesTheConductorsNormalIncidenceReflectance) {

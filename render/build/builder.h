@@ -193,7 +193,8 @@ class Builder {
     // --- materials (materials.cpp) --------------------------------------------------------
     // How a material falls back where "uroughness" or "vroughness" is absent (materials.cpp).
     enum class RoughFallback { Uber, Metal, Substrate };
-    TexInput rough_input(const Entity& e, const TextureScope& s, float def, RoughFallback f);
+    void rough_inputs(const Entity& e, const TextureScope& s, float def, RoughFallback f,
+                      Material& m);
     Material material(const pbrt::MaterialDesc& d);
     // Each fills in the material of its type (or types).
     using MaterialBuild = void (Builder::*)(const pbrt::MaterialDesc& d, Material& m);

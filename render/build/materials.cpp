@@ -4,11 +4,13 @@
 
 namespace cmam::render::build_detail {
 
-// A material's microfacet roughness as one value: cmam's microfacet distribution is isotropic, so
-// where pbrt-v3 has two, "uroughness" and "vroughness", their mean. An absent one falls back as in
-// pbrt-v3: uber's u on "roughness" and its v on u, metal's each on "roughness"; substrate has no
-// "roughness" (pbrt-v3 reports it unused), each of its two defaulting to `def`.
-TexInput Builder::rough_input(const Entity& e, const TextureScope& s, float def, RoughFallback f) {
+// A material's microfacet roughness along u and v, "uroughness" and "vroughness" (or one
+// "roughness" for both): `m.roughness` and `m.vroughness`, anisotropic when they differ. An absent
+// one falls back as in pbrt-v3: uber's u on "roughness" and its v on u, metal's each on
+// "roughness"; substrate has no "roughness" (pbrt-v3 reports it unused), each of its two
+// defaulting to `def`.
+void Builder::rough_inputs(const Entity& e, const TextureScope& s, float def, RoughFallback f,
+                           Material& m) {
     const bool has_u = e.params.find("uroughness"), has_v = e.params.find("vroughness");
     if (f == RoughFallback::Substrate) {
         if (const pbrt::Param* r = e.params.find("roughness")) {
@@ -18,16 +20,17 @@ TexInput Builder::rough_input(const Entity& e, const TextureScope& s, float def,
             (void)float_input(e, s, "roughness", def);
         }
     } else if (!has_u && !has_v) {
-        return float_input(e, s, "roughness", def);
+        m.roughness = m.vroughness = float_input(e, s, "roughness", def);
+        return;
     }
     const TexInput r = f == RoughFallback::Substrate ? TexInput{-1, Rgb(def)}
                                                      : float_input(e, s, "roughness", def);
     const TexInput u = has_u ? float_input(e, s, "uroughness", def) : r;
     const TexInput v =
         has_v ? float_input(e, s, "vroughness", def) : (f == RoughFallback::Uber ? u : r);
-    if (u.node < 0 && v.node < 0) return TexInput{-1, Rgb(0.5f * (u.value.r + v.value.r))};
-    warn(e.loc, "textured uroughness/vroughness: uroughness is used for both");
-    return u;
+    m.roughness = u;
+    m.vroughness = v;
+    m.anisotropic = u.node != v.node || (u.node < 0 && !(u.value.r == v.value.r));
 }
 
 void Builder::matte_material(const pbrt::MaterialDesc& d, Material& m) {
@@ -64,7 +67,7 @@ void Builder::plastic_material(const pbrt::MaterialDesc& d, Material& m) {
     m.type = Material::Type::Plastic;
     m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
     m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
-    m.roughness = float_input(e, s, "roughness", 0.1f);
+    m.roughness = m.vroughness = float_input(e, s, "roughness", 0.1f);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
 }
 
@@ -78,7 +81,7 @@ void Builder::uber_material(const pbrt::MaterialDesc& d, Material& m) {
     m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
     m.kr = spectrum_input(e, s, "Kr", Rgb(0));
     m.kt = spectrum_input(e, s, "Kt", Rgb(0));
-    m.roughness = rough_input(e, s, 0.1f, RoughFallback::Uber);
+    rough_inputs(e, s, 0.1f, RoughFallback::Uber, m);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
     const char* eta = e.params.find("eta") ? "eta" : "index";
     m.eta = float_input(e, s, eta, 1.5f, true);
@@ -97,8 +100,10 @@ void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
     m.type = Material::Type::Plastic;
     m.kd = spectrum_input(e, s, "Kd", Rgb(t == "substrate" ? 0.5f : 0.25f));
     m.ks = spectrum_input(e, s, "Ks", Rgb(t == "substrate" ? 0.5f : 0.25f));
-    m.roughness = t == "substrate" ? rough_input(e, s, 0.1f, RoughFallback::Substrate)
-                                   : float_input(e, s, "roughness", 0.1f);
+    if (t == "substrate")
+        rough_inputs(e, s, 0.1f, RoughFallback::Substrate, m);
+    else
+        m.roughness = m.vroughness = float_input(e, s, "roughness", 0.1f);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
     if (t == "translucent") {
         (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
@@ -118,7 +123,7 @@ void Builder::metal_material(const pbrt::MaterialDesc& d, Material& m) {
     m.type = Material::Type::Metal;
     m.eta = spectrum_input(e, s, "eta", Rgb(0.2004f, 0.9240f, 1.1022f));
     m.k = spectrum_input(e, s, "k", Rgb(3.9129f, 2.4528f, 2.1421f));
-    m.roughness = rough_input(e, s, 0.01f, RoughFallback::Metal);
+    rough_inputs(e, s, 0.01f, RoughFallback::Metal, m);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
 }
 
