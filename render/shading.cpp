@@ -304,6 +304,31 @@ float fresnel_dielectric(float cos_i, float eta_i, float eta_t) {
     return (r_parl * r_parl + r_perp * r_perp) / 2;
 }
 
+// The Fresnel equations of a conductor (complex index eta + i k, from air) for unpolarised
+// light, in the form pbrt-v3's FrConductor evaluates them: a^2 + b^2 = |(eta + i k)^2 -
+// sin^2|, Rs = (a^2 + b^2 + cos^2 - 2a cos) / (a^2 + b^2 + cos^2 + 2a cos), and Rp from Rs.
+namespace {
+float fresnel_conductor(float cos_i, float eta, float k) {
+    cos_i = std::clamp(std::abs(cos_i), 0.0f, 1.0f);
+    const float cos2 = cos_i * cos_i, sin2 = 1 - cos2;
+    const float eta2 = eta * eta, k2 = k * k;
+    const float t0 = eta2 - k2 - sin2;
+    const float a2_b2 = std::sqrt(t0 * t0 + 4 * eta2 * k2);
+    const float t1 = a2_b2 + cos2;
+    const float a = std::sqrt(0.5f * (a2_b2 + t0));
+    const float t2 = 2 * cos_i * a;
+    const float rs = (t1 - t2) / (t1 + t2);
+    const float t3 = cos2 * a2_b2 + sin2 * sin2, t4 = t2 * sin2;
+    const float rp = rs * (t3 - t4) / (t3 + t4);
+    return 0.5f * (rp + rs);
+}
+}  // namespace
+
+Rgb fresnel_conductor(float cos_i, const Rgb& eta, const Rgb& k) {
+    return {fresnel_conductor(cos_i, eta.r, k.r), fresnel_conductor(cos_i, eta.g, k.g),
+            fresnel_conductor(cos_i, eta.b, k.b)};
+}
+
 std::optional<Vec3> refract(const Vec3& wi, const Vec3& n, float eta) {
     float cos_i = dot(n, wi);
     float sin2_i = std::max(0.0f, 1 - cos_i * cos_i);
@@ -425,8 +450,7 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
             float g = 1 / (1 + o.lambda + lambda_i);
             const float common = d * g / (4 * cos_i * cos_o);
             if (conductor) {
-                const float m = 1 - std::clamp(c, 0.0f, 1.0f), m5 = (m * m) * (m * m) * m;
-                out += ks * (f0 + (Rgb(1) - f0) * m5) * common;
+                out += ks * fresnel_conductor(c, conductor_eta, conductor_k) * common;
             } else {
                 out += ks * (fresnel_dielectric(c, lobe_eta_i, lobe_eta_t) * common);
             }
@@ -533,13 +557,9 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             break;
         }
         case Material::Type::Metal: {
-            // Normal-incidence reflectance of a conductor: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
-            const Rgb n = eval_texture(scene, m.eta, ctx), k = eval_texture(scene, m.k, ctx);
-            auto r0 = [](float n_, float k_) {
-                return ((n_ - 1) * (n_ - 1) + k_ * k_) / ((n_ + 1) * (n_ + 1) + k_ * k_);
-            };
             b.conductor = true;
-            b.f0 = clamp0(Rgb(r0(n.r, k.r), r0(n.g, k.g), r0(n.b, k.b)));
+            b.conductor_eta = eval_texture(scene, m.eta, ctx);
+            b.conductor_k = eval_texture(scene, m.k, ctx);
             b.ks = Rgb(1);
             set_alphas(b, scene, m, ctx, 1e-3f);
             break;

@@ -78,10 +78,10 @@ struct Bsdf {
     Rgb kr{}, kt{};
     bool fresnel_noop = false;  // mirror
     float eta = 1.5f;           // glass
-    // Metal: the microfacet lobe's Fresnel term is Schlick's with this normal-incidence
-    // reflectance (ks is then 1) instead of the dielectric's.
+    // Metal: the microfacet lobe's Fresnel term is a conductor's of index eta + i k, per channel
+    // (ks is then 1), instead of the dielectric's.
     bool conductor = false;
-    Rgb f0{};
+    Rgb conductor_eta{}, conductor_k{};
 
     bool has_diffuse() const { return !kd.is_black(); }
     bool has_glossy() const { return !ks.is_black(); }
@@ -108,6 +108,10 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& material, cons
 
 /// Unpolarised Fresnel reflectance of a dielectric interface (pbrt-v3 FrDielectric).
 float fresnel_dielectric(float cos_theta_i, float eta_i, float eta_t);
+
+/// Unpolarised Fresnel reflectance of a conductor of complex index eta + i k seen from air, per
+/// channel (pbrt-v3 FrConductor); |cos_theta_i| is used.
+Rgb fresnel_conductor(float cos_theta_i, const Rgb& eta, const Rgb& k);
 
 /// Refracts `wi` (pointing away from the surface) through normal `n` on its side with relative
 /// index eta = eta_i/eta_t; false on total internal reflection.

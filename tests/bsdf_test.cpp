@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <complex>
 #include <limits>
 
 #include "render/build_scene.h"
@@ -282,23 +283,18 @@ TEST(Materials, AnisotropicRoughnessStretchesTheHighlightAlongDpdu) {
     // Local and world frames agree up to the signs of s and t, which D and G do not see.
     const double expected =
         pbrt_d(wh) / (1 + pbrt_lambda(wo) + pbrt_lambda(wi)) / (4 * wo.z * wi.z);
-    const Bsdf white = [&] {
-        Bsdf w = b;
-        w.f0 = Rgb(1);  // Schlick's term is then 1 at every angle
-        return w;
-    }();
-    EXPECT_NEAR(white.f(wo, wi).r / expected, 1, 1e-4);  // float arithmetic
+    const float fresnel = fresnel_conductor(dot(wi, wh), b.conductor_eta, b.conductor_k).r;
+    EXPECT_NEAR(b.f(wo, wi).r / fresnel / expected, 1, 1e-4);  // float arithmetic
     // Tilting the half vector 10 degrees along u keeps far more of the lobe than along v.
     const Vec3 n(0, 0, 1);
     auto mirrored = [&](const Vec3& h) { return normalize(2 * dot(n, h) * h - n); };
     const float t = std::tan(10 * 3.14159265f / 180);
-    const float along_u = white.f(n, mirrored(normalize(Vec3(0, t, 1)))).r;
-    const float along_v = white.f(n, mirrored(normalize(Vec3(t, 0, 1)))).r;
+    const float along_u = b.f(n, mirrored(normalize(Vec3(0, t, 1)))).r;
+    const float along_v = b.f(n, mirrored(normalize(Vec3(t, 0, 1)))).r;
     EXPECT_GT(along_u, 50 * along_v);
     // Equal alphas: the isotropic lobe's value (the same formula, rounded differently).
     Bsdf iso = bsdf("\"float roughness\" 0.2");
     ASSERT_FALSE(iso.anisotropic);
-    iso.f0 = Rgb(1);
     Bsdf same = iso;
     same.anisotropic = true;
     same.alpha_y = same.alpha;
@@ -308,19 +304,30 @@ TEST(Materials, AnisotropicRoughnessStretchesTheHighlightAlongDpdu) {
     }
 }
 
-TEST(Materials, MetalUsesTheConductorsNormalIncidenceReflectance) {
-    // pbrt-v3's default metal is copper; ((n-1)^2 + k^2) / ((n+1)^2 + k^2) per channel.
+// pbrt-v3's metal: a microfacet lobe with the Fresnel equations of a conductor of complex index
+// eta + i k (pbrt-v3's default is copper), checked against the equations in complex numbers.
+TEST(Materials, MetalTakesTheConductorsFresnelEquations) {
     const Bsdf b = bsdf_of("Material \"metal\"");
     EXPECT_TRUE(b.conductor);
-    EXPECT_NEAR(b.f0.r, 0.95215, 1e-4);  // n 0.2004, k 3.9129
+    // At normal incidence ((n-1)^2 + k^2) / ((n+1)^2 + k^2): copper's red, n 0.2004, k 3.9129.
+    EXPECT_NEAR(fresnel_conductor(1, b.conductor_eta, b.conductor_k).r, 0.95215, 1e-4);
     const Bsdf gold = bsdf_of(
         "Material \"metal\" \"rgb eta\" [0.143 0.374 1.442] \"rgb k\" "
         "[3.983 2.385 1.603] \"float roughness\" 0.2");
-    EXPECT_NEAR(
-        gold.f0.b,
-        ((1.442 - 1) * (1.442 - 1) + 1.603 * 1.603) / ((1.442 + 1) * (1.442 + 1) + 1.603 * 1.603),
-        1e-5);
-    // Reflection only, and brighter towards grazing (Schlick).
+    const Rgb eta = gold.conductor_eta, k = gold.conductor_k;
+    EXPECT_FLOAT_EQ(eta.b, 1.442f);
+    EXPECT_FLOAT_EQ(k.b, 1.603f);
+    for (double deg : {0.0, 30.0, 60.0, 80.0, 89.0}) {
+        const double c = std::cos(deg * 3.14159265358979 / 180), s2 = 1 - c * c;
+        const std::complex<double> n(eta.b, k.b), root = std::sqrt(n * n - s2);
+        const double rs = std::norm((c - root) / (c + root)),
+                     rp = std::norm((n * n * c - root) / (n * n * c + root));
+        EXPECT_NEAR(fresnel_conductor(float(c), eta, k).b, (rs + rp) / 2, 2e-5) << deg;
+        EXPECT_FLOAT_EQ(fresnel_conductor(float(-c), eta, k).b,
+                        fresnel_conductor(float(c), eta, k).b);
+    }
+    EXPECT_NEAR(fresnel_conductor(0, eta, k).g, 1, 1e-6);  // grazing
+    // Reflection only, and brighter towards grazing.
     const Vec3 n(0, 0, 1);
     const Vec3 wo = normalize(Vec3(0.2f, 0, 1)), wi = normalize(Vec3(-0.2f, 0, 1));
     EXPECT_GT(gold.f(wo, wi).r, 0);

@@ -115,8 +115,8 @@ void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
              ")");
 }
 
-// A conductor: a microfacet lobe whose Fresnel term is Schlick's from the
-// normal-incidence reflectance of eta and k (pbrt-v3: copper by default).
+// A conductor: a microfacet lobe with the Fresnel term of a conductor of index eta + i k
+// (pbrt-v3: copper by default).
 void Builder::metal_material(const pbrt::MaterialDesc& d, Material& m) {
     const Entity& e = d.entity;
     const TextureScope& s = d.scope;
