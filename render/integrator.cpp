@@ -100,14 +100,35 @@ struct Tracer {
             float u1 = rng.next_float(), u2 = rng.next_float();
             return from_map(light, light.env->sample(u1, u2));
         }
-        // Cosine-weighted about the geometric normal on wo's side: the same expected value as
-        // pbrt-v3's sphere sampling for reflection-only BSDFs, lower variance.
+        // The BSDFs it lights reflect only, over the hemisphere of the geometric normal on wo's
+        // side, weighted by |wi . ns|: sampled cosine-weighted about that normal, the same
+        // expected value as pbrt-v3's sphere sampling with lower variance. Where the shading
+        // normal differs (a mesh's given normals, bump mapping), half the samples are
+        // cosine-weighted about it and half uniform over the geometric hemisphere, and the pdf is
+        // the mixture's: |wi . ns| / pdf stays below 4 pi, where |wi . ns| / cos about the
+        // geometric normal grows without bound towards its horizon (fireflies).
         float u1 = rng.next_float(), u2 = rng.next_float();
-        float r = std::sqrt(u1), phi = 2 * kPi * u2;
-        Vec3 local(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u1)));
-        Frame f = Frame::from_z(faceforward(h.ng, wo));
-        ls.wi = f.to_world(local);
-        ls.pdf = local.z * kInvPi;
+        const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
+        const bool mixture = !(ns.x == ng.x && ns.y == ng.y && ns.z == ng.z);
+        const bool uniform = mixture && u1 >= 0.5f;
+        if (mixture) u1 = uniform ? 2 * u1 - 1 : 2 * u1;
+        const float phi = 2 * kPi * u2;
+        float z, r;
+        if (uniform) {
+            z = u1;
+            r = std::sqrt(std::max(0.0f, 1 - z * z));
+        } else {
+            z = std::sqrt(std::max(0.0f, 1 - u1));
+            r = std::sqrt(u1);
+        }
+        const Vec3 local(r * std::cos(phi), r * std::sin(phi), z);
+        ls.wi = Frame::from_z(uniform || !mixture ? ng : ns).to_world(local);
+        if (!mixture) {
+            ls.pdf = local.z * kInvPi;
+        } else {
+            const float cos_s = std::max(0.0f, dot(ls.wi, ns)), cos_g = dot(ls.wi, ng);
+            ls.pdf = 0.5f * cos_s * kInvPi + (cos_g > 0 ? 0.25f * kInvPi : 0.0f);
+        }
         if (ls.pdf == 0) return std::nullopt;
         ls.li = light.intensity;
         return ls;

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 
 #include "render/build_scene.h"
 #include "render/envmap.h"
@@ -307,6 +308,49 @@ double rect_irradiance(double L, double X, double Y, double h) {
     return L * f / 2;  // pi L F with F = f / (2 pi)
 }
 }  // namespace
+
+// A constant infinite light on a matte plane whose given normals lean 60 degrees from its face:
+// the radiance is Kd / pi L times the integral of |wi . ns| over the face's hemisphere (the BSDF
+// reflects on the geometric side, the cosine is the shading normal's), and no sample exceeds
+// Kd / pi L 4 pi, the bound of the light's sampling where the normals differ (cosine-weighted
+// about the geometric normal alone, |wi . ns| / cos grows without bound at its horizon).
+TEST(InfiniteLight, TiltedShadingNormalsAreSampledWithBoundedWeights) {
+    const double beta = 60 * std::numbers::pi / 180;
+    const float nx = float(std::sin(beta)), nz = float(std::cos(beta));
+    const std::string n = std::to_string(nx) + " 0 " + std::to_string(nz) + " ";
+    auto s = test::scene_from(
+        "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" WorldBegin "
+        "LightSource \"infinite\" \"rgb L\" [2 2 2] Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5] "
+        "Shape \"trianglemesh\" \"point3 P\" [-20 -20 0  20 -20 0  20 20 0  -20 20 0] "
+        "\"integer indices\" [0 1 2 0 2 3] \"normal N\" [" +
+            n + n + n + n + "] WorldEnd",
+        "t.pbrt", 1);
+    // The integral by quadrature over the upper hemisphere (theta, phi midpoints).
+    double integral = 0;
+    const int nt = 400, np = 800;
+    for (int i = 0; i < nt; ++i)
+        for (int j = 0; j < np; ++j) {
+            const double t = (i + 0.5) * std::numbers::pi / 2 / nt,
+                         p = (j + 0.5) * 2 * std::numbers::pi / np;
+            const double c =
+                std::abs(std::sin(t) * std::cos(p) * std::sin(beta) + std::cos(t) * std::cos(beta));
+            integral += c * std::sin(t) * (std::numbers::pi / 2 / nt) * (2 * std::numbers::pi / np);
+        }
+    const double expected = 0.5 / std::numbers::pi * 2 * integral;
+    double sum = 0, sum2 = 0, largest = 0;
+    const int samples = 40000;
+    for (int k = 0; k < samples; ++k) {
+        const double v = trace_radiance(*s, Vec3(0.3f, -0.2f, 4), normalize(Vec3(-0.1f, 0.05f, -1)),
+                                        uint64_t(k) + 1, nullptr)
+                             .r;
+        sum += v;
+        sum2 += v * v;
+        largest = std::max(largest, v);
+    }
+    const double mean = sum / samples, sd = std::sqrt(sum2 / samples - mean * mean);
+    EXPECT_NEAR(mean, expected, 4 * sd / std::sqrt(double(samples)) + 1e-4 * expected);
+    EXPECT_LE(largest, 0.5 / std::numbers::pi * 2 * 4 * std::numbers::pi * (1 + 1e-5));
+}
 
 TEST(AreaLight, SquareLightGivesTheFormFactorIrradiance) {
     // A 0.6 x 0.6 square at height 1, facing down, L = 5; the plane's radiance at the origin is
