@@ -16,7 +16,46 @@ Vec3 environment_direction(const std::array<float, 12>& m, float sin_theta, floa
                           m[4] * d.x + m[5] * d.y + m[6] * d.z,
                           m[8] * d.x + m[9] * d.y + m[10] * d.z));
 }
+// Shirley and Chiu's concentric map of [0,1)^2 onto the unit disc (pbrt-v3's
+// ConcentricSampleDisk): squares' rings onto circles, so strata stay compact.
+void concentric_disc(float u, float v, float& x, float& y) {
+    const float a = 2 * u - 1, b = 2 * v - 1;
+    if (a == 0 && b == 0) {
+        x = y = 0;
+        return;
+    }
+    float r, theta;
+    if (std::abs(a) > std::abs(b)) {
+        r = a;
+        theta = kPi / 4 * (b / a);
+    } else {
+        r = b;
+        theta = kPi / 2 - kPi / 4 * (a / b);
+    }
+    x = r * std::cos(theta);
+    y = r * std::sin(theta);
+}
 }  // namespace
+
+CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
+    if (!has_lens() || orthographic || environment) return generate_ray(px, py);
+    // In camera space the pinhole ray's direction is d = (sx tan, sy tan, 1): it meets the plane
+    // of focus z = focal_distance at focal_distance d; the ray leaves the lens point towards it.
+    const auto& m = world_from_camera;
+    const float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
+    const float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
+    float lx, ly;
+    concentric_disc(lu, lv, lx, ly);
+    lx *= lens_radius;
+    ly *= lens_radius;
+    const Vec3 d(focal_distance * sx * tan_half_fov - lx, focal_distance * sy * tan_half_fov - ly,
+                 focal_distance);
+    return {
+        Vec3(m[0] * lx + m[1] * ly + m[3], m[4] * lx + m[5] * ly + m[7],
+             m[8] * lx + m[9] * ly + m[11]),
+        normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                       m[8] * d.x + m[9] * d.y + m[10] * d.z))};
+}
 
 void Camera::environment_directions(float px, float py, Vec3 (&dirs)[3]) const {
     const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;

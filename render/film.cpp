@@ -21,6 +21,10 @@ namespace cmam::render {
 
 namespace {
 
+// The stream a camera sample's lens position is drawn from, mixed with the sample's seed (its
+// path's own stream starts from the seed itself).
+constexpr uint64_t kLensStream = 0x4c656e73ull;
+
 // Whether an image texture filtered by `area` takes its footprint from ray cones: the camera
 // rays then carry differentials to centre the first hit's parallelogram on its stratum.
 bool cones_read_by_area(const Scene& scene) {
@@ -168,6 +172,7 @@ class FilmTracer {
         packet.sample[k] = sample;
         packet.aov[k] = Aov{m_options.aov};
         CameraPath& p = packet.paths[k];
+        p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
         if (m_footprints.batches_camera_rays()) {  // made with the packet's others (trace)
             packet.fx[k] = fx;
             packet.fy[k] = fy;
@@ -181,6 +186,16 @@ class FilmTracer {
             p.ray.org = Vec3(m[3], m[7], m[11]);
             p.ray.dir = dirs[0];
             m_footprints.start_environment_ray(p.ray.fp, dirs, 0.5f - j[0], 0.5f - j[1]);
+        } else if (m_scene.camera.has_lens() && !m_scene.camera.orthographic &&
+                   !m_scene.camera.environment) {
+            // A thin lens: the sample's point on the lens from a stream of its own.
+            const uint64_t lens_seed = mix_seed(p.seed, kLensStream);
+            const float lu = Rng::float_at(lens_seed, 0), lv = Rng::float_at(lens_seed, 1);
+            const CameraRay ray = m_scene.camera.generate_ray(fx, fy, lu, lv);
+            p.ray.org = ray.org;
+            p.ray.dir = ray.dir;
+            m_footprints.start_lens_ray(p.ray.fp, fx, fy, lu, lv, p.ray.dir, 0.5f - j[0],
+                                        0.5f - j[1]);
         } else {  // orthographic and environment cameras, one ray at a time
             const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
             p.ray.org = ray.org;
@@ -188,7 +203,6 @@ class FilmTracer {
             m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1]);
         }
         tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
-        p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
         p.counts = i < sp.prime ? nullptr : &sp.counts;
         p.aov = m_options.aov == AovKind::None ? nullptr : &packet.aov[k];
     }

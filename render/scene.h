@@ -43,9 +43,18 @@ struct Camera {
     float tan_half_fov = 1;            // perspective; 1 for orthographic
     float screen[4] = {-1, 1, -1, 1};  // xmin, xmax, ymin, ymax
     int xres = kDefaultFilmWidth, yres = kDefaultFilmHeight;
+    // The perspective camera's thin lens (pbrt-v3's "lensradius" and "focaldistance", in camera
+    // units): rays leave a point of the lens disc towards where the pinhole ray meets the plane
+    // of focus. Radius 0 is the pinhole.
+    float lens_radius = 0, focal_distance = 1e6f;
 
+    bool has_lens() const { return lens_radius > 0; }
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
+    /// The pinhole's: with a lens, the ray from the lens's centre.
     CameraRay generate_ray(float px, float py) const;
+    /// The ray through (px, py) from the lens point that the sample (lu, lv) in [0,1)^2 maps to
+    /// (pbrt-v3's concentric mapping of the square onto the disc); generate_ray's without a lens.
+    CameraRay generate_ray(float px, float py, float lu, float lv) const;
     /// The environment camera's directions through (px, py), (px + 1, py) and (px, py + 1),
     /// each generate_ray's bit for bit: the first two share theta's sine and cosine, the first
     /// and the last phi's (four of them where three rays apart take six).

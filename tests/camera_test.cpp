@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "expect_throw.h"
+#include "render/integrator.h"
 #include "render/lens.h"
 #include "scene_util.h"
 #include "temp_dir.h"
@@ -199,6 +200,90 @@ double lensmaker(double r1, double r2, double n) {
 }
 
 }  // namespace
+
+// pbrt-v3's thin lens ("lensradius", "focaldistance"): a ray leaves a point of the lens disc
+// (the concentric map of its sample) towards where the pinhole ray through the same raster
+// position meets the plane of focus; the lens's centre gives the pinhole ray.
+TEST(Camera, ThinLensRaysMeetThePinholesOnThePlaneOfFocus) {
+    auto s = test::scene_from(
+        "LookAt 1 2 3  1 2 10  0 1 0 Camera \"perspective\" \"float fov\" 50 \"float lensradius\" "
+        "0.5 \"float focaldistance\" 4 Film \"image\" \"integer xresolution\" 64 "
+        "\"integer yresolution\" 48 WorldBegin WorldEnd");
+    const render::Camera& c = s->camera;
+    ASSERT_TRUE(c.has_lens());
+    const Vec3 eye(1, 2, 3);
+    uint64_t state = 12345;
+    auto next = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return float(state >> 40) * 0x1.0p-24f;
+    };
+    float farthest = 0;
+    for (int k = 0; k < 200; ++k) {
+        const float px = 64 * next(), py = 48 * next(), lu = next(), lv = next();
+        const render::CameraRay pin = c.generate_ray(px, py), lens = c.generate_ray(px, py, lu, lv);
+        const Vec3 o = lens.org - eye;
+        EXPECT_NEAR(o.z, 0, 1e-6f);  // on the lens, in the plane z = 3 facing +z
+        EXPECT_LE(std::hypot(o.x, o.y), 0.5f + 1e-6f);
+        farthest = std::max(farthest, std::hypot(o.x, o.y));
+        EXPECT_NEAR(render::length(lens.dir), 1, 1e-6f);
+        // Both reach the plane of focus z = 3 + 4 at the same point.
+        const Vec3 a = pin.org + pin.dir * (4 / pin.dir.z),
+                   b = lens.org + lens.dir * (4 / lens.dir.z);
+        EXPECT_NEAR(render::length(a - b), 0, 2e-5f) << px << " " << py;
+    }
+    EXPECT_GT(farthest, 0.45f);  // the samples cover the disc
+    const render::CameraRay centre = c.generate_ray(20, 30, 0.5f, 0.5f);
+    EXPECT_EQ(centre.org.x, eye.x);
+    expect_dir(centre.dir, c.generate_ray(20, 30).dir);
+    // Without a lens, and for the orthographic camera (with a warning), the pinhole's rays.
+    auto pinhole = test::scene_from("Camera \"perspective\" WorldBegin WorldEnd");
+    EXPECT_FALSE(pinhole->camera.has_lens());
+    const render::CameraRay p1 = pinhole->camera.generate_ray(3, 4, 0.9f, 0.1f),
+                            p2 = pinhole->camera.generate_ray(3, 4);
+    EXPECT_EQ(p1.dir.x, p2.dir.x);
+    EXPECT_EQ(p1.org.y, p2.org.y);
+    std::vector<std::string> warnings;
+    render::build_scene(
+        pbrt::parse_string("Camera \"orthographic\" \"float lensradius\" 0.1 WorldBegin WorldEnd",
+                           "t.pbrt"),
+        {}, [&](const std::string& w) { warnings.push_back(w); });
+    ASSERT_FALSE(warnings.empty());
+    EXPECT_EQ(warnings.back(),
+              "t.pbrt:1:23: warning: lensradius ignored: cmam renders the orthographic camera "
+              "without a lens");
+    EXPECT_THROW_MSG(
+        test::scene_from("Camera \"perspective\" \"float lensradius\" -1 WorldBegin WorldEnd"),
+        pbrt::SceneError, "t.pbrt:1:22: error: lensradius must be 0 or more, got -1");
+    EXPECT_THROW_MSG(test::scene_from("Camera \"perspective\" \"float lensradius\" 1 "
+                                      "\"float focaldistance\" 0 WorldBegin WorldEnd"),
+                     pbrt::SceneError, "t.pbrt:1:43: error: focaldistance must be positive, got 0");
+}
+
+// What lies on the plane of focus stays sharp and what lies off it blurs: the edge of a white
+// square seen against black, rendered through the lens at its distance and at twice it.
+TEST(Camera, ThinLensBlursOnlyWhatIsOffThePlaneOfFocus) {
+    auto blurred_pixels = [](float focus) {
+        auto s = test::scene_from(
+            "LookAt 0 0 0  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 30 "
+            "\"float lensradius\" 0.2 \"float focaldistance\" " +
+            std::to_string(focus) +
+            " Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 8 "
+            "Sampler \"stratified\" \"integer xsamples\" 8 \"integer ysamples\" 8 "
+            "Integrator \"whitted\" WorldBegin AttributeBegin AreaLightSource \"diffuse\" "
+            "\"rgb L\" [1 1 1] \"bool twosided\" true Shape \"trianglemesh\" "
+            "\"point3 P\" [-10 -10 5  0 -10 5  0 10 5  -10 10 5] "
+            "\"integer indices\" [0 1 2 0 2 3] AttributeEnd WorldEnd");
+        const render::Framebuffer fb = render::render(*s, {}, nullptr);
+        int grey = 0;  // pixels of the middle row neither black nor white
+        for (int x = 0; x < fb.width; ++x) {
+            const float v = fb.rgb[3 * (std::size_t(4) * fb.width + x)];
+            grey += v > 0.02f && v < 0.98f;
+        }
+        return grey;
+    };
+    EXPECT_LE(blurred_pixels(5), 1);  // the edge in focus: the one pixel it crosses
+    EXPECT_GE(blurred_pixels(10), 4);
+}
 
 TEST(RealisticCamera, ThinLensFramesTheFilmFromItsImageDistance) {
     LensScene s;

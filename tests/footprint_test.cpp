@@ -37,6 +37,48 @@ SurfaceHit hit_at(const Scene& s, float px, float py, Vec3* d) {
 }
 }  // namespace
 
+// A thin-lens camera's differentials are pbrt-v3's: the offset rays leave the same lens point
+// (no origin offset) towards the pinhole's offset rays' points on the plane of focus. On a plane
+// facing the camera the lens point then cancels: a hit's dP/dx and dP/dy are the pinhole's at
+// every depth (the blur comes from the lens samples, not from wider footprints).
+TEST(Differentials, ThinLensOffsetRaysMeetThePinholesOnThePlaneOfFocus) {
+    const std::string plane =
+        "Shape \"trianglemesh\" \"point3 P\" [-100 -100 Z  100 -100 Z  "
+        "100 100 Z  -100 100 Z] \"integer indices\" [0 1 2 0 2 3]";
+    for (const char* z : {"10", "25"}) {
+        SCOPED_TRACE(z);
+        std::string w = plane;
+        for (std::size_t k; (k = w.find('Z')) != std::string::npos;) w.replace(k, 1, z);
+        std::string text = camera512(w);
+        text.replace(text.find("\"float fov\" 90"), 14,
+                     "\"float fov\" 90 \"float lensradius\" 0.3 \"float focaldistance\" 10");
+        auto s = test::scene_from(text);
+        ASSERT_TRUE(s->camera.has_lens());
+        FootprintMethods methods;
+        methods.add(FootprintMethod::Differentials);
+        const FootprintProducers producers(methods, s->camera, 1);
+        const float px = 300.5f, py = 200.25f, lu = 0.9f, lv = 0.2f;
+        const CameraRay lens = s->camera.generate_ray(px, py, lu, lv);
+        RayFootprint r;
+        producers.start_lens_ray(r, px, py, lu, lv, lens.dir, 0, 0);
+        ASSERT_TRUE(r.diff.valid);
+        expect_vec(r.diff.dodx, Vec3(0, 0, 0), 0, "dO/dx");
+        expect_vec(r.diff.dody, Vec3(0, 0, 0), 0, "dO/dy");
+        // Towards the pinhole's offset ray's point on the plane of focus z = 10.
+        const CameraRay px1 = s->camera.generate_ray(px + 1, py);
+        const Vec3 focus_x = px1.org + px1.dir * (10 / px1.dir.z);
+        expect_vec(r.diff.dddx, normalize(focus_x - lens.org) - lens.dir, 1e-6, "dD/dx");
+        const std::optional<SurfaceHit> h = s->intersect(lens.org, lens.dir, 0, 1e30f);
+        ASSERT_TRUE(h.has_value());
+        const HitFootprint at = producers.at_hit(r, lens.dir, *h);
+        Vec3 d;
+        const SurfaceHit hp = hit_at(*s, px, py, &d);
+        const HitFootprint pin = producers.at_hit(producers.camera_ray(px, py, d, {}, 0, 0), d, hp);
+        expect_vec(at.dpdx, pin.dpdx, 2e-4, "dP/dx");
+        expect_vec(at.dpdy, pin.dpdy, 2e-4, "dP/dy");
+    }
+}
+
 TEST(Differentials, TRd1CameraDerivativeAndFrontoParallelTransfer) {
     auto s = test::scene_from(camera512(
         "Shape \"trianglemesh\" \"point3 P\" [-100 -100 10  100 -100 10  100 100 10  -100 100 10] "

@@ -126,17 +126,30 @@ void Builder::camera() {
         if (!(fov > 0 && fov < 180))
             throw SceneError(loc_of(e, "fov"), "fov must be in (0, 180) degrees");
         c.tan_half_fov = c.orthographic ? 1.0f : float(std::tan(fov * std::numbers::pi / 360));
-        if (e.params.get_float("lensradius", 0) != 0)
-            warn(e.params.find("lensradius")->loc,
-                 "lensradius ignored: cmam renders a pinhole camera");
+        // pbrt-v3's thin lens, on the perspective camera (its orthographic camera's lens is left
+        // out, with a warning; its environment camera has none).
+        const double lens = finite_float(e, "lensradius", 0);
+        const double focus = finite_float(e, "focaldistance", 1e6);
+        if (lens < 0)
+            throw SceneError(loc_of(e, "lensradius"),
+                             "lensradius must be 0 or more, got " + pbrt::number_text(lens));
+        if (lens > 0 && (c.orthographic || c.environment)) {
+            warn(loc_of(e, "lensradius"),
+                 "lensradius ignored: cmam renders the " + e.type + " camera without a lens");
+        } else if (lens > 0) {
+            if (!(focus > 0))
+                throw SceneError(loc_of(e, "focaldistance"),
+                                 "focaldistance must be positive, got " + pbrt::number_text(focus));
+            c.lens_radius = float(lens);
+            c.focal_distance = float(focus);
+        }
     }
     const Mat4 wc =
         inverse_or_error(m_desc.camera_from_world, e.loc, "the camera transform is singular");
     auto m = to34(wc);
     for (int i = 0; i < 12; ++i) c.world_from_camera[i] = float(m[i]);
     check_camera_rays(c, e.loc);
-    e.params.check_unused("Camera " + in_quotes(e.type), m_warn,
-                          {"focaldistance", "shutteropen", "shutterclose"});
+    e.params.check_unused("Camera " + in_quotes(e.type), m_warn, {"shutteropen", "shutterclose"});
 }
 
 // pbrt-v3's realistic camera as a pinhole: its field of view spans the film's shorter side seen

@@ -90,6 +90,18 @@ void FootprintProducers::start_camera_ray(RayFootprint& r, float fx, float fy, c
     start_camera_state(r, to_stratum_x, to_stratum_y);
 }
 
+void FootprintProducers::start_lens_ray(RayFootprint& r, float fx, float fy, float lu, float lv,
+                                        const Vec3& dir, float to_stratum_x,
+                                        float to_stratum_y) const {
+    r.diff = {};
+    if (m_camera_differentials) {
+        r.diff.valid = true;
+        r.diff.dddx = (m_camera.generate_ray(fx + 1, fy, lu, lv).dir - dir) * m_scale;
+        r.diff.dddy = (m_camera.generate_ray(fx, fy + 1, lu, lv).dir - dir) * m_scale;
+    }
+    start_camera_state(r, to_stratum_x, to_stratum_y);
+}
+
 void FootprintProducers::start_environment_ray(RayFootprint& r, const Vec3 (&dirs)[3],
                                                float to_stratum_x, float to_stratum_y) const {
     r.diff = {};

@@ -94,8 +94,15 @@ class FootprintProducers {
                                float to_stratum_y) const;
     /// Whether camera rays carry ray differentials (for the differentials, or the cones' strata).
     bool differentials() const { return m_camera_differentials; }
-    /// Whether camera rays can be made together (camera_rays): the perspective camera's.
-    bool batches_camera_rays() const { return !m_camera.orthographic && !m_camera.environment; }
+    /// The same for a ray of a camera with a thin lens: from the lens point of sample (lu, lv),
+    /// whose differential is pbrt-v3's (the offset rays leave the same lens point towards their
+    /// own points on the plane of focus: no origin offset).
+    void start_lens_ray(RayFootprint& r, float fx, float fy, float lu, float lv, const Vec3& dir,
+                        float to_stratum_x, float to_stratum_y) const;
+    /// Whether camera rays can be made together (camera_rays): the perspective pinhole's.
+    bool batches_camera_rays() const {
+        return !m_camera.orthographic && !m_camera.environment && !m_camera.has_lens();
+    }
     /// The perspective camera's rays through (fx[i], fy[i]), i < n <= 16, together
     /// (perspective_rays); start_camera_ray then takes ray i from `batch`.
     void camera_rays(const float* fx, const float* fy, int n, CameraRayBatch& batch) const {
