@@ -202,15 +202,17 @@ TEST(ProceduralTexture, CheckerboardIn3DAndDots) {
     EXPECT_EQ(at(*cb, 0, 0, Vec3(1.5f, 0.5f, 0.5f)).r, 0);
     EXPECT_EQ(at(*cb, 0, 0, Vec3(-0.5f, 0.5f, 0.5f)).r, 0);
     EXPECT_EQ(at(*cb, 0, 0, Vec3(-0.5f, -0.5f, 0.5f)).r, 1);
-    // Dots of radius 0.35 in about half the cells: about pi 0.35^2 / 2 of the plane.
+    // Dots of radius 0.35 in about half the cells: about pi 0.35^2 / 2 of the plane. They show
+    // "outside" and the rest "inside", as pbrt-v3 renders them (its constructor takes the two in
+    // the other order).
     auto dots = with_texture(
         "Texture \"t\" \"spectrum\" \"dots\" \"rgb inside\" [1 1 1] \"rgb outside\" [0 0 0]");
-    int inside = 0, n = 0;
+    int in_dots = 0, n = 0;
     for (int j = 0; j < 200; ++j)
         for (int i = 0; i < 200; ++i, ++n)
-            inside += at(*dots, i * 0.1f + 0.05f, j * 0.1f + 0.05f).r > 0;
-    EXPECT_GT(inside, n / 10);
-    EXPECT_LT(inside, n * 3 / 10);
+            in_dots += at(*dots, i * 0.1f + 0.05f, j * 0.1f + 0.05f).r == 0;
+    EXPECT_GT(in_dots, n / 10);
+    EXPECT_LT(in_dots, n * 3 / 10);
 }
 
 TEST(ProceduralTexture, NoiseTexturesAreFiniteAndVary) {

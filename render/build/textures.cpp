@@ -264,8 +264,12 @@ void Builder::uv_texture(const pbrt::TextureDesc& t, TextureNode& n) {
 void Builder::dots_texture(const pbrt::TextureDesc& t, TextureNode& n) {
     n.kind = TextureNode::Kind::Dots;
     uv_mapping(t.entity, t, &n);
-    n.tex1 = texture_input(t, "inside", 1);
-    n.tex2 = texture_input(t, "outside", 0);
+    // tex1 inside the dots, tex2 outside. pbrt-v3 hands its "inside" to the texture's outsideDot
+    // and its "outside" to insideDot (the constructor takes them in the other order), so its
+    // dots show "outside" (default 0) on a background of "inside" (default 1); scenes written
+    // for it were composed that way, and cmam renders them so.
+    n.tex1 = texture_input(t, "outside", 0);
+    n.tex2 = texture_input(t, "inside", 1);
 }
 
 // pbrt-v3's noise textures: "fbm", "wrinkled", "windy" and "marble".
