@@ -40,7 +40,8 @@ void concentric_disc(float u, float v, float& x, float& y) {
 CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
     if (!has_lens() || orthographic || environment) return generate_ray(px, py);
     // In camera space the pinhole ray's direction is d = (sx tan, sy tan, 1): it meets the plane
-    // of focus z = focal_distance at focal_distance d; the ray leaves the lens point towards it.
+    // of focus z = focal_distance at focal_distance d; the ray leaves the lens point towards it
+    // (algorithms.md §7).
     const auto& m = world_from_camera;
     const float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     const float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);

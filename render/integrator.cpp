@@ -106,7 +106,7 @@ struct Tracer {
         // normal differs (a mesh's given normals, bump mapping), half the samples are
         // cosine-weighted about it and half uniform over the geometric hemisphere, and the pdf is
         // the mixture's: |wi . ns| / pdf stays below 4 pi, where |wi . ns| / cos about the
-        // geometric normal grows without bound towards its horizon (fireflies).
+        // geometric normal grows without bound towards its horizon (fireflies; algorithms.md §13).
         float u1 = rng.next_float(), u2 = rng.next_float();
         const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
         const bool mixture = !(ns.x == ng.x && ns.y == ng.y && ns.z == ng.z);
