@@ -21,10 +21,6 @@ namespace cmam::render {
 
 namespace {
 
-// The stream a camera sample's lens position is drawn from, mixed with the sample's seed (its
-// path's own stream starts from the seed itself).
-constexpr uint64_t kLensStream = 0x4c656e73ull;
-
 // Whether an image texture filtered by `area` takes its footprint from ray cones: the camera
 // rays then carry differentials to centre the first hit's parallelogram on its stratum.
 bool cones_read_by_area(const Scene& scene) {
@@ -188,9 +184,9 @@ class FilmTracer {
             m_footprints.start_environment_ray(p.ray.fp, dirs, 0.5f - j[0], 0.5f - j[1]);
         } else if (m_scene.camera.has_lens() && !m_scene.camera.orthographic &&
                    !m_scene.camera.environment) {
-            // A thin lens: the sample's point on the lens from a stream of its own.
-            const uint64_t lens_seed = mix_seed(p.seed, kLensStream);
-            const float lu = Rng::float_at(lens_seed, 0), lv = Rng::float_at(lens_seed, 1);
+            // A thin lens: the sample's point on the lens, stratified over the pixel's samples.
+            float lu, lv;
+            lens_sample(sp.seeds[i], sample, m_nx, m_ny, lu, lv);
             const CameraRay ray = m_scene.camera.generate_ray(fx, fy, lu, lv);
             p.ray.org = ray.org;
             p.ray.dir = ray.dir;

@@ -76,6 +76,42 @@ inline uint64_t mix_seed(uint64_t a, uint64_t b) {
     return z ^ (z >> 33);
 }
 
+/// A permutation of [0, n) chosen by `key`: a four-round Feistel network on 2h bits (2^2h the
+/// power of four at or above n; each round a bijection there, whatever its round function, here
+/// mix_seed), repeated until the value falls below n (cycle walking; under four rounds expected).
+inline uint32_t permute(uint32_t i, uint32_t n, uint64_t key) {
+    int h = 0;
+    while ((uint64_t(1) << (2 * h)) < n) ++h;
+    const uint32_t half = (uint32_t(1) << h) - 1;
+    do {
+        uint32_t l = i >> h, r = i & half;
+        for (uint64_t round = 0; round < 4; ++round) {
+            const uint32_t f = uint32_t(mix_seed(key + round, r)) & half;
+            const uint32_t next = l ^ f;
+            l = r;
+            r = next;
+        }
+        i = (l << h) | r;
+    } while (i >= n);
+    return i;
+}
+
+/// The lens sample in [0,1)^2 of a pixel's camera sample `sample` (of nx x ny), stratified as its
+/// image-plane position is: the pixel's samples take the nx x ny strata of the lens square once
+/// each, in a random order of the pixel's own (so that a sample's lens stratum does not follow its
+/// image-plane stratum), jittered within the stratum by the sample's own numbers.
+inline void lens_sample(uint64_t pixel_seed, int sample, int nx, int ny, float& lu, float& lv) {
+    constexpr uint64_t kLensStream = 0x4c656e73ull;
+    const uint64_t key = mix_seed(pixel_seed, kLensStream);
+    const uint32_t n = uint32_t(nx) * uint32_t(ny);
+    const uint32_t stratum = permute(uint32_t(sample), n, key);
+    const uint64_t seed = mix_seed(key, uint64_t(sample) + 1);
+    lu = std::min((float(stratum % uint32_t(nx)) + Rng::float_at(seed, 0)) / float(nx),
+                  0x1.fffffep-1f);
+    lv = std::min((float(stratum / uint32_t(nx)) + Rng::float_at(seed, 1)) / float(ny),
+                  0x1.fffffep-1f);
+}
+
 /// A shadow ray of one light sample at a hit, traced one by one or in packets: the segment
 /// org + t dir, t in (0, tmax), and what the sample adds to direct lighting when nothing lies
 /// along it (`clear`; set directly when there is nothing to trace, `traced` false).

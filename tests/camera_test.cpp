@@ -11,6 +11,7 @@
 #include "expect_throw.h"
 #include "render/integrator.h"
 #include "render/lens.h"
+#include "render/tracer.h"
 #include "scene_util.h"
 #include "temp_dir.h"
 
@@ -259,29 +260,61 @@ TEST(Camera, ThinLensRaysMeetThePinholesOnThePlaneOfFocus) {
                      pbrt::SceneError, "t.pbrt:1:43: error: focaldistance must be positive, got 0");
 }
 
+// A pixel's lens samples are stratified as its image-plane samples are: its n = nx x ny samples
+// take the n strata of the lens square once each, in an order that changes from pixel to pixel.
+TEST(Camera, LensSamplesTakeEachStratumOncePerPixel) {
+    for (auto [nx, ny] : {std::pair{4, 3}, std::pair{1, 1}, std::pair{8, 8}, std::pair{3, 5}}) {
+        std::vector<std::vector<int>> orders;
+        for (uint64_t pixel = 1; pixel <= 20; ++pixel) {
+            std::vector<int> stratum_of(std::size_t(nx * ny));
+            std::vector<bool> taken(std::size_t(nx * ny), false);
+            for (int sample = 0; sample < nx * ny; ++sample) {
+                float lu, lv;
+                render::lens_sample(pixel * 7919, sample, nx, ny, lu, lv);
+                ASSERT_TRUE(lu >= 0 && lu < 1 && lv >= 0 && lv < 1) << lu << " " << lv;
+                const int cell = int(lv * float(ny)) * nx + int(lu * float(nx));
+                EXPECT_FALSE(taken[std::size_t(cell)]) << nx << "x" << ny << " " << sample;
+                taken[std::size_t(cell)] = true;
+                stratum_of[std::size_t(sample)] = cell;
+            }
+            orders.push_back(stratum_of);
+        }
+        if (nx * ny > 1) {
+            EXPECT_GT(std::count_if(orders.begin(), orders.end(),
+                                    [&](const std::vector<int>& o) { return o != orders[0]; }),
+                      10);
+        }
+    }
+}
+
 // What lies on the plane of focus stays sharp and what lies off it blurs: the edge of a white
 // square seen against black, rendered through the lens at its distance and at twice it.
 TEST(Camera, ThinLensBlursOnlyWhatIsOffThePlaneOfFocus) {
+    // The edge x = 0 of a white half-plane at distance 5, seen through a lens of radius 0.2: in
+    // focus, one pixel at most straddles it; focused at 10, its circle of confusion spans
+    // 0.4 (1/5 - 1/10) = 0.04 radians, about 4.9 pixels of 0.0082.
     auto blurred_pixels = [](float focus) {
         auto s = test::scene_from(
             "LookAt 0 0 0  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 30 "
             "\"float lensradius\" 0.2 \"float focaldistance\" " +
             std::to_string(focus) +
-            " Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 8 "
+            " Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 64 "
+            "\"float cropwindow\" [0 1 0.45 0.55] "
             "Sampler \"stratified\" \"integer xsamples\" 8 \"integer ysamples\" 8 "
             "Integrator \"whitted\" WorldBegin AttributeBegin AreaLightSource \"diffuse\" "
             "\"rgb L\" [1 1 1] \"bool twosided\" true Shape \"trianglemesh\" "
-            "\"point3 P\" [-10 -10 5  0 -10 5  0 10 5  -10 10 5] "
+            "\"point3 P\" [-100 -100 5  0 -100 5  0 100 5  -100 100 5] "
             "\"integer indices\" [0 1 2 0 2 3] AttributeEnd WorldEnd");
         const render::Framebuffer fb = render::render(*s, {}, nullptr);
         int grey = 0;  // pixels of the middle row neither black nor white
+        const std::size_t row = std::size_t(fb.height / 2) * std::size_t(fb.width);
         for (int x = 0; x < fb.width; ++x) {
-            const float v = fb.rgb[3 * (std::size_t(4) * fb.width + x)];
+            const float v = fb.rgb[3 * (row + std::size_t(x))];
             grey += v > 0.02f && v < 0.98f;
         }
         return grey;
     };
-    EXPECT_LE(blurred_pixels(5), 1);  // the edge in focus: the one pixel it crosses
+    EXPECT_LE(blurred_pixels(5), 1);
     EXPECT_GE(blurred_pixels(10), 4);
 }
 
