@@ -103,15 +103,18 @@ struct Tracer {
         // The BSDFs it lights reflect only, over the hemisphere of the geometric normal on wo's
         // side, weighted by |wi . ns|: sampled cosine-weighted about that normal, the same
         // expected value as pbrt-v3's sphere sampling with lower variance. Where the shading
-        // normal differs (a mesh's given normals, bump mapping), half the samples are
-        // cosine-weighted about it and half uniform over the geometric hemisphere, and the pdf is
-        // the mixture's: |wi . ns| / pdf stays below 4 pi, where |wi . ns| / cos about the
-        // geometric normal grows without bound towards its horizon (fireflies; algorithms.md §13).
+        // normal differs (a mesh's given normals, bump mapping), a share q = min(1/2, 1 - ns.ng)
+        // of the samples is uniform over the geometric hemisphere and the rest cosine-weighted
+        // about the shading normal, and the pdf is the mixture's: |wi . ns| / pdf stays bounded,
+        // where |wi . ns| / cos about the geometric normal grows without bound towards its
+        // horizon (fireflies; algorithms.md §13), and a shading normal near the geometric one
+        // keeps nearly all of the cosine's samples.
         float u1 = rng.next_float(), u2 = rng.next_float();
         const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
         const bool mixture = !(ns.x == ng.x && ns.y == ng.y && ns.z == ng.z);
-        const bool uniform = mixture && u1 >= 0.5f;
-        if (mixture) u1 = uniform ? 2 * u1 - 1 : 2 * u1;
+        const float share = mixture ? std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f) : 0.0f;
+        const bool uniform = u1 < share;
+        if (mixture) u1 = uniform ? u1 / share : (u1 - share) / (1 - share);
         const float phi = 2 * kPi * u2;
         float z, r;
         if (uniform) {
@@ -127,7 +130,7 @@ struct Tracer {
             ls.pdf = local.z * kInvPi;
         } else {
             const float cos_s = std::max(0.0f, dot(ls.wi, ns)), cos_g = dot(ls.wi, ng);
-            ls.pdf = 0.5f * cos_s * kInvPi + (cos_g > 0 ? 0.25f * kInvPi : 0.0f);
+            ls.pdf = (1 - share) * cos_s * kInvPi + (cos_g > 0 ? share * 0.5f * kInvPi : 0.0f);
         }
         if (ls.pdf == 0) return std::nullopt;
         ls.li = light.intensity;

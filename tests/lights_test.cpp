@@ -312,8 +312,9 @@ double rect_irradiance(double L, double X, double Y, double h) {
 // A constant infinite light on a matte plane whose given normals lean 60 degrees from its face:
 // the radiance is Kd / pi L times the integral of |wi . ns| over the face's hemisphere (the BSDF
 // reflects on the geometric side, the cosine is the shading normal's), and no sample exceeds
-// Kd / pi L 4 pi, the bound of the light's sampling where the normals differ (cosine-weighted
-// about the geometric normal alone, |wi . ns| / cos grows without bound at its horizon).
+// Kd / pi L 4 pi, the bound of the light's sampling at this angle between the normals (half the
+// samples uniform; cosine-weighted about the geometric normal alone, |wi . ns| / cos grows
+// without bound at its horizon).
 TEST(InfiniteLight, TiltedShadingNormalsAreSampledWithBoundedWeights) {
     const double beta = 60 * std::numbers::pi / 180;
     const float nx = float(std::sin(beta)), nz = float(std::cos(beta));
