@@ -41,7 +41,8 @@ CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
     if (!has_lens() || orthographic || environment) return generate_ray(px, py);
     // In camera space the pinhole ray's direction is d = (sx tan, sy tan, 1): it meets the plane
     // of focus z = focal_distance at focal_distance d; the ray leaves the lens point towards it
-    // (algorithms.md §7).
+    // (algorithms.md §7), along d - lens / focal_distance (the same direction, without the
+    // product that overflows for a far plane of focus).
     const auto& m = world_from_camera;
     const float sx = screen[0] + (px / xres) * (screen[1] - screen[0]);
     const float sy = screen[3] - (py / yres) * (screen[3] - screen[2]);
@@ -49,8 +50,8 @@ CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
     concentric_disc(lu, lv, lx, ly);
     lx *= lens_radius;
     ly *= lens_radius;
-    const Vec3 d(focal_distance * sx * tan_half_fov - lx, focal_distance * sy * tan_half_fov - ly,
-                 focal_distance);
+    const Vec3 d(sx * tan_half_fov - lx / focal_distance, sy * tan_half_fov - ly / focal_distance,
+                 1);
     return {
         Vec3(m[0] * lx + m[1] * ly + m[3], m[4] * lx + m[5] * ly + m[7],
              m[8] * lx + m[9] * ly + m[11]),

@@ -258,6 +258,20 @@ TEST(Camera, ThinLensRaysMeetThePinholesOnThePlaneOfFocus) {
     EXPECT_THROW_MSG(test::scene_from("Camera \"perspective\" \"float lensradius\" 1 "
                                       "\"float focaldistance\" 0 WorldBegin WorldEnd"),
                      pbrt::SceneError, "t.pbrt:1:43: error: focaldistance must be positive, got 0");
+    // A lens whose rim starts rays beyond Embree's coordinates, or a plane of focus so near that
+    // the directions overflow: located errors, not a render (Embree asserted on such rays).
+    EXPECT_THROW_MSG(
+        test::scene_from("Camera \"perspective\" \"float lensradius\" 1e30 WorldBegin WorldEnd"),
+        pbrt::SceneError,
+        "t.pbrt:1:1: error: camera rays start at (-1e+30, 0, 0) at raster position (0, 0) and "
+        "the lens's rim, beyond cmam's limit of 1e+18 on coordinates (check the camera "
+        "transform, screenwindow and lensradius)");
+    EXPECT_THROW_MSG(test::scene_from("Camera \"perspective\" \"float lensradius\" 1 "
+                                      "\"float focaldistance\" 1e-36 WorldBegin WorldEnd"),
+                     pbrt::SceneError,
+                     "t.pbrt:1:1: error: camera rays have direction (0, 0, 0) at raster position "
+                     "(0, 0) and the lens's rim, not a finite unit vector (check the camera "
+                     "transform, screenwindow and focaldistance)");
 }
 
 // A pixel's lens samples are stratified as its image-plane samples are: its n = nx x ny samples

@@ -202,22 +202,31 @@ void Builder::check_camera_rays(const Camera& c, const pbrt::FileLoc& loc) {
         return "(" + pbrt::number_text(v.x, 7) + ", " + pbrt::number_text(v.y, 7) + ", " +
                pbrt::number_text(v.z, 7) + ")";
     };
-    for (int corner = 0; corner < 4; ++corner) {
-        const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
-        const auto [org, dir] = c.generate_ray(px, py);
-        const std::string at =
-            " at raster position (" + pbrt::number_text(px) + ", " + pbrt::number_text(py) + ")";
-        for (float x : {org.x, org.y, org.z})
-            if (!(std::abs(x) <= kMaxRayCoordinate))
-                throw SceneError(
-                    loc, "camera rays start at " + text(org) + at + ", beyond cmam's limit of " +
-                             pbrt::number_text(kMaxRayCoordinate, 7) +
-                             " on coordinates (check the camera transform and screenwindow)");
-        if (!(std::abs(length(dir) - 1) < 1e-3f))
-            throw SceneError(loc, "camera rays have direction " + text(dir) + at +
-                                      ", not a finite unit vector (check the camera "
-                                      "transform, screenwindow and frameaspectratio)");
-    }
+    // The image's corners, through the lens's centre and, with a lens, its rim's four extremes
+    // (the concentric map's images of the square's edge midpoints).
+    const float lens[5][2] = {{0.5f, 0.5f}, {0, 0.5f}, {1, 0.5f}, {0.5f, 0}, {0.5f, 1}};
+    for (int corner = 0; corner < 4; ++corner)
+        for (int k = 0; k < (c.has_lens() ? 5 : 1); ++k) {
+            const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
+            const auto [org, dir] = c.generate_ray(px, py, lens[k][0], lens[k][1]);
+            const std::string at = " at raster position (" + pbrt::number_text(px) + ", " +
+                                   pbrt::number_text(py) + ")";
+            for (float x : {org.x, org.y, org.z})
+                if (!(std::abs(x) <= kMaxRayCoordinate))
+                    throw SceneError(
+                        loc, "camera rays start at " + text(org) + at +
+                                 (k > 0 ? " and the lens's rim" : "") +
+                                 ", beyond cmam's limit of " +
+                                 pbrt::number_text(kMaxRayCoordinate, 7) +
+                                 " on coordinates (check the camera transform" +
+                                 (k > 0 ? ", screenwindow and lensradius)" : " and screenwindow)"));
+            if (!(std::abs(length(dir) - 1) < 1e-3f))
+                throw SceneError(loc, "camera rays have direction " + text(dir) + at +
+                                          (k > 0 ? " and the lens's rim" : "") +
+                                          ", not a finite unit vector (check the camera "
+                                          "transform, screenwindow and " +
+                                          (c.has_lens() ? "focaldistance)" : "frameaspectratio)"));
+        }
 }
 
 void Builder::sampler() {
