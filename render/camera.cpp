@@ -38,7 +38,7 @@ void concentric_disc(float u, float v, float& x, float& y) {
 }  // namespace
 
 CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
-    if (!has_lens() || orthographic || environment) return generate_ray(px, py);
+    if (!has_lens()) return generate_ray(px, py);
     // In camera space the pinhole ray's direction is d = (sx tan, sy tan, 1): it meets the plane
     // of focus z = focal_distance at focal_distance d; the ray leaves the lens point towards it
     // (algorithms.md §7), along d - lens / focal_distance (the same direction, without the

@@ -182,8 +182,7 @@ class FilmTracer {
             p.ray.org = Vec3(m[3], m[7], m[11]);
             p.ray.dir = dirs[0];
             m_footprints.start_environment_ray(p.ray.fp, dirs, 0.5f - j[0], 0.5f - j[1]);
-        } else if (m_scene.camera.has_lens() && !m_scene.camera.orthographic &&
-                   !m_scene.camera.environment) {
+        } else if (m_scene.camera.has_lens()) {
             // A thin lens: the sample's point on the lens, stratified over the pixel's samples.
             float lu, lv;
             lens_sample(sp.seeds[i], sample, m_nx, m_ny, lu, lv);

@@ -45,10 +45,11 @@ struct Camera {
     int xres = kDefaultFilmWidth, yres = kDefaultFilmHeight;
     // The perspective camera's thin lens (pbrt-v3's "lensradius" and "focaldistance", in camera
     // units): rays leave a point of the lens disc towards where the pinhole ray meets the plane
-    // of focus. Radius 0 is the pinhole.
+    // of focus. Radius 0 is the pinhole; the scene builder gives a lens to perspective cameras
+    // only, so a camera with one is a perspective camera.
     float lens_radius = 0, focal_distance = 1e6f;
 
-    bool has_lens() const { return lens_radius > 0; }
+    bool has_lens() const { return lens_radius > 0 && !orthographic && !environment; }
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
     /// The pinhole's: with a lens, the ray from the lens's centre.
     CameraRay generate_ray(float px, float py) const;
