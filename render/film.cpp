@@ -6,9 +6,19 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <cmath>
+#include <limits>
+#include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -31,6 +41,182 @@ bool cones_read_by_area(const Scene& scene) {
     });
 }
 
+// The film of a pixel filter other than pbrt-v3's default box (algorithms.md §16): as pbrt-v3's,
+// each sample adds L w and w to every pixel whose centre is within the filter's radius of it, w
+// the filter's weight from its tables, and a pixel is the sum of the first over the sum of the
+// second (negative values, from the negative lobes of mitchell and sinc, made 0, as pbrt-v3).
+// Each task of the render loop traces its part of the image (a tile: a block of rows, or a strip
+// segment) into a buffer of its own that reaches the filter's radius beyond the tile, and the
+// buffers are added to the image in the tiles' order, whichever finishes first, so the image is
+// the same for any thread count.
+// The pixels traced, in the cropped film's coordinates: the film's own, or with a filtered film
+// also those whose samples reach into it.
+struct Traced {
+    int x0, x1, y0, y1;
+    int width() const { return x1 - x0; }
+    int height() const { return y1 - y0; }
+};
+
+class SplatFilm {
+  public:
+    SplatFilm(const FilmSettings& film)
+        : m_film(film),
+          m_filter(film.filter),
+          m_mx(static_cast<int>(std::ceil(film.filter.rx)) + 1),
+          m_my(static_cast<int>(std::ceil(film.filter.ry)) + 1),
+          m_sum(static_cast<std::size_t>(film.width()) * film.height() * 4, 0.0) {}
+
+    // The pixels traced: as pbrt-v3's film asks its sampler for, every pixel whose samples can
+    // reach the film's, [floor(0.5 - r), W + ceil(r - 0.5)) along each axis (the first pixel's
+    // centre less the radius, the last one's plus it).
+    Traced traced() const {
+        return {static_cast<int>(std::floor(0.5f - m_filter.rx)),
+                m_film.width() + static_cast<int>(std::ceil(m_filter.rx - 0.5f)),
+                static_cast<int>(std::floor(0.5f - m_filter.ry)),
+                m_film.height() + static_cast<int>(std::ceil(m_filter.ry - 0.5f))};
+    }
+
+    // A tile's buffer: pixels [x0, x0 + w) x [y0, y0 + h) of the cropped film, 4 doubles each
+    // (the weighted r, g, b and the weights).
+    struct Tile {
+        int id = 0, x0 = 0, y0 = 0, w = 0, h = 0;
+        std::vector<double> px;
+    };
+
+    // The buffer of tile `id`, which traces the film's (cropped) pixels [x_begin, x_end) x
+    // [y_begin, y_end).
+    Tile tile(int id, int x_begin, int x_end, int y_begin, int y_end) const {
+        Tile t;
+        t.id = id;
+        t.x0 = std::max(0, x_begin - m_mx);
+        t.y0 = std::max(0, y_begin - m_my);
+        t.w = std::min(m_film.width(), x_end + m_mx) - t.x0;
+        t.h = std::min(m_film.height(), y_end + m_my) - t.y0;
+        t.px.assign(static_cast<std::size_t>(t.w) * t.h * 4, 0.0);
+        return t;
+    }
+
+    // Samples of one row of pixels (a packet's) added up in single precision before they go to
+    // the tile, pixel by pixel in 4 lanes (r, g, b and the weight): rows [y0, y0 + h) of the
+    // cropped film, columns [x0, x0 + w).
+    struct RowSums {
+        int x0 = 0, y0 = 0, w = 0, h = 0;
+        std::vector<std::array<float, 4>> px;
+    };
+
+    // Makes `r` the sums of the samples of pixels [x_begin, x_end) of row `row` (cropped film).
+    void start(RowSums& r, int row, int x_begin, int x_end) const {
+        r.x0 = std::max(0, x_begin - m_mx);
+        r.y0 = std::max(0, row - m_my);
+        r.w = std::max(0, std::min(m_film.width(), x_end + m_mx) - r.x0);
+        r.h = std::max(0, std::min(m_film.height(), row + m_my + 1) - r.y0);
+        r.px.assign(static_cast<std::size_t>(r.w) * r.h, {0, 0, 0, 0});
+    }
+
+    // Adds a sample at raster position (fx, fy) (the whole film's) with radiance L to the pixels
+    // of the cropped film in its filter's reach: pbrt-v3's FilmTile::AddSample, in its
+    // single-precision steps, so that the same pixels take the same table entries. Returns the
+    // columns it reached, [x0, x1) of the cropped film (empty when none).
+    std::pair<int, int> splat(RowSums& r, float fx, float fy, const Rgb& L) const {
+        constexpr int N = PixelFilter::kTableSize;
+        const float dx = fx - 0.5f, dy = fy - 0.5f;
+        const int px0 = std::max(m_film.x0, static_cast<int>(std::ceil(dx - m_filter.rx))),
+                  px1 = std::min(m_film.x1, static_cast<int>(std::floor(dx + m_filter.rx)) + 1),
+                  py0 = std::max(m_film.y0, static_cast<int>(std::ceil(dy - m_filter.ry))),
+                  py1 = std::min(m_film.y1, static_cast<int>(std::floor(dy + m_filter.ry)) + 1);
+        if (px0 >= px1 || py0 >= py1) return {0, 0};
+        const float inv_rx = 1 / m_filter.rx, inv_ry = 1 / m_filter.ry;
+        // The factors along x, once for every row (at most 2 kMaxFilterRadius + 1 of them).
+        float wx[2 * static_cast<int>(kMaxFilterRadius) + 2];
+        // (The table positions are at least 0, so truncation is their floor.)
+        for (int x = px0; x < px1; ++x) {
+            const float tx = std::abs((float(x) - dx) * inv_rx * N);
+            wx[x - px0] =
+                m_filter.table_x[static_cast<std::size_t>(std::min(static_cast<int>(tx), N - 1))];
+        }
+#if defined(__SSE2__)
+        const __m128 l = _mm_setr_ps(L.r, L.g, L.b, 1);
+#else
+        const float l[4] = {L.r, L.g, L.b, 1};
+#endif
+        for (int y = py0; y < py1; ++y) {
+            const float ty = std::abs((float(y) - dy) * inv_ry * N);
+            const float wy =
+                m_filter.table_y[static_cast<std::size_t>(std::min(static_cast<int>(ty), N - 1))];
+            float* p = r.px[static_cast<std::size_t>(y - m_film.y0 - r.y0) * r.w +
+                            static_cast<std::size_t>(px0 - m_film.x0 - r.x0)]
+                           .data();
+            for (int k = 0; k < px1 - px0; ++k, p += 4) {
+                // pbrt-v3's table entry (the same product); per lane the scalar l[c] * w + p[c].
+                const float w = wx[k] * wy;
+#if defined(__SSE2__)
+                _mm_storeu_ps(p, _mm_add_ps(_mm_loadu_ps(p), _mm_mul_ps(l, _mm_set1_ps(w))));
+#else
+                for (int c = 0; c < 4; ++c) p[c] += l[c] * w;
+#endif
+            }
+        }
+        return {px0 - m_film.x0, px1 - m_film.x0};
+    }
+
+    // Adds columns [x0, x1) of the sums to the tile (in double precision), and clears them.
+    void flush(RowSums& r, Tile& t, int x0, int x1) const {
+        x0 = std::max(x0, r.x0);
+        x1 = std::min(x1, r.x0 + r.w);
+        for (int y = 0; y < r.h && x0 < x1; ++y) {
+            std::array<float, 4>* src = &r.px[static_cast<std::size_t>(y) * r.w + (x0 - r.x0)];
+            double* dst =
+                &t.px[(static_cast<std::size_t>(r.y0 + y - t.y0) * t.w + (x0 - t.x0)) * 4];
+            for (int k = 0; k < x1 - x0; ++k) {
+                for (int c = 0; c < 4; ++c) dst[4 * k + c] += double(src[k][c]);
+                src[k] = {0, 0, 0, 0};
+            }
+        }
+    }
+
+    // Hands a finished tile over: the finished tiles are added to the image in their order.
+    void finish(Tile&& t) {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        const int id = t.id;
+        m_waiting.emplace(id, std::move(t));
+        for (auto it = m_waiting.find(m_next); it != m_waiting.end(); it = m_waiting.find(m_next)) {
+            add(it->second);
+            m_waiting.erase(it);
+            ++m_next;
+        }
+    }
+
+    // The image, every tile added: each pixel's weighted mean, at least 0, times the film scale.
+    void resolve(Framebuffer& fb) const {
+        const double scale = m_film.scale;
+        const std::size_t n = static_cast<std::size_t>(fb.width) * fb.height;
+        for (std::size_t p = 0; p < n; ++p) {
+            const double* s = &m_sum[p * 4];
+            for (int c = 0; c < 3; ++c)
+                fb.rgb[p * 3 + c] =
+                    s[3] != 0 ? static_cast<float>(std::max(0.0, s[c] / s[3]) * scale) : 0.0f;
+        }
+    }
+
+  private:
+    void add(const Tile& t) {
+        const int W = m_film.width();
+        for (int y = 0; y < t.h; ++y) {
+            const double* src = &t.px[static_cast<std::size_t>(y) * t.w * 4];
+            double* dst = &m_sum[(static_cast<std::size_t>(t.y0 + y) * W + t.x0) * 4];
+            for (int k = 0; k < t.w * 4; ++k) dst[k] += src[k];
+        }
+    }
+
+    const FilmSettings& m_film;
+    const PixelFilter& m_filter;
+    const int m_mx, m_my;  // how far beyond its tile a sample reaches, in pixels (at most)
+    std::vector<double> m_sum;
+    std::mutex m_mutex;
+    std::map<int, Tile> m_waiting;  // finished tiles not yet added (an earlier one is not)
+    int m_next = 0;                 // the next tile to add
+};
+
 // Traces the film's samples into a framebuffer, a span of one row at a time.
 //
 // Scanline tags with several samples per pixel: the paper's scanline is a row of sample
@@ -45,7 +231,7 @@ bool cones_read_by_area(const Scene& scene) {
 class FilmTracer {
   public:
     FilmTracer(const Scene& scene, const RenderOptions& options, RenderStats* stats,
-               Framebuffer& fb)
+               Framebuffer& fb, SplatFilm* splat)
         : m_scene(scene),
           m_film(scene.film),
           m_options(options),
@@ -58,7 +244,12 @@ class FilmTracer {
           m_stratum_y(m_ny),
           m_sub_rows(scene.tags == TagPolicy::Scanline &&
                      scene.footprint_methods.has(FootprintMethod::Cmam)),
-          m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene)) {}
+          m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene)),
+          m_splat(splat),
+          m_traced(splat ? splat->traced() : Traced{0, m_film.width(), 0, m_film.height()}) {}
+
+    // The pixels traced (the cropped film's coordinates).
+    const Traced& traced() const { return m_traced; }
 
     int samples_x() const { return m_nx; }
     bool sub_rows() const { return m_sub_rows; }
@@ -66,16 +257,23 @@ class FilmTracer {
     // Traces pixels [x_begin, x_end) of one row, after `prime` pixels to their left whose
     // samples only feed the CMAM's caches (their radiance is dropped): they are what a row
     // traced whole would have put there.
-    void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam) const {
-        Span sp{row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {},
-                {}};
+    //
+    // With a SplatFilm's tile the samples are added to the tile, not to the framebuffer.
+    void span(int row, int x_begin, int x_end, int prime, CmamRowState& cmam,
+              SplatFilm::Tile* tile = nullptr) const {
+        Span sp{
+            row, m_film.y0 + row, x_begin - prime, x_end - (x_begin - prime), prime, {}, {}, {}, {},
+            {}};
         sp.counts.count_lookups = m_options.count_lookups;
         seed_pixels(sp);
-        sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
+        if (tile)
+            m_splat->start(sp.row_sums, row, sp.c0, sp.c0 + sp.n);
+        else
+            sp.sum.assign(static_cast<std::size_t>(sp.n) * 3, 0.0);
         Packet packet;
         auto add = [&](int i, int sx, int sy) {
             add_sample(sp, packet, i, sx, sy);
-            if (packet.n == Scene::kPacketSize) trace(sp, packet, cmam);
+            if (packet.n == Scene::kPacketSize) trace(sp, packet, cmam, tile);
         };
         if (m_sub_rows) {
             for (int sy = 0; sy < m_ny; ++sy)
@@ -86,13 +284,14 @@ class FilmTracer {
                 for (int sy = 0; sy < m_ny; ++sy)
                     for (int sx = 0; sx < m_nx; ++sx) add(i, sx, sy);
         }
-        trace(sp, packet, cmam);
+        trace(sp, packet, cmam, tile);
+        sp.counts.add_to(m_stats);
+        if (tile) return;
         float* out = &m_fb.rgb[(static_cast<std::size_t>(row) * m_fb.width + x_begin) * 3];
         const double scale = m_options.aov == AovKind::None ? double(m_film.scale) : 1.0;
         const std::size_t skip = static_cast<std::size_t>(prime) * 3;
         for (std::size_t k = skip; k < sp.sum.size(); ++k)
             out[k - skip] = static_cast<float>(sp.sum[k] / m_spp * scale);
-        sp.counts.add_to(m_stats);
     }
 
   private:
@@ -103,7 +302,8 @@ class FilmTracer {
         std::vector<uint64_t> seeds;  // per pixel
         std::vector<double> sum;      // 3 per pixel
         RayCounts counts;
-        PacketScratch scratch;  // trace_packet's
+        PacketScratch scratch;        // trace_packet's
+        SplatFilm::RowSums row_sums;  // a filtered film's
     };
 
     // Each pixel's seed. Its generator gives the pixel's jitter in stratum order (sy, sx), two
@@ -113,7 +313,11 @@ class FilmTracer {
         sp.seeds.resize(static_cast<std::size_t>(sp.n));
         for (int i = 0; i < sp.n; ++i) {
             const int px = m_film.x0 + sp.c0 + i;
-            sp.seeds[i] = mix_seed(uint64_t(sp.py) * uint64_t(m_film.xres) + uint64_t(px), 0x5eed);
+            const bool outside = px < 0 || px >= m_film.xres || sp.py < 0 || sp.py >= m_film.yres;
+            sp.seeds[i] =
+                !outside ? mix_seed(uint64_t(sp.py) * uint64_t(m_film.xres) + uint64_t(px), 0x5eed)
+                         // (a filtered film's pixels beyond the film: seeds of their own)
+                         : mix_seed((uint64_t(uint32_t(sp.py)) << 32) | uint32_t(px), 0xb07de5);
         }
     }
 
@@ -133,14 +337,18 @@ class FilmTracer {
     void tag_of(const Span& sp, int col, int sx, int sy, const float* j,
                 texture::RayTag& tag) const {
         tag = {};
+        // Counted from the first pixel traced (a filtered film's start beyond the film's own:
+        // the tags stay non-negative, the CMAM's caches being indexed by them).
+        col -= m_traced.x0;
+        const int py = sp.py - m_traced.y0, xres = m_film.xres - m_traced.x0 * 2;
         if (m_sub_rows) {
-            tag.id = static_cast<uint32_t>(sp.py * m_ny + sy);
+            tag.id = static_cast<uint32_t>(py * m_ny + sy);
             tag.seq = static_cast<uint32_t>(col * m_nx + sx);
             tag.positioned = true;  // in strata: the 2-D CMAM's Jacobian and centre
             tag.x = double(col) * m_nx + sx + j[0];
-            tag.y = double(sp.py) * m_ny + sy + j[1];
+            tag.y = double(py) * m_ny + sy + j[1];
         } else {
-            tag.id = static_cast<uint32_t>(sp.py * m_film.xres + m_film.x0 + col);
+            tag.id = static_cast<uint32_t>(py * xres + m_film.x0 + col);
             tag.seq = static_cast<uint32_t>(sy * m_nx + sx);
         }
     }
@@ -169,9 +377,9 @@ class FilmTracer {
         packet.aov[k] = Aov{m_options.aov};
         CameraPath& p = packet.paths[k];
         p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
+        packet.fx[k] = fx;  // (a filter's splat reads them too)
+        packet.fy[k] = fy;
         if (m_footprints.batches_camera_rays()) {  // made with the packet's others (trace)
-            packet.fx[k] = fx;
-            packet.fy[k] = fy;
             packet.to_stratum_x[k] = 0.5f - j[0];
             packet.to_stratum_y[k] = 0.5f - j[1];
         } else if (m_scene.camera.environment && m_footprints.differentials()) {
@@ -202,8 +410,8 @@ class FilmTracer {
         p.aov = m_options.aov == AovKind::None ? nullptr : &packet.aov[k];
     }
 
-    // Traces the packet's samples and adds each to its pixel, in order.
-    void trace(Span& sp, Packet& packet, CmamRowState& cmam) const {
+    // Traces the packet's samples and adds each to its pixel, in order (or to `tile`'s pixels).
+    void trace(Span& sp, Packet& packet, CmamRowState& cmam, SplatFilm::Tile* tile) const {
         if (packet.n == 0) return;
         if (m_footprints.batches_camera_rays()) {
             CameraRayBatch batch;
@@ -216,6 +424,25 @@ class FilmTracer {
         }
         Rgb radiance[Scene::kPacketSize];
         trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.scratch, radiance);
+        if (tile) {  // a packet's samples summed in single precision, then added to the tile
+            int x0 = std::numeric_limits<int>::max(), x1 = std::numeric_limits<int>::min();
+            for (int k = 0; k < packet.n; ++k) {
+                if (packet.i[k] < sp.prime) continue;  // (primed pixels feed the caches only)
+                Rgb L = radiance[k];
+                if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) {
+                    ++sp.counts.non_finite_samples;
+                    L = Rgb();
+                }
+                const auto [a, b] = m_splat->splat(sp.row_sums, packet.fx[k], packet.fy[k], L);
+                if (a < b) {
+                    x0 = std::min(x0, a);
+                    x1 = std::max(x1, b);
+                }
+            }
+            if (x0 < x1) m_splat->flush(sp.row_sums, *tile, x0, x1);
+            packet.n = 0;
+            return;
+        }
         // Each pixel's samples added to its sum in order; a run of one pixel's samples (a packet
         // holds one or a few pixels' runs) in registers, not through memory sample by sample.
         int i = packet.i[0];
@@ -268,23 +495,32 @@ class FilmTracer {
     const Stratum m_stratum_x, m_stratum_y;
     const bool m_sub_rows;
     const FootprintProducers m_footprints;
+    SplatFilm* m_splat;  // the filtered film, or null (each sample counts for its own pixel)
+    const Traced m_traced;
 };
 
 // Rows in fixed blocks of 8, each row whole, so the image is the same for any thread count. The
 // 1-D CMAM's caches, which live for one block, see each row as one scan from left to right, as
 // in the paper: its matches never cross a row.
-void render_rows(const FilmTracer& tracer, const RenderOptions& options, int height, int width) {
+// With a filtered film, each block is a tile.
+void render_rows(const FilmTracer& tracer, const RenderOptions& options, const Traced& px,
+                 SplatFilm* splat) {
     constexpr int kBlockRows = 8;
-    const int blocks = (height + kBlockRows - 1) / kBlockRows;
+    const int height = px.height(), blocks = (height + kBlockRows - 1) / kBlockRows;
     std::atomic<int> rows_done{0};
     parallel_range(blocks, options.threads, [&](int begin, int end) {
         CmamRowState cmam;
-        for (int b = begin; b < end; ++b)
-            for (int row = b * kBlockRows; row < std::min(height, (b + 1) * kBlockRows); ++row) {
-                tracer.span(row, 0, width, 0, cmam);
+        for (int b = begin; b < end; ++b) {
+            const int r0 = px.y0 + b * kBlockRows, r1 = std::min(px.y1, r0 + kBlockRows);
+            std::optional<SplatFilm::Tile> tile;
+            if (splat) tile = splat->tile(b, px.x0, px.x1, r0, r1);
+            for (int row = r0; row < r1; ++row) {
+                tracer.span(row, px.x0, px.x1, 0, cmam, tile ? &*tile : nullptr);
                 int done = ++rows_done;
                 if (options.progress) options.progress(done, height);
             }
+            if (splat) splat->finish(std::move(*tile));
+        }
     });
 }
 
@@ -299,8 +535,9 @@ void render_rows(const FilmTracer& tracer, const RenderOptions& options, int hei
 // fewer than 16 strips a thread: each segment is a task of its own, whose caches start with the
 // row above the segment traced into them. Caches are then in the state a whole strip would have
 // left them in, so the cut changes no pixel.
-void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, int height,
-                        int width) {
+void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, const Traced& px,
+                        SplatFilm* splat) {
+    const int height = px.height(), width = px.width();
     const int strips = (width + kCmamStripWidth - 1) / kCmamStripWidth;
     const int prime_pixels = tracer.sub_rows() ? (tracer.samples_x() >= 2 ? 1 : 2) : 0;
     const int threads = worker_count(options.threads);
@@ -311,16 +548,20 @@ void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, 
     parallel_range(strips * tasks_per_strip, options.threads, [&](int begin, int end) {
         for (int task = begin; task < end; ++task) {
             CmamRowState cmam;
-            const int k = task / tasks_per_strip, r0 = (task % tasks_per_strip) * seg_rows;
-            const int x0 = k * kCmamStripWidth, x1 = std::min(width, x0 + kCmamStripWidth);
-            const int prime = std::min(x0, prime_pixels);
-            if (r0 > 0)  // the row above, into the caches only
-                tracer.span(r0 - 1, x1, x1, x1 - x0 + prime, cmam);
-            for (int row = r0; row < std::min(height, r0 + seg_rows); ++row) {
-                tracer.span(row, x0, x1, prime, cmam);
+            const int k = task / tasks_per_strip, r0 = px.y0 + (task % tasks_per_strip) * seg_rows;
+            const int x0 = px.x0 + k * kCmamStripWidth, x1 = std::min(px.x1, x0 + kCmamStripWidth);
+            const int prime = std::min(x0 - px.x0, prime_pixels);
+            const int r1 = std::min(px.y1, r0 + seg_rows);
+            std::optional<SplatFilm::Tile> tile;  // with a filtered film, the segment's
+            if (splat) tile = splat->tile(task, x0, x1, r0, r1);
+            if (r0 > px.y0)  // the row above, into the caches only
+                tracer.span(r0 - 1, x1, x1, x1 - x0 + prime, cmam, tile ? &*tile : nullptr);
+            for (int row = r0; row < r1; ++row) {
+                tracer.span(row, x0, x1, prime, cmam, tile ? &*tile : nullptr);
                 int done = ++spans_done;
                 if (options.progress) options.progress(done, strips * height);
             }
+            if (splat) splat->finish(std::move(*tile));
         }
     });
 }
@@ -364,11 +605,17 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                       options.threads);
     build_texture_tables(scene, options.threads);
-    const FilmTracer tracer(scene, options, stats, fb);
+    // A pixel filter reaching beyond the pixel splats its samples; AOVs are each pixel's own.
+    std::unique_ptr<SplatFilm> splat;
+    if (!scene.film.filter.own_pixel() && options.aov == AovKind::None)
+        splat = std::make_unique<SplatFilm>(scene.film);
+    const FilmTracer tracer(scene, options, stats, fb, splat.get());
+    const Traced& px = tracer.traced();
     if (scene.footprint_methods.has(FootprintMethod::Cmam) && scene.cmam.two_d)
-        render_cmam_strips(tracer, options, fb.height, fb.width);
+        render_cmam_strips(tracer, options, px, splat.get());
     else
-        render_rows(tracer, options, fb.height, fb.width);
+        render_rows(tracer, options, px, splat.get());
+    if (splat) splat->resolve(fb);
     return fb;
 }
 

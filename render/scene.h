@@ -21,6 +21,7 @@
 #include "render/footprint/method.h"
 #include "render/huge_pages.h"
 #include "render/math.h"
+#include "render/pixel_filter.h"
 
 namespace cmam::render {
 
@@ -77,7 +78,8 @@ struct FilmSettings {
     // The cropped pixel bounds [x0,x1) x [y0,y1).
     int x0 = 0, y0 = 0, x1 = kDefaultFilmWidth, y1 = kDefaultFilmHeight;
     std::string filename = "pbrt.exr";
-    float scale = 1;  // pbrt-v3's Film "scale": every pixel's radiance is multiplied by it
+    float scale = 1;     // pbrt-v3's Film "scale": every pixel's radiance is multiplied by it
+    PixelFilter filter;  // PixelFilter (pbrt-v3's default: the box of radius 0.5)
     int width() const { return x1 - x0; }
     int height() const { return y1 - y0; }
 };

@@ -51,10 +51,14 @@ void Builder::film() {
             cw[i] = std::clamp((*c)[i], 0.0, 1.0);
         }
     }
-    f.x0 = static_cast<int>(std::ceil(f.xres * std::min(cw[0], cw[1])));
-    f.x1 = static_cast<int>(std::ceil(f.xres * std::max(cw[0], cw[1])));
-    f.y0 = static_cast<int>(std::ceil(f.yres * std::min(cw[2], cw[3])));
-    f.y1 = static_cast<int>(std::ceil(f.yres * std::max(cw[2], cw[3])));
+    // In single precision, as pbrt-v3 (200 x 0.6f is 120.0000076f, so its ceiling is 121).
+    auto edge = [](int res, double c) {
+        return static_cast<int>(std::ceil(static_cast<float>(res) * static_cast<float>(c)));
+    };
+    f.x0 = edge(f.xres, std::min(cw[0], cw[1]));
+    f.x1 = edge(f.xres, std::max(cw[0], cw[1]));
+    f.y0 = edge(f.yres, std::min(cw[2], cw[3]));
+    f.y1 = edge(f.yres, std::max(cw[2], cw[3]));
     if (f.width() <= 0 || f.height() <= 0)
         throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
     // pbrt-v3 multiplies every pixel by "scale" (radiance only, not AOVs).
@@ -303,20 +307,45 @@ void Builder::sampler() {
 void Builder::filter() {
     const Entity& e = m_desc.filter;
     if (!e.given) return;
+    using K = PixelFilter::Kind;
+    PixelFilter f;
+    double radius = 2;  // pbrt-v3's default radius for all but the box and sinc
     if (e.type == "box") {
-        double xw = e.params.get_float("xwidth", 0.5), yw = e.params.get_float("ywidth", 0.5);
-        if (xw != 0.5 || yw != 0.5)
-            warn(e.loc,
-                 "box filter width other than 0.5 is rendered with width 0.5 (each sample "
-                 "counts for its own pixel)");
-        e.params.check_unused("PixelFilter \"box\"", m_warn);
-    } else if (e.type == "gaussian" || e.type == "mitchell" || e.type == "sinc" ||
-               e.type == "triangle") {
-        warn(e.loc, "PixelFilter " + in_quotes(e.type) + " is rendered as \"box\"");
-        e.params.check_unused("PixelFilter", m_warn, names_of(e));
+        f.kind = K::Box;
+        radius = 0.5;
+    } else if (e.type == "gaussian") {
+        f.kind = K::Gaussian;
+        f.alpha = static_cast<float>(finite_float(e, "alpha", 2, true));
+    } else if (e.type == "mitchell") {
+        f.kind = K::Mitchell;
+        f.b = static_cast<float>(finite_float(e, "B", 1.0 / 3));
+        f.c = static_cast<float>(finite_float(e, "C", 1.0 / 3));
+    } else if (e.type == "sinc") {
+        f.kind = K::Sinc;
+        radius = 4;
+        f.tau = static_cast<float>(finite_float(e, "tau", 3, true));
+    } else if (e.type == "triangle") {
+        f.kind = K::Triangle;
     } else {
         throw SceneError(e.loc, "unknown PixelFilter " + in_quotes(e.type));
     }
+    // A sample counts for every pixel within the radius: beyond kMaxFilterRadius pixels a side
+    // (a blur wider than any reconstruction filter) the radius is bounded, with a warning.
+    auto width = [&](const char* name) {
+        double r = finite_float(e, name, radius, true);
+        if (r > kMaxFilterRadius) {
+            warn(loc_of(e, name), std::string("PixelFilter ") + name + " " + pbrt::number_text(r) +
+                                      " is rendered as " + pbrt::number_text(kMaxFilterRadius) +
+                                      " pixels");
+            r = kMaxFilterRadius;
+        }
+        return static_cast<float>(r);
+    };
+    f.rx = width("xwidth");
+    f.ry = width("ywidth");
+    f.tabulate();
+    m_scene->film.filter = f;
+    e.params.check_unused("PixelFilter " + in_quotes(e.type), m_warn);
 }
 
 void Builder::integrator() {
