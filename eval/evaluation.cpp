@@ -150,6 +150,7 @@ Rendered render_with(const pbrt::SceneDesc& desc, render::BuildOptions bo, int s
     render::RenderOptions ro;
     ro.aov = aov;
     ro.count_lookups = false;  // the timings measure the filters without the bookkeeping
+    ro.pixel_filter = false;   // box-filtered pixels, the ground truth's (algorithms.md §9)
     render::RenderStats stats;
     auto t0 = std::chrono::steady_clock::now();
     Rendered r;

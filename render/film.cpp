@@ -41,7 +41,7 @@ bool cones_read_by_area(const Scene& scene) {
     });
 }
 
-// The film of a pixel filter other than pbrt-v3's default box (algorithms.md §16): as pbrt-v3's,
+// The film of a pixel filter other than pbrt-v3's default box (algorithms.md §17): as pbrt-v3's,
 // each sample adds L w and w to every pixel whose centre is within the filter's radius of it, w
 // the filter's weight from its tables, and a pixel is the sum of the first over the sum of the
 // second (negative values, from the negative lobes of mitchell and sinc, made 0, as pbrt-v3).
@@ -607,7 +607,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     build_texture_tables(scene, options.threads);
     // A pixel filter reaching beyond the pixel splats its samples; AOVs are each pixel's own.
     std::unique_ptr<SplatFilm> splat;
-    if (!scene.film.filter.own_pixel() && options.aov == AovKind::None)
+    if (!scene.film.filter.own_pixel() && options.pixel_filter && options.aov == AovKind::None)
         splat = std::make_unique<SplatFilm>(scene.film);
     const FilmTracer tracer(scene, options, stats, fb, splat.get());
     const Traced& px = tracer.traced();

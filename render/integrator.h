@@ -43,6 +43,9 @@ struct RenderOptions {
     /// Called after each finished row, or row of a strip with the CMAM, with (done, total); may
     /// be empty.
     std::function<void(int, int)> progress;
+    /// The scene's PixelFilter; false: each sample counts for its own pixel alone (the box of
+    /// radius 0.5, as `cmam eval` defines its pixels), whatever the scene's filter.
+    bool pixel_filter = true;
 };
 
 /// Rendered image: linear RGB, top row first, film.width() x film.height().

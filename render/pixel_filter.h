@@ -1,6 +1,6 @@
 // render — pbrt-v3's pixel reconstruction filters (PixelFilter): each camera sample counts for
 // every pixel whose centre lies within the filter's radius of it, weighted by the filter, and a
-// pixel is its samples' weighted mean. algorithms.md §16.
+// pixel is its samples' weighted mean. algorithms.md §17.
 #pragma once
 
 #include <array>

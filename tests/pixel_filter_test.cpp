@@ -181,6 +181,18 @@ TEST(PixelFilter, FilteredFilmIsPbrtV3sWeightedMeanOfTheSamplesInReach) {
     }
 }
 
+TEST(PixelFilter, WithoutTheFilterEachSampleCountsForItsOwnPixel) {
+    // RenderOptions::pixel_filter false (cmam eval's box-filtered pixels): the box's image.
+    auto s = test::scene_from(edge_scene("PixelFilter \"gaussian\""));
+    RenderOptions o;
+    o.pixel_filter = false;
+    const Framebuffer fb = render::render(*s, o, nullptr);
+    EXPECT_EQ(fb.rgb[0], 0.5f);
+    EXPECT_EQ(fb.rgb[9 * 3], 0.0f);
+    EXPECT_EQ(fb.rgb[10 * 3], 0.75f);
+    EXPECT_EQ(fb.rgb[11 * 3], 1.0f);
+}
+
 TEST(PixelFilter, CroppedFilmTakesTheSamplesBeyondTheCrop) {
     // Columns [10, 15) of the same film, the edge in the first: the pixels at the crop's edges
     // take the samples of the pixels beyond it, as the whole film's pixels do.
