@@ -289,6 +289,7 @@ class SceneEvaluation {
         sr.reference_cached = fs::exists(cached.beauty) && fs::exists(cached.texture) &&
                               fs::exists(cached.untextured);
         if (!sr.reference_cached) {
+            warn_of_cost(sr, desc, gt.options, warn);
             render_ground_truth(sr.name, desc, gt.options, cached, warn);
         } else {
             // The warnings of building, which a cached ground truth did not show.
@@ -308,6 +309,27 @@ class SceneEvaluation {
         gt.heat_scale = std::max(1e-3, compare(gt.beauty, gt.beauty).reference_mean);
         gt.texture_heat_scale = std::max(1e-3, compare(gt.texture, gt.texture).reference_mean);
         return gt;
+    }
+
+    // A ground truth that will take long (a large film, many light samples) is announced before
+    // it starts, with what shortens it: its three renders take about three times the image's,
+    // which is its render at one sample per pixel times the samples (measured here, at a
+    // thousandth of the cost).
+    void warn_of_cost(const SceneReport& sr, const pbrt::SceneDesc& desc,
+                      const render::BuildOptions& gt_opts, const pbrt::WarningSink& warn) const {
+        const Rendered one = render_with(desc, gt_opts, 1, render::AovKind::None, warn);
+        const double estimate = 3 * one.seconds * sr.reference_spp;
+        if (estimate < o.long_ground_truth) return;
+        char span[32], text[400];
+        if (estimate >= 7200)
+            std::snprintf(span, sizeof span, "%.1f h", estimate / 3600);
+        else
+            std::snprintf(span, sizeof span, "%.0f min", std::max(1.0, estimate / 60));
+        std::snprintf(text, sizeof text,
+                      "warning: %s: its ground truth at %d samples per pixel will take about %s "
+                      "(%.2f s at 1 spp); --reference-spp, --resolution or --crop make it shorter",
+                      sr.path.c_str(), sr.reference_spp, span, one.seconds);
+        warn(text);
     }
 
     // Renders the ground truth's image, texture AOV and untextured image into the cache.

@@ -45,6 +45,9 @@ struct EvalOptions {
     /// Renders timed per method and sample count: the report gives their median and range
     /// (1: a single run, marked as such).
     int timing_runs = 1;
+    /// A ground truth to be rendered that is expected to take longer than this (seconds, from
+    /// the scene's render at 1 spp) is announced first with a warning (through `warn`).
+    double long_ground_truth = 120;
     /// Called after each render with (renders done, renders total, what was rendered).
     std::function<void(int, int, const std::string&)> progress;
     /// Receives each distinct warning of a scene (parsing and building), once.

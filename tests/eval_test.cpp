@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -99,6 +100,49 @@ TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
     write_scene("# a changed scene\n");
     EXPECT_NE(eval::reference_key(scene.string(), 4), key);
     EXPECT_FALSE(eval::run_eval(o).scenes[0].reference_cached);
+}
+
+// A ground truth expected to take longer than EvalOptions::long_ground_truth is announced with a
+// warning before it is rendered, naming the scene and its samples; a cached one is not.
+TEST(Eval, LongGroundTruthIsAnnouncedBeforeItIsRendered) {
+    const test::TempDir tmp("cmam_eval_long");
+    const fs::path scene = tmp.path / "plane.pbrt";
+    std::ofstream(scene) << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\"\n"
+                         << "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 8\n"
+                         << "WorldBegin LightSource \"distant\" \"point from\" [0 1 -1]\n"
+                         << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+                         << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5]\nWorldEnd\n";
+    eval::EvalOptions o;
+    o.scenes = {scene.string()};
+    o.methods = {*eval::parse_method("none")};
+    o.spp = {1};
+    o.reference_spp = 9;
+    o.out_dir = (tmp.path / "out").string();
+    std::vector<std::string> warnings;
+    o.warn = [&](const std::string& w) { warnings.push_back(w); };
+    auto announced = [&] {
+        return std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
+            return w.rfind("warning: " + scene.string() +
+                               ": its ground truth at 9 samples per pixel will take about ",
+                           0) == 0 &&
+                   w.find("--reference-spp, --resolution or --crop make it shorter") !=
+                       std::string::npos;
+        });
+    };
+    o.long_ground_truth = 1e9;  // (a tiny scene: seconds would never be reached)
+    eval::run_eval(o);
+    EXPECT_EQ(announced(), 0);
+    std::filesystem::remove_all(o.out_dir);
+    o.long_ground_truth = 0;
+    const eval::EvalResult r = eval::run_eval(o);
+    EXPECT_EQ(announced(), 1);
+    EXPECT_EQ(std::count_if(r.scenes[0].warnings.begin(), r.scenes[0].warnings.end(),
+                            [](const std::string& w) {
+                                return w.find("its ground truth") != std::string::npos;
+                            }),
+              1);       // in the report too
+    eval::run_eval(o);  // cached: nothing to announce
+    EXPECT_EQ(announced(), 1);
 }
 
 // EvalOptions::adjust_scene changes each scene's film before anything is rendered (the command
