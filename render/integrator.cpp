@@ -304,8 +304,12 @@ struct Tracer {
     // are left in `shadow`, untraced, and its radiance kept in parts; its reflected and
     // transmitted rays are made and left in made_rays. Everything else is done in li's order:
     // the random numbers, texture lookups and CMAM cache entries are li's.
+    //
+    // `after_diffuse`: the ray left a non-specular bounce of a path (path tracing), so what it
+    // meets lights the path only through the bounce's light samples: the lights it hits or
+    // escapes to add nothing (pbrt-v3's path integrator without multiple importance sampling).
     Rgb li(const Ray& camera_or_child, int depth, std::optional<SurfaceHit>* first = nullptr,
-           int deferred = -1) {
+           int deferred = -1, bool after_diffuse = false) {
         // A ray that is not finite (a NaN or infinite index, texel or parameter upstream) has no
         // radiance: its sample is counted as non-finite and taken as black (FilmTracer).
         if (!finite(camera_or_child.org) || !finite(camera_or_child.dir))
@@ -322,7 +326,7 @@ struct Tracer {
                                         false);
             std::optional<SurfaceHit>& hit = first ? *first : traced;
             first = nullptr;
-            if (!hit) return escaped(ray.dir, ray.fp.diff);
+            if (!hit) return after_diffuse ? Rgb() : escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
@@ -374,7 +378,7 @@ struct Tracer {
                 bsdf.kt = bsdf.kt * mix_weight;
             }
             if (aov) record_aov(ctx, h, bsdf);
-            Rgb L = emitted(h, wo);
+            Rgb L = after_diffuse ? Rgb() : emitted(h, wo);
             if (deferred >= 0) {
                 // (Children add deferred hits: `d` is not kept across them.)
                 DeferredHit& d = (*deferred_hits)[static_cast<std::size_t>(deferred)];
@@ -397,10 +401,47 @@ struct Tracer {
             if (depth + 1 < scene.max_depth) {
                 L += specular_reflect(ray, h, at, bsdf, wo, depth);
                 L += specular_transmit(ray, h, at, bsdf, wo, depth);
+                if (scene.path_tracing && bsdf.has_nonspecular()) L += bounce(h, bsdf, wo, depth);
             }
             return L;
         }
         return {};
+    }
+
+    // Path tracing: the product of the weights from the camera to the ray being traced, which
+    // Russian roulette reads (pbrt-v3's beta).
+    Rgb beta{1, 1, 1};
+
+    // One non-specular bounce of a path from h (path tracing): a direction drawn from the BSDF,
+    // weighted f |cos| / pdf, continued past three bounces by Russian roulette as pbrt-v3's path
+    // integrator does (a path whose throughput's largest channel m is under rr_threshold goes
+    // on with probability 1 - max(0.05, 1 - m), its weight divided by that). The ray carries no
+    // footprint, as pbrt-v3's rays from such bounces carry no differentials: the textures it
+    // meets are read at full resolution, and the CMAM's caches (whose paths are specular
+    // chains) are not used below it.
+    Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, int depth) {
+        const float u0 = rng.next_float(), u1 = rng.next_float(), u2 = rng.next_float();
+        const Bsdf::Sample s = bsdf.sample(bsdf.outgoing(wo), u0, u1, u2);
+        if (s.pdf == 0 || s.f.is_black()) return {};
+        Rgb weight = s.f * (absdot(s.wi, h.ns) / s.pdf);
+        const Rgb through = beta * weight;
+        const float m = std::max({through.r, through.g, through.b});
+        if (depth > 3 && m < scene.rr_threshold) {
+            const float q = std::max(0.05f, 1 - m);
+            if (rng.next_float() < q) return {};
+            weight = weight / (1 - q);
+        }
+        if (!finite(s.wi)) return {};
+        if (counts) ++counts->secondary;
+        const Ray next{offset_origin(h, s.wi), s.wi, RayFootprint{}};
+        CmamRowState* const caches = cmam;
+        const Rgb saved = beta;
+        cmam = nullptr;
+        beta = beta * weight;
+        const Rgb L = weight * li(next, depth + 1, nullptr, -1, true);
+        beta = saved;
+        cmam = caches;
+        return L;
     }
 
     // The radiance of a deferred hit once every shadow ray is traced: li's sum, in li's order.
@@ -429,7 +470,13 @@ struct Tracer {
     Rgb spawn(const SurfaceHit& h, Ray& next, int depth, const Rgb& weight, int parent, int lobe) {
         if (counts) ++counts->secondary;
         next.org = offset_origin(h, next.dir);
-        if (parent < 0) return weight * li(next, depth + 1);
+        if (parent < 0) {
+            const Rgb saved = beta;
+            beta = beta * weight;
+            const Rgb L = weight * li(next, depth + 1);
+            beta = saved;
+            return L;
+        }
         (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe] = {true, weight, -1};
         ++*made_count;
         return {};
@@ -608,6 +655,14 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         t.made_count = &children;
         return t;
     };
+    if (scene.path_tracing) {  // each sample's path traced to its end, one ray at a time
+        for (int k = 0; k < n; ++k) {
+            rng[k].emplace(paths[k].seed);
+            if (paths[k].counts) ++paths[k].counts->camera;
+            radiance[k] = tracer(k).li(paths[k].ray, 0, &hits[k]);
+        }
+        return;
+    }
     for (int k = 0; k < n; ++k) {
         rng[k].emplace(paths[k].seed);
         if (paths[k].counts) ++paths[k].counts->camera;

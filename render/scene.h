@@ -368,6 +368,10 @@ class Scene {
     FilmSettings film;
     SamplerSettings sampler;
     int max_depth = 5;  // at most kMaxDepthLimit
+    // pbrt-v3's "path" integrator: at every non-specular hit one more bounce drawn from the BSDF
+    // (algorithms.md §18), continued past three bounces by Russian roulette below rr_threshold.
+    bool path_tracing = false;
+    float rr_threshold = 1;
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;

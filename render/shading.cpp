@@ -459,6 +459,72 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
     return out;
 }
 
+// algorithms.md §18. The glossy lobe's normals are drawn from the whole distribution D(h) cos
+// theta_h (pbrt-v3's Trowbridge-Reitz sampling without the visible-normals restriction), so the
+// reflected direction's density is D(h) |cos theta_h| / (4 |wo . h|).
+float Bsdf::pdf(const Outgoing& o, const Vec3& wi_w) const {
+    const Vec3& wo = o.local;
+    const Vec3 wi = frame.to_local(wi_w);
+    if (wo.z == 0 || wo.z * wi.z <= 0) return 0;
+    const bool diffuse = has_diffuse(), glossy = has_glossy();
+    const float share = diffuse && glossy ? 0.5f : 1.0f;
+    float p = 0;
+    if (diffuse) p += share * std::abs(wi.z) * kInvPi;
+    if (glossy) {
+        Vec3 wh = wi + wo;
+        if (wh.x == 0 && wh.y == 0 && wh.z == 0) return p;
+        wh = normalize(wh);
+        if (wh.z < 0) wh = -wh;
+        const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+        const float dot_oh = std::abs(dot(wo, wh));
+        if (dot_oh > 0) p += share * d * wh.z / (4 * dot_oh);
+    }
+    return p;
+}
+
+Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const {
+    Sample out;
+    const Vec3& wo = o.local;
+    if (wo.z == 0 || !has_nonspecular()) return out;
+    const bool glossy_lobe = has_glossy() && (!has_diffuse() || u0 < 0.5f);
+    Vec3 wi;
+    if (!glossy_lobe) {
+        // Cosine-weighted on wo's side of the shading normal.
+        const float r = std::sqrt(u1), phi = 2 * kPi * u2;
+        const float z = std::sqrt(std::max(0.0f, 1 - u1));
+        wi = Vec3(r * std::cos(phi), r * std::sin(phi), wo.z < 0 ? -z : z);
+    } else {
+        float tan2, phi;
+        if (!anisotropic) {
+            tan2 = alpha * alpha * u1 / (1 - u1);
+            phi = 2 * kPi * u2;
+        } else {
+            phi = std::atan(alpha_y / alpha * std::tan(2 * kPi * u2 + 0.5f * kPi));
+            if (u2 > 0.5f) phi += kPi;
+            const float c = std::cos(phi), sn = std::sin(phi);
+            const float a2 = 1 / (c * c / (alpha * alpha) + sn * sn / (alpha_y * alpha_y));
+            tan2 = a2 * u1 / (1 - u1);
+        }
+        if (!std::isfinite(tan2)) return out;
+        const float cos_h = 1 / std::sqrt(1 + tan2),
+                    sin_h = std::sqrt(std::max(0.0f, 1 - cos_h * cos_h));
+        Vec3 wh(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
+        if (wo.z < 0) wh = -wh;
+        const float dot_oh = dot(wo, wh);
+        if (dot_oh <= 0) return out;
+        wi = -wo + 2 * dot_oh * wh;
+        if (wi.z * wo.z <= 0) return out;
+    }
+    out.wi = frame.to_world(wi);
+    out.pdf = pdf(o, out.wi);
+    if (!(out.pdf > 0)) {
+        out.pdf = 0;
+        return out;
+    }
+    out.f = f(o, out.wi);
+    return out;
+}
+
 Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit,
                  const TexContext& ctx, float du, float dv) {
     if (!(du > 0)) du = 0.0005f;

@@ -99,6 +99,20 @@ struct Bsdf {
     };
     Outgoing outgoing(const Vec3& wo) const;
     Rgb f(const Outgoing& wo, const Vec3& wi) const;
+
+    /// A direction drawn from the non-specular lobes for the outgoing direction `o`, from three
+    /// uniform numbers: the lobe (diffuse or glossy, evenly when both, as pbrt-v3 picks among its
+    /// components), then a cosine-weighted direction about the shading normal or a reflection about
+    /// a Trowbridge-Reitz microfacet normal. `pdf` is the density of the whole mixture in solid
+    /// angle (0: nothing drawn), `f` the BSDF there.
+    struct Sample {
+        Vec3 wi;
+        Rgb f;
+        float pdf = 0;
+    };
+    Sample sample(const Outgoing& o, float u0, float u1, float u2) const;
+    /// The density sample() draws wi with (wo, wi in world space).
+    float pdf(const Outgoing& o, const Vec3& wi) const;
 };
 
 /// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose

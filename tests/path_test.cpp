@@ -1,0 +1,164 @@
+// Path tracing (pbrt-v3's "path" integrator): BSDF sampling against its own density and against
+// uniform sampling, a closed emitting sphere seen from inside against the sum of its bounces,
+// and the integrators a scene may name.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "pbrt/parser.h"
+#include "render/build_scene.h"
+#include "render/integrator.h"
+#include "render/shading.h"
+#include "render/tracer.h"
+#include "scene_util.h"
+
+using namespace cmam;
+using namespace cmam::render;
+
+namespace {
+
+// Lambertian; glossy alone; diffuse under an anisotropic glossy lobe.
+std::vector<Bsdf> test_bsdfs() {
+    Bsdf base;
+    base.frame = Frame::from_z(Vec3(0, 0, 1));
+    base.ng = Vec3(0, 0, 1);
+    Bsdf lambert = base, glossy = base, both = base;
+    lambert.kd = Rgb(0.8f);
+    glossy.ks = Rgb(1);
+    glossy.alpha = 0.2f;
+    glossy.lobe_eta_i = 1;
+    both.kd = Rgb(0.5f);
+    both.ks = Rgb(0.5f);
+    both.alpha = 0.05f;
+    both.alpha_y = 0.4f;
+    both.anisotropic = true;
+    return {lambert, glossy, both};
+}
+
+}  // namespace
+
+// sample() draws directions with the density pdf() reports: the density integrates over the
+// sphere to the share of draws that give a direction (those a microfacet reflects below the
+// surface give none; all of the Lambertian's), and the estimate of the reflected fraction,
+// f |cos| / pdf, agrees with uniform sampling's.
+TEST(PathTracing, BsdfSamplesHaveTheDensityTheyReport) {
+    const std::vector<Bsdf> bsdfs = test_bsdfs();
+    for (std::size_t b = 0; b < bsdfs.size(); ++b) {
+        SCOPED_TRACE(b);
+        const Bsdf& bsdf = bsdfs[b];
+        for (float theta_o : {0.1f, 0.8f, 1.3f}) {
+            SCOPED_TRACE(theta_o);
+            const Vec3 wo(std::sin(theta_o), 0, std::cos(theta_o));
+            const Bsdf::Outgoing o = bsdf.outgoing(wo);
+            // The density over the sphere, by a midpoint rule in (cos theta, phi).
+            const int n = 800;
+            double integral = 0, uniform = 0;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) {
+                    const float z = -1 + 2 * (i + 0.5f) / n, phi = 2 * kPi * (j + 0.5f) / n;
+                    const float r = std::sqrt(std::max(0.0f, 1 - z * z));
+                    const Vec3 wi(r * std::cos(phi), r * std::sin(phi), z);
+                    const double w = 4 * kPi / (double(n) * n);
+                    integral += bsdf.pdf(o, wi) * w;
+                    uniform += bsdf.f(o, wi).g * std::abs(z) * w;
+                }
+            EXPECT_LT(integral, 1.01);
+            if (b == 0) {
+                EXPECT_NEAR(integral, 1, 0.005);
+            }
+            // Importance sampling's estimate of the same integral.
+            Rng rng(7 + b);
+            double sampled = 0;
+            int drawn = 0;
+            const int m = 200000;
+            for (int k = 0; k < m; ++k) {
+                const float u0 = rng.next_float(), u1 = rng.next_float(), u2 = rng.next_float();
+                const Bsdf::Sample s = bsdf.sample(o, u0, u1, u2);
+                if (s.pdf == 0) continue;
+                ++drawn;
+                EXPECT_NEAR(s.pdf, bsdf.pdf(o, s.wi), 1e-4f * s.pdf);
+                EXPECT_NEAR(length(s.wi), 1, 1e-5);
+                sampled += s.f.g * std::abs(s.wi.z) / s.pdf;
+            }
+            EXPECT_NEAR(double(drawn) / m, integral, 0.01);
+            EXPECT_NEAR(sampled / m, uniform, 0.01 + 0.01 * uniform);
+        }
+    }
+}
+
+namespace {
+
+// The camera inside a sphere of radius 1 that emits 1 from both sides and reflects with albedo
+// 0.5: every ray sees 1 + 0.5 + 0.25 + ..., one term per bounce lit.
+std::string furnace(int maxdepth, const std::string& integrator = "path") {
+    return "LookAt 0 0 0  0 0 1  0 1 0 Camera \"perspective\" \"float fov\" 60 "
+           "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
+           "Sampler \"stratified\" \"integer xsamples\" 8 \"integer ysamples\" 8 "
+           "Integrator \"" +
+           integrator + "\" \"integer maxdepth\" " + std::to_string(maxdepth) +
+           " WorldBegin AttributeBegin "
+           "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" \"true\" "
+           "Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5] Shape \"sphere\" \"float radius\" 1 "
+           "AttributeEnd WorldEnd";
+}
+
+double bounces(int lit) {  // 1 + 0.5 + ... + 0.5^lit
+    double s = 0;
+    for (int k = 0; k <= lit; ++k) s += std::pow(0.5, k);
+    return s;
+}
+
+}  // namespace
+
+TEST(PathTracing, ClosedEmittingSphereSeesEveryBounce) {
+    // maxdepth 5: five shaded hits, each lit by the sphere (its light samples), and the
+    // emission seen directly: 1 + 0.5 + ... + 0.5^5, in every pixel (no Russian roulette yet).
+    {
+        auto s = test::scene_from(furnace(5));
+        const Framebuffer fb = render::render(*s, {}, nullptr);
+        for (float v : fb.rgb) EXPECT_NEAR(v, bounces(5), 1e-4);
+    }
+    // maxdepth 8: Russian roulette from the fourth bounce on; its weights keep the mean.
+    {
+        auto s = test::scene_from(furnace(8));
+        const Framebuffer fb = render::render(*s, {}, nullptr);
+        const double mean = std::accumulate(fb.rgb.begin(), fb.rgb.end(), 0.0) / fb.rgb.size();
+        EXPECT_NEAR(mean, bounces(8), 0.005 * bounces(8));
+        EXPECT_GT(*std::max_element(fb.rgb.begin(), fb.rgb.end()), bounces(5) + 1e-3);
+    }
+    // Whitted: the emission and the direct light only.
+    auto w = test::scene_from(furnace(5, "whitted"));
+    const Framebuffer fw = render::render(*w, {}, nullptr);
+    for (float v : fw.rgb) EXPECT_NEAR(v, bounces(1), 1e-4);
+}
+
+TEST(PathTracing, SceneIntegratorsChooseIt) {
+    auto integrator = [](const std::string& directive, std::vector<std::string>* warnings) {
+        auto s = build_scene(pbrt::parse_string(directive + " WorldBegin WorldEnd", "i.pbrt"), {},
+                             [&](const std::string& w) { warnings->push_back(w); });
+        return std::make_pair(s->path_tracing, s->rr_threshold);
+    };
+    std::vector<std::string> warnings;
+    EXPECT_EQ(integrator("Integrator \"path\"", &warnings), std::make_pair(true, 1.0f));
+    EXPECT_EQ(integrator("Integrator \"path\" \"float rrthreshold\" 0.5", &warnings),
+              std::make_pair(true, 0.5f));
+    EXPECT_FALSE(integrator("Integrator \"whitted\"", &warnings).first);
+    EXPECT_FALSE(integrator("Integrator \"directlighting\"", &warnings).first);
+    const auto none = std::count_if(warnings.begin(), warnings.end(), [](const std::string& w) {
+        return w.find("Integrator") != std::string::npos;
+    });
+    EXPECT_EQ(none, 0);
+    for (const char* other : {"bdpt", "volpath", "mlt", "sppm"}) {
+        warnings.clear();
+        EXPECT_TRUE(integrator(std::string("Integrator \"") + other + "\"", &warnings).first);
+        EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
+                                [&](const std::string& w) {
+                                    return w.find("is rendered as \"path\"") != std::string::npos;
+                                }),
+                  1)
+            << other;
+    }
+}
