@@ -399,9 +399,12 @@ struct Tracer {
             }
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
             if (depth + 1 < scene.max_depth) {
-                L += specular_reflect(ray, h, at, bsdf, wo, depth);
-                L += specular_transmit(ray, h, at, bsdf, wo, depth);
-                if (scene.path_tracing && bsdf.has_nonspecular()) L += bounce(h, bsdf, wo, depth);
+                if (!scene.path_tracing) {
+                    L += specular_reflect(ray, h, at, bsdf, wo, depth);
+                    L += specular_transmit(ray, h, at, bsdf, wo, depth);
+                } else {
+                    L += continue_path(ray, h, at, bsdf, wo, depth);
+                }
             }
             return L;
         }
@@ -411,6 +414,27 @@ struct Tracer {
     // Path tracing: the product of the weights from the camera to the ray being traced, which
     // Russian roulette reads (pbrt-v3's beta).
     Rgb beta{1, 1, 1};
+
+    // A path goes on from h by one ray (path tracing), as pbrt-v3's path integrator samples one
+    // component of the BSDF: a specular lobe or a non-specular bounce, evenly when there are
+    // both, and of the specular lobes the reflection with the probability of its Fresnel term
+    // (pbrt-v3's FresnelSpecular), each weighted by the inverse of its probability. Every other
+    // lobe's children would double the rays at each hit of a glass or a glossy mirror.
+    Rgb continue_path(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
+                      const Vec3& wo, int depth) {
+        const bool reflect = !b.kr.is_black(), transmit = !b.kt.is_black();
+        const bool specular = reflect || transmit, other = b.has_nonspecular();
+        if (!specular && !other) return {};
+        const float p_specular = specular && other ? 0.5f : specular ? 1.0f : 0.0f;
+        if (!(rng.next_float() < p_specular)) return bounce(h, b, wo, depth) / (1 - p_specular);
+        float p_reflect = reflect ? 1.0f : 0.0f;
+        if (reflect && transmit)
+            p_reflect = b.fresnel_noop ? 0.5f : fresnel_dielectric(dot(wo, h.ns), 1.0f, b.eta);
+        const Rgb L = rng.next_float() < p_reflect
+                          ? specular_reflect(ray, h, at, b, wo, depth) / p_reflect
+                          : specular_transmit(ray, h, at, b, wo, depth) / (1 - p_reflect);
+        return L / p_specular;
+    }
 
     // One non-specular bounce of a path from h (path tracing): a direction drawn from the BSDF,
     // weighted f |cos| / pdf, continued past three bounces by Russian roulette as pbrt-v3's path

@@ -135,6 +135,28 @@ TEST(PathTracing, ClosedEmittingSphereSeesEveryBounce) {
     for (float v : fw.rgb) EXPECT_NEAR(v, bounces(1), 1e-4);
 }
 
+// A glass sphere inside a sphere that emits 1 everywhere (and reflects nothing) is invisible:
+// glass loses no light (its Fresnel reflection and transmission add up to 1, and the radiance's
+// (eta_i / eta_t)^2 on the way in is undone on the way out), so every path that reaches the
+// emitter carries 1, reflected or transmitted by the lobe chosen at each hit and weighted by the
+// inverse of its probability. One ray per hit: 30 hits deep, both lobes' children would be 2^30.
+TEST(PathTracing, GlassInsideAnEmittingSphereIsInvisible) {
+    auto s = test::scene_from(
+        "LookAt 0 0 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
+        "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
+        "Sampler \"stratified\" \"integer xsamples\" 8 \"integer ysamples\" 8 "
+        "Integrator \"path\" \"integer maxdepth\" 30 WorldBegin "
+        "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" \"true\" "
+        "Material \"matte\" \"rgb Kd\" [0 0 0] Shape \"sphere\" \"float radius\" 10 AttributeEnd "
+        "Material \"glass\" \"float index\" 1.5 Shape \"sphere\" \"float radius\" 1 WorldEnd");
+    RenderStats stats;
+    const Framebuffer fb = render::render(*s, {}, &stats);
+    const double mean = std::accumulate(fb.rgb.begin(), fb.rgb.end(), 0.0) / fb.rgb.size();
+    EXPECT_NEAR(mean, 1, 0.01);
+    for (float v : fb.rgb) EXPECT_GT(v, 0.8f);
+    EXPECT_LT(stats.total_rays(), 40u * 16 * 16 * 64);  // a path, not a tree, per sample
+}
+
 TEST(PathTracing, SceneIntegratorsChooseIt) {
     auto integrator = [](const std::string& directive, std::vector<std::string>* warnings) {
         auto s = build_scene(pbrt::parse_string(directive + " WorldBegin WorldEnd", "i.pbrt"), {},
