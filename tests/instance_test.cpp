@@ -19,6 +19,7 @@ const std::string kHeader = R"(
 LookAt 0 1.2 4  0 0.8 0  0 1 0
 Camera "perspective" "float fov" 60
 Film "image" "integer xresolution" 96 "integer yresolution" 64
+Integrator "whitted"
 WorldBegin
 LightSource "distant" "point from" [1 3 2] "point to" [0 0 0] "color L" [2 2 2]
 LightSource "infinite" "color L" [0.3 0.3 0.3]

@@ -63,8 +63,10 @@ std::pair<double, double> radiance_stats(const Scene& s) {
 }
 
 std::string camera_and_plane(const std::string& world) {
+    // (Whitted: the closed forms below are the lights' direct light.)
     return "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
-           "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 WorldBegin " +
+           "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
+           "Integrator \"whitted\" WorldBegin " +
            world +
            " Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5] "
            "Shape \"trianglemesh\" \"point3 P\" [-20 -20 0  20 -20 0  20 20 0  -20 20 0] "

@@ -167,6 +167,7 @@ TEST(PathTracing, SceneIntegratorsChooseIt) {
     EXPECT_EQ(integrator("Integrator \"path\"", &warnings), std::make_pair(true, 1.0f));
     EXPECT_EQ(integrator("Integrator \"path\" \"float rrthreshold\" 0.5", &warnings),
               std::make_pair(true, 0.5f));
+    EXPECT_TRUE(integrator("", &warnings).first);  // pbrt-v3's default
     EXPECT_FALSE(integrator("Integrator \"whitted\"", &warnings).first);
     EXPECT_FALSE(integrator("Integrator \"directlighting\"", &warnings).first);
     const auto none = std::count_if(warnings.begin(), warnings.end(), [](const std::string& w) {

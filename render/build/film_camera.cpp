@@ -351,10 +351,7 @@ void Builder::filter() {
 void Builder::integrator() {
     const Entity& e = m_desc.integrator;
     if (!e.given) {
-        if (!m_desc.shapes.empty())
-            warn(m_desc.camera.loc,
-                 "no Integrator given: pbrt-v3 would path trace (\"path\"); cmam renders "
-                 "\"whitted\"");
+        m_scene->path_tracing = true;  // pbrt-v3's default integrator: "path"
         return;
     }
     // pbrt-v3's directlighting is whitted's recursion with every light sampled nsamples
