@@ -41,14 +41,6 @@ bool cones_read_by_area(const Scene& scene) {
     });
 }
 
-// The film of a pixel filter other than pbrt-v3's default box (algorithms.md §17): as pbrt-v3's,
-// each sample adds L w and w to every pixel whose centre is within the filter's radius of it, w
-// the filter's weight from its tables, and a pixel is the sum of the first over the sum of the
-// second (negative values, from the negative lobes of mitchell and sinc, made 0, as pbrt-v3).
-// Each task of the render loop traces its part of the image (a tile: a block of rows, or a strip
-// segment) into a buffer of its own that reaches the filter's radius beyond the tile, and the
-// buffers are added to the image in the tiles' order, whichever finishes first, so the image is
-// the same for any thread count.
 // The pixels traced, in the cropped film's coordinates: the film's own, or with a filtered film
 // also those whose samples reach into it.
 struct Traced {
@@ -57,9 +49,17 @@ struct Traced {
     int height() const { return y1 - y0; }
 };
 
+// The film of a pixel filter other than pbrt-v3's default box (algorithms.md §17): as pbrt-v3's,
+// each sample adds L w and w to every pixel whose centre is within the filter's radius of it, w
+// the filter's weight from its tables, and a pixel is the sum of the first over the sum of the
+// second (negative values, from the negative lobes of mitchell and sinc, made 0, as pbrt-v3).
+// Each task of the render loop traces its part of the image (a tile: a block of rows, or a strip
+// segment) into a buffer of its own that reaches the filter's radius beyond the tile, and the
+// buffers are added to the image in the tiles' order, whichever finishes first, so the image is
+// the same for any thread count.
 class SplatFilm {
   public:
-    SplatFilm(const FilmSettings& film)
+    explicit SplatFilm(const FilmSettings& film)
         : m_film(film),
           m_filter(film.filter),
           m_mx(static_cast<int>(std::ceil(film.filter.rx)) + 1),
