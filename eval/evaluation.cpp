@@ -141,6 +141,7 @@ struct Rendered {
     render::Framebuffer image;
     double seconds = 0;
     uint64_t rays = 0;
+    bool path_traced = false;  // the scene's integrator
 };
 
 Rendered render_with(const pbrt::SceneDesc& desc, render::BuildOptions bo, int spp,
@@ -157,6 +158,7 @@ Rendered render_with(const pbrt::SceneDesc& desc, render::BuildOptions bo, int s
     r.image = render::render(*scene, ro, &stats);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.rays = stats.total_rays();
+    r.path_traced = scene->path_tracing;
     return r;
 }
 
@@ -288,14 +290,22 @@ class SceneEvaluation {
         sr.reference_spp = rendered_spp(o.reference_spp);
         sr.reference_cached = fs::exists(cached.beauty) && fs::exists(cached.texture) &&
                               fs::exists(cached.untextured);
+        bool path_traced;
         if (!sr.reference_cached) {
-            warn_of_cost(sr, desc, gt.options, warn);
+            path_traced = warn_of_cost(sr, desc, gt.options, warn);
             render_ground_truth(sr.name, desc, gt.options, cached, warn);
         } else {
             // The warnings of building, which a cached ground truth did not show.
-            render::build_scene(desc, gt.options, warn);
+            path_traced = render::build_scene(desc, gt.options, warn)->path_tracing;
             for (int k = 0; k < 3; ++k) step(sr.name + ": ground truth (cached)");
         }
+        // A path tracer's noise at the methods' sample counts is far above what the filters
+        // change in the image; the unlit texture AOV is what compares them there.
+        if (path_traced)
+            warn("warning: " + sr.path +
+                 ": the scene is path traced, so its images carry the path tracer's noise at "
+                 "every sample count, and so does the off-edge mask; the texture RMSE (the unlit "
+                 "texture, the same for any integrator) compares the filters");
         gt.beauty = read_rgb(cached.beauty.string());
         gt.texture = read_rgb(cached.texture.string());
         gt.untextured = read_rgb(cached.untextured.string());
@@ -315,11 +325,12 @@ class SceneEvaluation {
     // it starts, with what shortens it: its three renders take about three times the image's,
     // which is its render at one sample per pixel times the samples (measured here, at a
     // thousandth of the cost).
-    void warn_of_cost(const SceneReport& sr, const pbrt::SceneDesc& desc,
+    // Returns whether the scene is path traced.
+    bool warn_of_cost(const SceneReport& sr, const pbrt::SceneDesc& desc,
                       const render::BuildOptions& gt_opts, const pbrt::WarningSink& warn) const {
         const Rendered one = render_with(desc, gt_opts, 1, render::AovKind::None, warn);
         const double estimate = 3 * one.seconds * sr.reference_spp;
-        if (estimate < o.long_ground_truth) return;
+        if (estimate < o.long_ground_truth) return one.path_traced;
         char span[32], text[400];
         if (estimate >= 7200)
             std::snprintf(span, sizeof span, "%.1f h", estimate / 3600);
@@ -330,6 +341,7 @@ class SceneEvaluation {
                       "(%.2f s at 1 spp); --reference-spp, --resolution or --crop make it shorter",
                       sr.path.c_str(), sr.reference_spp, span, one.seconds);
         warn(text);
+        return one.path_traced;
     }
 
     // Renders the ground truth's image, texture AOV and untextured image into the cache.

@@ -145,6 +145,42 @@ TEST(Eval, LongGroundTruthIsAnnouncedBeforeItIsRendered) {
     EXPECT_EQ(announced(), 1);
 }
 
+// A path-traced scene (pbrt-v3's default integrator) is flagged: its image errors are mostly the
+// path tracer's noise, and the texture RMSE compares the filters. A whitted one is not.
+TEST(Eval, PathTracedSceneIsFlagged) {
+    const test::TempDir tmp("cmam_eval_path");
+    for (const std::string integrator : {"", "Integrator \"whitted\"\n"}) {
+        SCOPED_TRACE(integrator);
+        const fs::path scene = tmp.path / "plane.pbrt";
+        std::ofstream(scene)
+            << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\"\n"
+            << "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+            << integrator << "WorldBegin LightSource \"distant\" \"point from\" [0 1 -1]\n"
+            << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+            << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5]\nWorldEnd\n";
+        eval::EvalOptions o;
+        o.scenes = {scene.string()};
+        o.methods = {*eval::parse_method("none")};
+        o.spp = {1};
+        o.reference_spp = 4;
+        o.out_dir = (tmp.path / "out").string();
+        std::vector<std::string> warnings;
+        o.warn = [&](const std::string& w) { warnings.push_back(w); };
+        const eval::EvalResult r = eval::run_eval(o);
+        ASSERT_EQ(r.scenes.size(), 1u);
+        const auto flagged =
+            std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
+                return w == "warning: " + scene.string() +
+                                ": the scene is path traced, so its images carry the path "
+                                "tracer's noise at every sample count, and so does the off-edge "
+                                "mask; the texture RMSE (the unlit texture, the same for any "
+                                "integrator) compares the filters";
+            });
+        EXPECT_EQ(flagged, integrator.empty() ? 1 : 0);
+        fs::remove_all(o.out_dir);
+    }
+}
+
 // EvalOptions::adjust_scene changes each scene's film before anything is rendered (the command
 // line's --resolution and --crop): the ground truth and the methods have its size, its warnings
 // reach the scene's, and the film it makes is part of the ground truth's key, so a cached ground
