@@ -126,15 +126,36 @@ struct Tracer {
         }
         const Vec3 local(r * std::cos(phi), r * std::sin(phi), z);
         ls.wi = Frame::from_z(uniform || !mixture ? ng : ns).to_world(local);
-        if (!mixture) {
-            ls.pdf = local.z * kInvPi;
-        } else {
-            const float cos_s = std::max(0.0f, dot(ls.wi, ns)), cos_g = dot(ls.wi, ng);
-            ls.pdf = (1 - share) * cos_s * kInvPi + (cos_g > 0 ? share * 0.5f * kInvPi : 0.0f);
-        }
+        ls.pdf = !mixture ? local.z * kInvPi : mixture_pdf(ng, ns, share, ls.wi);
         if (ls.pdf == 0) return std::nullopt;
         ls.li = light.intensity;
         return ls;
+    }
+
+    // The density of sample_infinite's mixture (a share uniform over ng's hemisphere, the rest
+    // cosine-weighted about ns) at wi.
+    static float mixture_pdf(const Vec3& ng, const Vec3& ns, float share, const Vec3& wi) {
+        const float cos_s = std::max(0.0f, dot(wi, ns)), cos_g = dot(wi, ng);
+        return (1 - share) * cos_s * kInvPi + (cos_g > 0 ? share * 0.5f * kInvPi : 0.0f);
+    }
+
+    // The density with which sample_light draws direction wi from h (solid angle): for an infinite
+    // light, and for an area light whose surface the ray along wi meets first at `y`.
+    float infinite_pdf(const Light& light, const SurfaceHit& h, const Vec3& wo,
+                       const Vec3& wi) const {
+        if (light.env) return light.env->pdf(wi);
+        const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
+        if (ns.x == ng.x && ns.y == ng.y && ns.z == ng.z)
+            return std::max(0.0f, dot(wi, ng)) * kInvPi;
+        return mixture_pdf(ng, ns, std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f), wi);
+    }
+    float area_pdf(const Light& light, const SurfaceHit& h, const Vec3& wi,
+                   const SurfaceHit& y) const {
+        const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
+        if (const std::optional<float> cone = prim.cone_pdf(h.p)) return *cone;
+        const Vec3 d = y.p - h.p;
+        const float cos_l = std::abs(dot(y.ng, wi));
+        return cos_l > 0 ? prim.area_pdf(y.p) * dot(d, d) / cos_l : 0.0f;
     }
 
     // One point: in the cone a round sphere subtends, else uniform by area with its density
@@ -191,6 +212,10 @@ struct Tracer {
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
             // A light sample's shadow ray, unless the light's radiance or the BSDF is zero.
+            // Path tracing weighs the samples of area and infinite lights against the BSDF's
+            // (multiple importance sampling, direct_by_bsdf).
+            const bool mis = scene.path_tracing && (light.type == Light::Type::Area ||
+                                                    light.type == Light::Type::Infinite);
             auto add = [&](const LightSample& ls) {
                 if (ls.li.is_black()) return;
                 const Rgb fv = bsdf.f(o, ls.wi);
@@ -199,6 +224,8 @@ struct Tracer {
                 ShadowRay& r = out.emplace_back();  // in place: no copy of a half-written ray
                 r.light = static_cast<int>(l);
                 r.contribution = fv * ls.li * (absdot(ls.wi, h.ns) / ls.pdf);
+                if (mis)
+                    r.contribution = r.contribution * power_heuristic(ls.pdf, bsdf.pdf(o, ls.wi));
                 r.org = offset_origin(h, ls.wi);
                 if (light.type == Light::Type::Area) {
                     const Vec3 d = ls.target - r.org;
@@ -261,8 +288,49 @@ struct Tracer {
         const std::size_t first = shadow.size();
         shadow_rays(h, bsdf, wo, shadow);
         for (std::size_t i = first; i < shadow.size(); ++i) trace_shadow_ray(scene, shadow[i]);
-        const Rgb L = direct_from(shadow.data() + first, shadow.size() - first);
+        Rgb L = direct_from(shadow.data() + first, shadow.size() - first);
         shadow.resize(first);
+        if (scene.path_tracing) L += direct_by_bsdf(h, bsdf, wo);
+        return L;
+    }
+
+    // pbrt-v3's power heuristic: the weight of a sample drawn with density pa against another
+    // strategy's pb.
+    static float power_heuristic(float pa, float pb) {
+        const float a = pa * pa, b = pb * pb;
+        return a + b > 0 && std::isfinite(a + b) ? a / (a + b) : 1.0f;
+    }
+
+    // The other half of path tracing's direct light, as pbrt-v3's EstimateDirect: for each area
+    // and infinite light, a direction drawn from the BSDF, whose ray adds the light if it meets
+    // that light first (an area light's surface, or for an infinite light nothing), weighted by
+    // the power heuristic against the light's own sampling (algorithms.md §18).
+    Rgb direct_by_bsdf(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
+        Rgb L{};
+        const Bsdf::Outgoing o = bsdf.outgoing(wo);
+        for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+            const Light& light = scene.lights[l];
+            if (light.type != Light::Type::Area && light.type != Light::Type::Infinite) continue;
+            const float u0 = rng.next_float(), u1 = rng.next_float(), u2 = rng.next_float();
+            const Bsdf::Sample s = bsdf.sample(o, u0, u1, u2);
+            if (s.pdf == 0 || s.f.is_black() || !finite(s.wi)) continue;
+            if (counts) ++counts->shadow;
+            const std::optional<SurfaceHit> y = scene.intersect(
+                offset_origin(h, s.wi), s.wi, 0, std::numeric_limits<float>::infinity(), false);
+            Rgb le;
+            float p_light;
+            if (light.type == Light::Type::Infinite) {
+                if (y) continue;
+                le = light.env ? light.intensity * light.env->radiance(s.wi) : light.intensity;
+                p_light = infinite_pdf(light, h, wo, s.wi);
+            } else {
+                if (!y || y->prim->area_light != static_cast<int>(l)) continue;
+                le = emitted(*y, -s.wi);
+                p_light = area_pdf(light, h, s.wi, *y);
+            }
+            if (le.is_black()) continue;
+            L += s.f * le * (absdot(s.wi, h.ns) / s.pdf * power_heuristic(s.pdf, p_light));
+        }
         return L;
     }
 

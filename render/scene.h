@@ -257,6 +257,11 @@ struct Primitive {
     /// the cone of directions the sphere subtends, with its density with respect to solid angle.
     /// Nothing for other shapes and for points inside.
     std::optional<SurfaceSample> sample_cone(const Vec3& ref, float u1, float u2) const;
+    /// The densities those give the point `p` of the surface (world space): sample_area's with
+    /// respect to area, and sample_cone's from `ref` with respect to solid angle (nothing where
+    /// sample_cone gives nothing).
+    float area_pdf(const Vec3& p) const;
+    std::optional<float> cone_pdf(const Vec3& ref) const;
 };
 
 /// An object's primitives, in the object's own space, with their own Embree scene, which every

@@ -12,6 +12,19 @@ namespace cmam::render {
 
 using namespace xform;
 
+namespace {
+// A quadric's world-space area element for the object-space one `cross_obj` (dP/du1 x dP/du2 of
+// sample_area's parameters): det(M) M^-T applied to it; 0 when not finite.
+double area_element_of(const Primitive& pr, const D3& cross_obj) {
+    const auto& m = pr.world_from_object;
+    const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
+                       m[2] * (m[4] * m[9] - m[5] * m[8]);
+    const D3 cw = xform_normal(pr.object_from_world, cross_obj);
+    const double e = std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
+    return e > 0 && std::isfinite(e) ? e : 0.0;
+}
+}  // namespace
+
 SurfaceSample Primitive::sample_area(float u1, float u2) const {
     SurfaceSample out;
     if (kind == Kind::Triangles) {
@@ -59,15 +72,10 @@ SurfaceSample Primitive::sample_area(float u1, float u2) const {
         po = {rho * std::cos(phi), rho * std::sin(phi), height};
         cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
     }
-    const auto& m = world_from_object;
-    const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
-                       m[2] * (m[4] * m[9] - m[5] * m[8]);
-    const D3 cw = xform_normal(object_from_world, cross_obj);
-    const double area_element =
-        std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
-    if (!(area_element > 0) || !std::isfinite(area_element)) return out;
+    const double area_element = area_element_of(*this, cross_obj);
+    if (!(area_element > 0)) return out;
     out.p = to_vec(xform_point(world_from_object, po));
-    Vec3 nw = normalize(to_vec(cw));
+    Vec3 nw = normalize(to_vec(xform_normal(object_from_world, cross_obj)));
     out.n = flip ? -nw : nw;
     out.pdf = float(1 / area_element);
     return out;
@@ -88,6 +96,30 @@ bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
     ctx.object = id;
     if (eval_texture(*scene, alpha, ctx).r == 0) return true;
     return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
+}
+
+float Primitive::area_pdf(const Vec3& p) const {
+    if (kind == Kind::Triangles) {
+        const double total = area_cdf.empty() ? 0 : area_cdf.back();
+        return total > 0 ? float(1 / total) : 0.0f;
+    }
+    // sample_area's area element at the object-space point of p (on the surface).
+    const D3 po = xform_point(object_from_world, {p.x, p.y, p.z});
+    D3 cross_obj;
+    if (kind == Kind::Sphere) {
+        const double k = (zmax - zmin) * phi_max;
+        cross_obj = {k * po[0], k * po[1], k * po[2]};
+    } else {
+        cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
+    }
+    const double area_element = area_element_of(*this, cross_obj);
+    return area_element > 0 ? float(1 / area_element) : 0.0f;
+}
+
+std::optional<float> Primitive::cone_pdf(const Vec3& ref) const {
+    // (uniform in the cone: any point's density)
+    const std::optional<SurfaceSample> s = sample_cone(ref, 0.5f, 0.5f);
+    return s ? std::optional<float>(s->pdf) : std::nullopt;
 }
 
 std::optional<SurfaceSample> Primitive::sample_cone(const Vec3& ref, float u1, float u2) const {
