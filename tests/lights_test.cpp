@@ -322,7 +322,7 @@ TEST(InfiniteLight, TiltedShadingNormalsAreSampledWithBoundedWeights) {
     const float nx = float(std::sin(beta)), nz = float(std::cos(beta));
     const std::string n = std::to_string(nx) + " 0 " + std::to_string(nz) + " ";
     auto s = test::scene_from(
-        "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" WorldBegin "
+        "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" Integrator \"whitted\" WorldBegin "
         "LightSource \"infinite\" \"rgb L\" [2 2 2] Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5] "
         "Shape \"trianglemesh\" \"point3 P\" [-20 -20 0  20 -20 0  20 20 0  -20 20 0] "
         "\"integer indices\" [0 1 2 0 2 3] \"normal N\" [" +
