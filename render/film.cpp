@@ -377,6 +377,9 @@ class FilmTracer {
         packet.aov[k] = Aov{m_options.aov};
         CameraPath& p = packet.paths[k];
         p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
+        p.pixel_seed = sp.seeds[i];
+        p.sample = static_cast<uint32_t>(sample);
+        p.samples = static_cast<uint32_t>(m_spp);
         packet.fx[k] = fx;  // (a filter's splat reads them too)
         packet.fy[k] = fy;
         if (m_footprints.batches_camera_rays()) {  // made with the packet's others (trace)

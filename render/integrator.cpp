@@ -27,6 +27,22 @@ struct Tracer {
     CmamRowState* cmam;              // the strip's CMAM caches
     std::vector<ShadowRay>& shadow;  // shadow rays being traced (direct lighting's scratch)
 
+    // Path tracing stratifies the first kStratifiedDims numbers a sample draws over its pixel's
+    // samples (set by trace_packet; strata 0: none): sample `stratum` of `strata` takes, in
+    // each of those dimensions, one stratum of [0,1) in a random order of the pixel's own per
+    // dimension, jittered by its own generator, as pbrt-v3's stratified sampler stratifies its
+    // first dimensions. Each number stays uniform, so every estimate keeps its mean; the
+    // pixel's samples cover each dimension evenly.
+    static constexpr int kStratifiedDims = 16;
+    uint64_t strata_key = 0;
+    uint32_t stratum = 0, strata = 0;
+    int dimension = 0;
+    float next() {
+        if (strata > 1 && dimension < kStratifiedDims)
+            return stratified(strata_key, stratum, strata, dimension++, rng.next_float());
+        return rng.next_float();
+    }
+
     // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
     // over the ray differential's footprint when the ray carries one.
     Rgb escaped(const Vec3& dir, const RayDifferential& diff) const {
@@ -97,7 +113,7 @@ struct Tracer {
                                                const Vec3& wo) {
         LightSample ls;
         if (light.env) {  // by the map's luminance
-            float u1 = rng.next_float(), u2 = rng.next_float();
+            float u1 = next(), u2 = next();
             return from_map(light, light.env->sample(u1, u2));
         }
         // The BSDFs it lights reflect only, over the hemisphere of the geometric normal on wo's
@@ -109,7 +125,7 @@ struct Tracer {
         // where |wi . ns| / cos about the geometric normal grows without bound towards its
         // horizon (fireflies; algorithms.md §13), and a shading normal near the geometric one
         // keeps nearly all of the cosine's samples.
-        float u1 = rng.next_float(), u2 = rng.next_float();
+        float u1 = next(), u2 = next();
         const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
         const bool mixture = !(ns.x == ng.x && ns.y == ng.y && ns.z == ng.z);
         const float share = mixture ? std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f) : 0.0f;
@@ -162,7 +178,7 @@ struct Tracer {
     // converted to solid angle.
     std::optional<LightSample> sample_area(const Light& light, const SurfaceHit& h) {
         const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
-        const float u1 = rng.next_float(), u2 = rng.next_float();
+        const float u1 = next(), u2 = next();
         const std::optional<SurfaceSample> cone = prim.sample_cone(h.p, u1, u2);
         const SurfaceSample s = cone ? *cone : prim.sample_area(u1, u2);
         if (!cone && s.pdf == 0) return std::nullopt;
@@ -253,8 +269,8 @@ struct Tracer {
                     const int m = std::min(kSampleBatch, light.samples - k0);
                     float u1[kSampleBatch], u2[kSampleBatch];
                     for (int i = 0; i < m; ++i) {
-                        u1[i] = rng.next_float();
-                        u2[i] = rng.next_float();
+                        u1[i] = next();
+                        u2[i] = next();
                     }
                     EnvironmentMap::Sample es[kSampleBatch];
                     light.env->sample(u1, u2, m, es);
@@ -311,7 +327,7 @@ struct Tracer {
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
             if (light.type != Light::Type::Area && light.type != Light::Type::Infinite) continue;
-            const float u0 = rng.next_float(), u1 = rng.next_float(), u2 = rng.next_float();
+            const float u0 = next(), u1 = next(), u2 = next();
             const Bsdf::Sample s = bsdf.sample(o, u0, u1, u2);
             if (s.pdf == 0 || s.f.is_black() || !finite(s.wi)) continue;
             if (counts) ++counts->shadow;
@@ -350,7 +366,7 @@ struct Tracer {
             a = Rgb(std::clamp(a.r, 0.0f, 1.0f), std::clamp(a.g, 0.0f, 1.0f),
                     std::clamp(a.b, 0.0f, 1.0f));
             const float p = (a.r + a.g + a.b) / 3;
-            const bool first = rng.next_float() < p;
+            const bool first = next() < p;
             mix_weight = mix_weight * (first ? a / p : (Rgb(1) - a) / (1 - p));
             const int next = cur->mix[first ? 0 : 1];
             cur = next >= 0 ? &scene.materials[static_cast<std::size_t>(next)]
@@ -494,11 +510,11 @@ struct Tracer {
         const bool specular = reflect || transmit, other = b.has_nonspecular();
         if (!specular && !other) return {};
         const float p_specular = specular && other ? 0.5f : specular ? 1.0f : 0.0f;
-        if (!(rng.next_float() < p_specular)) return bounce(h, b, wo, depth) / (1 - p_specular);
+        if (!(next() < p_specular)) return bounce(h, b, wo, depth) / (1 - p_specular);
         float p_reflect = reflect ? 1.0f : 0.0f;
         if (reflect && transmit)
             p_reflect = b.fresnel_noop ? 0.5f : fresnel_dielectric(dot(wo, h.ns), 1.0f, b.eta);
-        const Rgb L = rng.next_float() < p_reflect
+        const Rgb L = next() < p_reflect
                           ? specular_reflect(ray, h, at, b, wo, depth) / p_reflect
                           : specular_transmit(ray, h, at, b, wo, depth) / (1 - p_reflect);
         return L / p_specular;
@@ -512,7 +528,7 @@ struct Tracer {
     // meets are read at full resolution, and the CMAM's caches (whose paths are specular
     // chains) are not used below it.
     Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, int depth) {
-        const float u0 = rng.next_float(), u1 = rng.next_float(), u2 = rng.next_float();
+        const float u0 = next(), u1 = next(), u2 = next();
         const Bsdf::Sample s = bsdf.sample(bsdf.outgoing(wo), u0, u1, u2);
         if (s.pdf == 0 || s.f.is_black()) return {};
         Rgb weight = s.f * (absdot(s.wi, h.ns) / s.pdf);
@@ -520,7 +536,7 @@ struct Tracer {
         const float m = std::max({through.r, through.g, through.b});
         if (depth > 3 && m < scene.rr_threshold) {
             const float q = std::max(0.05f, 1 - m);
-            if (rng.next_float() < q) return {};
+            if (next() < q) return {};
             weight = weight / (1 - q);
         }
         if (!finite(s.wi)) return {};
@@ -741,6 +757,11 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
     auto tracer = [&](int k) {
         const CameraPath& p = paths[k];
         Tracer t{scene, footprints, p.counts, *rng[k], cmam, shadow};
+        if (scene.path_tracing) {
+            t.strata_key = mix_seed(p.pixel_seed, 0x5472617461ull);
+            t.stratum = p.sample;
+            t.strata = p.samples;
+        }
         t.aov = p.aov;
         t.deferred_hits = &deferred;
         t.made_rays = made + 2 * k;

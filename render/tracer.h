@@ -96,6 +96,15 @@ inline uint32_t permute(uint32_t i, uint32_t n, uint64_t key) {
     return i;
 }
 
+/// Number `dim` of a pixel's sample `stratum` of `strata`, stratified over the pixel's samples:
+/// in each dimension the samples take the strata [k/strata, (k+1)/strata) once each, in an order
+/// of the pixel's own (`key`) per dimension, at `jitter` within the stratum. Uniform in [0,1)
+/// for each sample, as the unstratified number would be.
+inline float stratified(uint64_t key, uint32_t stratum, uint32_t strata, int dim, float jitter) {
+    const uint32_t s = permute(stratum, strata, mix_seed(key, uint64_t(dim)));
+    return std::min((float(s) + jitter) / float(strata), 0x1.fffffep-1f);
+}
+
 /// The lens sample in [0,1)^2 of a pixel's camera sample `sample` (of nx x ny), stratified as its
 /// image-plane position is: the pixel's samples take the nx x ny strata of the lens square once
 /// each, in a random order of the pixel's own (so that a sample's lens stratum does not follow its
@@ -186,6 +195,10 @@ struct PacketScratch {
 struct CameraPath {
     TracedRay ray;
     uint64_t seed = 0;
+    // The pixel's seed and the sample's number among the pixel's samples (path tracing
+    // stratifies the sample's first numbers over them).
+    uint64_t pixel_seed = 0;
+    uint32_t sample = 0, samples = 1;
     RayCounts* counts = nullptr;
     Aov* aov = nullptr;
 };
