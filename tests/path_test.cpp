@@ -1,8 +1,10 @@
 // Path tracing (pbrt-v3's "path" integrator): BSDF sampling against its own density and against
-// uniform sampling, a closed emitting sphere seen from inside against the sum of its bounces,
-// and the integrators a scene may name.
+// uniform sampling, a closed emitting sphere seen from inside against the sum of its bounces, a
+// glass sphere inside an emitting one, multiple importance sampling's mean and noise, the
+// stratified numbers, and the integrators a scene may name.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <string>
