@@ -380,6 +380,7 @@ class FilmTracer {
         p.pixel_seed = sp.seeds[i];
         p.sample = static_cast<uint32_t>(sample);
         p.samples = static_cast<uint32_t>(m_spp);
+        p.samples_x = static_cast<uint32_t>(m_nx);
         packet.fx[k] = fx;  // (a filter's splat reads them too)
         packet.fy[k] = fy;
         if (m_footprints.batches_camera_rays()) {  // made with the packet's others (trace)

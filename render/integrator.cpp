@@ -27,20 +27,29 @@ struct Tracer {
     CmamRowState* cmam;              // the strip's CMAM caches
     std::vector<ShadowRay>& shadow;  // shadow rays being traced (direct lighting's scratch)
 
-    // Path tracing stratifies the first kStratifiedDims numbers a sample draws over its pixel's
-    // samples (set by trace_packet; strata 0: none): sample `stratum` of `strata` takes, in
-    // each of those dimensions, one stratum of [0,1) in a random order of the pixel's own per
-    // dimension, jittered by its own generator, as pbrt-v3's stratified sampler stratifies its
-    // first dimensions. Each number stays uniform, so every estimate keeps its mean; the
-    // pixel's samples cover each dimension evenly.
-    static constexpr int kStratifiedDims = 16;
+    // Path tracing stratifies a sample's first numbers over its pixel's samples (set by
+    // trace_packet; strata 0: none), as pbrt-v3's stratified sampler does its first dimensions:
+    // its first kStratified1D single numbers (next) each in 1-D strata, its first
+    // kStratified2D pairs (next2: a light's point, a BSDF's direction) each in the pixel's
+    // nx x ny cells, in random orders of the pixel's own per dimension, jittered by the sample's
+    // own generator. Each number stays uniform, so every estimate keeps its mean; the pixel's
+    // samples cover each dimension evenly. Without strata both draw the generator's numbers in
+    // order.
+    static constexpr int kStratified1D = 8, kStratified2D = 8;
     uint64_t strata_key = 0;
-    uint32_t stratum = 0, strata = 0;
-    int dimension = 0;
+    uint32_t stratum = 0, strata = 0, strata_x = 1;
+    int dim1 = 0, dim2 = 0;
     float next() {
-        if (strata > 1 && dimension < kStratifiedDims)
-            return stratified(strata_key, stratum, strata, dimension++, rng.next_float());
+        if (strata > 1 && dim1 < kStratified1D)
+            return stratified(strata_key, stratum, strata, dim1++, rng.next_float());
         return rng.next_float();
+    }
+    void next2(float& u, float& v) {
+        u = rng.next_float();
+        v = rng.next_float();
+        if (strata > 1 && dim2 < kStratified2D)
+            stratified2(mix_seed(strata_key, 0x3244ull + uint64_t(dim2++)), stratum, strata_x,
+                        strata / strata_x, u, v, u, v);
     }
 
     // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
@@ -113,7 +122,8 @@ struct Tracer {
                                                const Vec3& wo) {
         LightSample ls;
         if (light.env) {  // by the map's luminance
-            float u1 = next(), u2 = next();
+            float u1, u2;
+            next2(u1, u2);
             return from_map(light, light.env->sample(u1, u2));
         }
         // The BSDFs it lights reflect only, over the hemisphere of the geometric normal on wo's
@@ -125,7 +135,8 @@ struct Tracer {
         // where |wi . ns| / cos about the geometric normal grows without bound towards its
         // horizon (fireflies; algorithms.md §13), and a shading normal near the geometric one
         // keeps nearly all of the cosine's samples.
-        float u1 = next(), u2 = next();
+        float u1, u2;
+        next2(u1, u2);
         const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
         const bool mixture = !(ns.x == ng.x && ns.y == ng.y && ns.z == ng.z);
         const float share = mixture ? std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f) : 0.0f;
@@ -178,7 +189,8 @@ struct Tracer {
     // converted to solid angle.
     std::optional<LightSample> sample_area(const Light& light, const SurfaceHit& h) {
         const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
-        const float u1 = next(), u2 = next();
+        float u1, u2;
+        next2(u1, u2);
         const std::optional<SurfaceSample> cone = prim.sample_cone(h.p, u1, u2);
         const SurfaceSample s = cone ? *cone : prim.sample_area(u1, u2);
         if (!cone && s.pdf == 0) return std::nullopt;
@@ -269,8 +281,7 @@ struct Tracer {
                     const int m = std::min(kSampleBatch, light.samples - k0);
                     float u1[kSampleBatch], u2[kSampleBatch];
                     for (int i = 0; i < m; ++i) {
-                        u1[i] = next();
-                        u2[i] = next();
+                        next2(u1[i], u2[i]);
                     }
                     EnvironmentMap::Sample es[kSampleBatch];
                     light.env->sample(u1, u2, m, es);
@@ -327,7 +338,9 @@ struct Tracer {
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
             if (light.type != Light::Type::Area && light.type != Light::Type::Infinite) continue;
-            const float u0 = next(), u1 = next(), u2 = next();
+            const float u0 = next();
+            float u1, u2;
+            next2(u1, u2);
             const Bsdf::Sample s = bsdf.sample(o, u0, u1, u2);
             if (s.pdf == 0 || s.f.is_black() || !finite(s.wi)) continue;
             if (counts) ++counts->shadow;
@@ -528,7 +541,9 @@ struct Tracer {
     // meets are read at full resolution, and the CMAM's caches (whose paths are specular
     // chains) are not used below it.
     Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, int depth) {
-        const float u0 = next(), u1 = next(), u2 = next();
+        const float u0 = next();
+        float u1, u2;
+        next2(u1, u2);
         const Bsdf::Sample s = bsdf.sample(bsdf.outgoing(wo), u0, u1, u2);
         if (s.pdf == 0 || s.f.is_black()) return {};
         Rgb weight = s.f * (absdot(s.wi, h.ns) / s.pdf);
@@ -761,6 +776,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
             t.strata_key = mix_seed(p.pixel_seed, 0x5472617461ull);
             t.stratum = p.sample;
             t.strata = p.samples;
+            t.strata_x = std::max(1u, p.samples_x);
         }
         t.aov = p.aov;
         t.deferred_hits = &deferred;

@@ -105,6 +105,16 @@ inline float stratified(uint64_t key, uint32_t stratum, uint32_t strata, int dim
     return std::min((float(s) + jitter) / float(strata), 0x1.fffffep-1f);
 }
 
+/// A point in [0,1)^2 of a pixel's sample `stratum` of nx x ny, stratified in 2-D: the pixel's
+/// samples take the nx x ny cells once each, in the order `key` chooses, at (ju, jv) within the
+/// cell. Uniform in [0,1)^2 for each sample.
+inline void stratified2(uint64_t key, uint32_t stratum, uint32_t nx, uint32_t ny, float ju,
+                        float jv, float& u, float& v) {
+    const uint32_t cell = permute(stratum, nx * ny, key);
+    u = std::min((float(cell % nx) + ju) / float(nx), 0x1.fffffep-1f);
+    v = std::min((float(cell / nx) + jv) / float(ny), 0x1.fffffep-1f);
+}
+
 /// The lens sample in [0,1)^2 of a pixel's camera sample `sample` (of nx x ny), stratified as its
 /// image-plane position is: the pixel's samples take the nx x ny strata of the lens square once
 /// each, in a random order of the pixel's own (so that a sample's lens stratum does not follow its
@@ -112,13 +122,9 @@ inline float stratified(uint64_t key, uint32_t stratum, uint32_t strata, int dim
 inline void lens_sample(uint64_t pixel_seed, int sample, int nx, int ny, float& lu, float& lv) {
     constexpr uint64_t kLensStream = 0x4c656e73ull;
     const uint64_t key = mix_seed(pixel_seed, kLensStream);
-    const uint32_t n = uint32_t(nx) * uint32_t(ny);
-    const uint32_t stratum = permute(uint32_t(sample), n, key);
     const uint64_t seed = mix_seed(key, uint64_t(sample) + 1);
-    lu = std::min((float(stratum % uint32_t(nx)) + Rng::float_at(seed, 0)) / float(nx),
-                  0x1.fffffep-1f);
-    lv = std::min((float(stratum / uint32_t(nx)) + Rng::float_at(seed, 1)) / float(ny),
-                  0x1.fffffep-1f);
+    stratified2(key, uint32_t(sample), uint32_t(nx), uint32_t(ny), Rng::float_at(seed, 0),
+                Rng::float_at(seed, 1), lu, lv);
 }
 
 /// A shadow ray of one light sample at a hit, traced one by one or in packets: the segment
@@ -198,7 +204,7 @@ struct CameraPath {
     // The pixel's seed and the sample's number among the pixel's samples (path tracing
     // stratifies the sample's first numbers over them).
     uint64_t pixel_seed = 0;
-    uint32_t sample = 0, samples = 1;
+    uint32_t sample = 0, samples = 1, samples_x = 1;  // (samples_x: the strata along x)
     RayCounts* counts = nullptr;
     Aov* aov = nullptr;
 };

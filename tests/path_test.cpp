@@ -207,7 +207,8 @@ TEST(PathTracing, MultipleImportanceSamplingKeepsTheMeanAndCutsTheNoise) {
 }
 
 // A path's first numbers are stratified over its pixel's samples: in each dimension the samples
-// of a pixel fall in distinct strata, in an order that changes from dimension to dimension.
+// of a pixel fall in distinct strata, in an order that changes from dimension to dimension, and
+// in each pair of dimensions in distinct cells.
 TEST(PathTracing, FirstNumbersTakeEachStratumOncePerPixel) {
     const uint32_t n = 16;
     std::vector<uint32_t> first_order;
@@ -231,6 +232,19 @@ TEST(PathTracing, FirstNumbersTakeEachStratumOncePerPixel) {
             orders_differ += order != first_order;
     }
     EXPECT_GE(orders_differ, 6);  // not one order for every dimension
+    // Pairs (a light's point, a BSDF's direction): the samples take the 4 x 4 cells once each.
+    for (uint64_t key : {1u, 2u, 3u}) {
+        std::vector<int> taken(n, 0);
+        for (uint32_t s = 0; s < n; ++s) {
+            float u, v;
+            stratified2(key, s, 4, 4, 0.5f, 0.25f, u, v);
+            const auto cx = static_cast<uint32_t>(u * 4), cy = static_cast<uint32_t>(v * 4);
+            EXPECT_NEAR(u * 4 - cx, 0.5f, 1e-4);
+            EXPECT_NEAR(v * 4 - cy, 0.25f, 1e-4);
+            ++taken[cy * 4 + cx];
+        }
+        for (uint32_t k = 0; k < n; ++k) EXPECT_EQ(taken[k], 1) << key << " " << k;
+    }
 }
 
 TEST(PathTracing, SceneIntegratorsChooseIt) {
