@@ -233,10 +233,9 @@ struct Tracer {
     // The shadow rays of the light samples at h that could add light (neither the light's
     // radiance nor the BSDF zero), appended to `out` light by light, sample by sample. A ray
     // towards a point on an area light stops short of the light's own surface by its ray
-    // epsilon; a positional light's by a relative 1e-4.
-    void shadow_rays(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo,
+    // epsilon; a positional light's by a relative 1e-4. `o`: bsdf.outgoing(wo).
+    void shadow_rays(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, const Bsdf::Outgoing& o,
                      std::vector<ShadowRay>& out) {
-        const Bsdf::Outgoing o = bsdf.outgoing(wo);
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
             // A light sample's shadow ray, unless the light's radiance or the BSDF is zero.
@@ -311,13 +310,13 @@ struct Tracer {
     }
 
     // Direct lighting at h, its shadow rays traced one by one (in `shadow`, after what it holds).
-    Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
+    Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, const Bsdf::Outgoing& o) {
         const std::size_t first = shadow.size();
-        shadow_rays(h, bsdf, wo, shadow);
+        shadow_rays(h, bsdf, wo, o, shadow);
         for (std::size_t i = first; i < shadow.size(); ++i) trace_shadow_ray(scene, shadow[i]);
         Rgb L = direct_from(shadow.data() + first, shadow.size() - first);
         shadow.resize(first);
-        if (scene.path_tracing) L += direct_by_bsdf(h, bsdf, wo);
+        if (scene.path_tracing) L += direct_by_bsdf(h, bsdf, wo, o);
         return L;
     }
 
@@ -332,9 +331,9 @@ struct Tracer {
     // and infinite light, a direction drawn from the BSDF, whose ray adds the light if it meets
     // that light first (an area light's surface, or for an infinite light nothing), weighted by
     // the power heuristic against the light's own sampling (algorithms.md §18).
-    Rgb direct_by_bsdf(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo) {
+    Rgb direct_by_bsdf(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo,
+                       const Bsdf::Outgoing& o) {
         Rgb L{};
-        const Bsdf::Outgoing o = bsdf.outgoing(wo);
         for (std::size_t l = 0; l < scene.lights.size(); ++l) {
             const Light& light = scene.lights[l];
             if (light.type != Light::Type::Area && light.type != Light::Type::Infinite) continue;
@@ -483,7 +482,7 @@ struct Tracer {
                 d.radiance = L;
                 d.lit = bsdf.has_nonspecular();
                 d.first = d.cursor = shadow.size();
-                if (d.lit) shadow_rays(h, bsdf, wo, shadow);
+                if (d.lit) shadow_rays(h, bsdf, wo, bsdf.outgoing(wo), shadow);
                 d.count = shadow.size() - d.first;
                 d.children = depth + 1 < scene.max_depth;
                 if (d.children) {  // (a call each when a lobe is black cost 2% on matte scenes)
@@ -494,13 +493,15 @@ struct Tracer {
                 }
                 return {};
             }
-            if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo);
+            // (What the non-specular lobes compute of wo, once for the light and the bounce.)
+            const Bsdf::Outgoing o = bsdf.has_nonspecular() ? bsdf.outgoing(wo) : Bsdf::Outgoing{};
+            if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo, o);
             if (depth + 1 < scene.max_depth) {
                 if (!scene.path_tracing) {
                     L += specular_reflect(ray, h, at, bsdf, wo, depth);
                     L += specular_transmit(ray, h, at, bsdf, wo, depth);
                 } else {
-                    L += continue_path(ray, h, at, bsdf, wo, depth);
+                    L += continue_path(ray, h, at, bsdf, wo, o, depth);
                 }
             }
             return L;
@@ -518,12 +519,12 @@ struct Tracer {
     // (pbrt-v3's FresnelSpecular), each weighted by the inverse of its probability. Every other
     // lobe's children would double the rays at each hit of a glass or a glossy mirror.
     Rgb continue_path(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
-                      const Vec3& wo, int depth) {
+                      const Vec3& wo, const Bsdf::Outgoing& o, int depth) {
         const bool reflect = !b.kr.is_black(), transmit = !b.kt.is_black();
         const bool specular = reflect || transmit, other = b.has_nonspecular();
         if (!specular && !other) return {};
         const float p_specular = specular && other ? 0.5f : specular ? 1.0f : 0.0f;
-        if (!(next() < p_specular)) return bounce(h, b, wo, depth) / (1 - p_specular);
+        if (!(next() < p_specular)) return bounce(h, b, o, depth) / (1 - p_specular);
         float p_reflect = reflect ? 1.0f : 0.0f;
         if (reflect && transmit)
             p_reflect = b.fresnel_noop ? 0.5f : fresnel_dielectric(dot(wo, h.ns), 1.0f, b.eta);
@@ -540,11 +541,11 @@ struct Tracer {
     // footprint, as pbrt-v3's rays from such bounces carry no differentials: the textures it
     // meets are read at full resolution, and the CMAM's caches (whose paths are specular
     // chains) are not used below it.
-    Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, int depth) {
+    Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Bsdf::Outgoing& o, int depth) {
         const float u0 = next();
         float u1, u2;
         next2(u1, u2);
-        const Bsdf::Sample s = bsdf.sample(bsdf.outgoing(wo), u0, u1, u2);
+        const Bsdf::Sample s = bsdf.sample(o, u0, u1, u2);
         if (s.pdf == 0 || s.f.is_black()) return {};
         Rgb weight = s.f * (absdot(s.wi, h.ns) / s.pdf);
         const Rgb through = beta * weight;

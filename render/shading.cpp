@@ -463,8 +463,10 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
 // theta_h (pbrt-v3's Trowbridge-Reitz sampling without the visible-normals restriction), so the
 // reflected direction's density is D(h) |cos theta_h| / (4 |wo . h|).
 float Bsdf::pdf(const Outgoing& o, const Vec3& wi_w) const {
-    const Vec3& wo = o.local;
-    const Vec3 wi = frame.to_local(wi_w);
+    return pdf_local(o.local, frame.to_local(wi_w));
+}
+
+float Bsdf::pdf_local(const Vec3& wo, const Vec3& wi) const {
     if (wo.z == 0 || wo.z * wi.z <= 0) return 0;
     const bool diffuse = has_diffuse(), glossy = has_glossy();
     const float share = diffuse && glossy ? 0.5f : 1.0f;
@@ -516,7 +518,7 @@ Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const
         if (wi.z * wo.z <= 0) return out;
     }
     out.wi = frame.to_world(wi);
-    out.pdf = pdf(o, out.wi);
+    out.pdf = pdf_local(wo, wi);
     if (!(out.pdf > 0)) {
         out.pdf = 0;
         return out;

@@ -113,6 +113,9 @@ struct Bsdf {
     Sample sample(const Outgoing& o, float u0, float u1, float u2) const;
     /// The density sample() draws wi with (wo, wi in world space).
     float pdf(const Outgoing& o, const Vec3& wi) const;
+
+  private:
+    float pdf_local(const Vec3& wo, const Vec3& wi) const;  // the same in the shading frame
 };
 
 /// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose
