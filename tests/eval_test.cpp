@@ -102,27 +102,41 @@ TEST(Eval, GroundTruthIsCachedAndInvalidatedWhenTheSceneChanges) {
     EXPECT_FALSE(eval::run_eval(o).scenes[0].reference_cached);
 }
 
+namespace {
+
+// dir/plane.pbrt, a plane under a distant light with `integrator` (a directive, or nothing)
+// before WorldBegin, and the options that evaluate it with "none" at 1 spp into dir/out against
+// a ground truth of `reference_spp`, its warnings kept in `warnings`.
+eval::EvalOptions plane_eval(const fs::path& dir, const std::string& integrator, int reference_spp,
+                             std::vector<std::string>& warnings) {
+    std::ofstream(dir / "plane.pbrt")
+        << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\"\n"
+        << "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 8\n"
+        << integrator << "WorldBegin LightSource \"distant\" \"point from\" [0 1 -1]\n"
+        << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+        << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5]\nWorldEnd\n";
+    eval::EvalOptions o;
+    o.scenes = {(dir / "plane.pbrt").string()};
+    o.methods = {*eval::parse_method("none")};
+    o.spp = {1};
+    o.reference_spp = reference_spp;
+    o.out_dir = (dir / "out").string();
+    o.warn = [&warnings](const std::string& w) { warnings.push_back(w); };
+    return o;
+}
+
+}  // namespace
+
 // A ground truth expected to take longer than EvalOptions::long_ground_truth is announced with a
 // warning before it is rendered, naming the scene and its samples; a cached one is not.
 TEST(Eval, LongGroundTruthIsAnnouncedBeforeItIsRendered) {
     const test::TempDir tmp("cmam_eval_long");
-    const fs::path scene = tmp.path / "plane.pbrt";
-    std::ofstream(scene) << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\"\n"
-                         << "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 8\n"
-                         << "WorldBegin LightSource \"distant\" \"point from\" [0 1 -1]\n"
-                         << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
-                         << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5]\nWorldEnd\n";
-    eval::EvalOptions o;
-    o.scenes = {scene.string()};
-    o.methods = {*eval::parse_method("none")};
-    o.spp = {1};
-    o.reference_spp = 9;
-    o.out_dir = (tmp.path / "out").string();
     std::vector<std::string> warnings;
-    o.warn = [&](const std::string& w) { warnings.push_back(w); };
+    eval::EvalOptions o = plane_eval(tmp.path, "", 9, warnings);
+    const std::string scene = o.scenes[0];
     auto announced = [&] {
         return std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
-            return w.rfind("warning: " + scene.string() +
+            return w.rfind("warning: " + scene +
                                ": its ground truth at 9 samples per pixel will take about ",
                            0) == 0 &&
                    w.find("--reference-spp, --resolution or --crop make it shorter") !=
@@ -151,26 +165,13 @@ TEST(Eval, PathTracedSceneIsFlagged) {
     const test::TempDir tmp("cmam_eval_path");
     for (const std::string integrator : {"", "Integrator \"whitted\"\n"}) {
         SCOPED_TRACE(integrator);
-        const fs::path scene = tmp.path / "plane.pbrt";
-        std::ofstream(scene)
-            << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\"\n"
-            << "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
-            << integrator << "WorldBegin LightSource \"distant\" \"point from\" [0 1 -1]\n"
-            << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
-            << "\"point3 P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5]\nWorldEnd\n";
-        eval::EvalOptions o;
-        o.scenes = {scene.string()};
-        o.methods = {*eval::parse_method("none")};
-        o.spp = {1};
-        o.reference_spp = 4;
-        o.out_dir = (tmp.path / "out").string();
         std::vector<std::string> warnings;
-        o.warn = [&](const std::string& w) { warnings.push_back(w); };
+        const eval::EvalOptions o = plane_eval(tmp.path, integrator, 4, warnings);
         const eval::EvalResult r = eval::run_eval(o);
         ASSERT_EQ(r.scenes.size(), 1u);
         const auto flagged =
             std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
-                return w == "warning: " + scene.string() +
+                return w == "warning: " + o.scenes[0] +
                                 ": the scene is path traced, so its images carry the path "
                                 "tracer's noise at every sample count, and so does the off-edge "
                                 "mask; the texture RMSE (the unlit texture, the same for any "
