@@ -467,12 +467,7 @@ struct Tracer {
                 continue;
             }
             Bsdf& bsdf = *made;
-            if (m.type == Material::Type::Mix) {
-                bsdf.kd = bsdf.kd * mix_weight;
-                bsdf.ks = bsdf.ks * mix_weight;
-                bsdf.kr = bsdf.kr * mix_weight;
-                bsdf.kt = bsdf.kt * mix_weight;
-            }
+            if (m.type == Material::Type::Mix) bsdf.scale(mix_weight);
             if (aov) record_aov(ctx, h, bsdf);
             Rgb L = after_diffuse ? Rgb() : emitted(h, wo);
             if (deferred >= 0) {

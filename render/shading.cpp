@@ -394,10 +394,22 @@ Bsdf::Outgoing Bsdf::outgoing(const Vec3& wo_w) const {
     Outgoing o;
     o.local = frame.to_local(wo_w);
     o.w_ng = dot(wo_w, ng);
-    o.lambda = !has_glossy() ? 0
-               : anisotropic ? tr_lambda(o.local, alpha, alpha_y)
-                             : tr_lambda(o.local, alpha);
+    o.lambda = !has_glossy() && !has_transmission() ? 0
+               : anisotropic                        ? tr_lambda(o.local, alpha, alpha_y)
+                                                    : tr_lambda(o.local, alpha);
     return o;
+}
+
+void Bsdf::scale(const Rgb& w) {
+    if (fresnel_blend) {  // (its kd and ks are reflectances, not weights: its value is scaled)
+        blend_scale = blend_scale * w;
+    } else {
+        kd = kd * w;
+        ks = ks * w;
+    }
+    kr = kr * w;
+    kt = kt * w;
+    kt_rough = kt_rough * w;
 }
 
 Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
@@ -408,7 +420,8 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
-    if (!reflect) return {};  // no non-specular transmission lobes in the supported materials
+    if (!reflect) return has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
+    if (fresnel_blend) return blend_f(wo, frame.to_local(wi_w));
     if (on_b == 0 && !has_glossy()) return kd * kInvPi;  // Lambertian: wi's local frame unused
     const Vec3 wi = frame.to_local(wi_w);
     Rgb out{};
@@ -467,9 +480,24 @@ float Bsdf::pdf(const Outgoing& o, const Vec3& wi_w) const {
 }
 
 float Bsdf::pdf_local(const Vec3& wo, const Vec3& wi) const {
-    if (wo.z == 0 || wo.z * wi.z <= 0) return 0;
-    const bool diffuse = has_diffuse(), glossy = has_glossy();
-    const float share = diffuse && glossy ? 0.5f : 1.0f;
+    if (wo.z == 0) return 0;
+    const bool diffuse = has_diffuse(), glossy = has_glossy(), transmission = has_transmission();
+    const int lobes = int(diffuse) + int(glossy) + int(transmission);
+    const float share = lobes == 2 ? 0.5f : lobes == 3 ? 1.0f / 3 : 1.0f;
+    if (wo.z * wi.z < 0) {  // through the surface: the rough transmission alone
+        if (!transmission) return 0;
+        const float eta = wo.z > 0 ? lobe_eta_t / lobe_eta_i : lobe_eta_i / lobe_eta_t;
+        const Vec3 h = wo + wi * eta;
+        if (h.x == 0 && h.y == 0 && h.z == 0) return 0;
+        const Vec3 wh = normalize(h);
+        const float oh = dot(wo, wh), ih = dot(wi, wh);
+        if (oh * ih > 0) return 0;  // wo and wi on one side of the microfacet: no refraction
+        // The half vector's density D |cos theta_h| times dwh/dwi = eta^2 |wi . h| / denom^2.
+        const float denom = oh + eta * ih;
+        const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+        return share * d * std::abs(wh.z) * std::abs(eta * eta * ih / (denom * denom));
+    }
+    if (wo.z * wi.z == 0) return 0;
     float p = 0;
     if (diffuse) p += share * std::abs(wi.z) * kInvPi;
     if (glossy) {
@@ -484,38 +512,60 @@ float Bsdf::pdf_local(const Vec3& wo, const Vec3& wi) const {
     return p;
 }
 
+namespace {
+// A Trowbridge-Reitz microfacet normal drawn from D(h) cos theta_h (upper hemisphere), from two
+// uniform numbers; nothing where the draw is not finite.
+std::optional<Vec3> sample_microfacet(float alpha, float alpha_y, bool anisotropic, float u1,
+                                      float u2) {
+    float tan2, phi;
+    if (!anisotropic) {
+        tan2 = alpha * alpha * u1 / (1 - u1);
+        phi = 2 * kPi * u2;
+    } else {
+        phi = std::atan(alpha_y / alpha * std::tan(2 * kPi * u2 + 0.5f * kPi));
+        if (u2 > 0.5f) phi += kPi;
+        const float c = std::cos(phi), sn = std::sin(phi);
+        const float a2 = 1 / (c * c / (alpha * alpha) + sn * sn / (alpha_y * alpha_y));
+        tan2 = a2 * u1 / (1 - u1);
+    }
+    if (!std::isfinite(tan2)) return std::nullopt;
+    const float cos_h = 1 / std::sqrt(1 + tan2),
+                sin_h = std::sqrt(std::max(0.0f, 1 - cos_h * cos_h));
+    return Vec3(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
+}
+}  // namespace
+
 Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const {
     Sample out;
     const Vec3& wo = o.local;
     if (wo.z == 0 || !has_nonspecular()) return out;
-    const bool glossy_lobe = has_glossy() && (!has_diffuse() || u0 < 0.5f);
+    // The lobe: glossy, diffuse, transmission, evenly among those there are.
+    const bool glossy = has_glossy(), diffuse = has_diffuse(), transmission = has_transmission();
+    const int lobes = int(glossy) + int(diffuse) + int(transmission);
+    int lobe = std::min(static_cast<int>(u0 * float(lobes)), lobes - 1);
+    if (!glossy) ++lobe;
+    if (lobe == 1 && !diffuse) ++lobe;
     Vec3 wi;
-    if (!glossy_lobe) {
+    if (lobe == 1) {
         // Cosine-weighted on wo's side of the shading normal.
         const float r = std::sqrt(u1), phi = 2 * kPi * u2;
         const float z = std::sqrt(std::max(0.0f, 1 - u1));
         wi = Vec3(r * std::cos(phi), r * std::sin(phi), wo.z < 0 ? -z : z);
     } else {
-        float tan2, phi;
-        if (!anisotropic) {
-            tan2 = alpha * alpha * u1 / (1 - u1);
-            phi = 2 * kPi * u2;
-        } else {
-            phi = std::atan(alpha_y / alpha * std::tan(2 * kPi * u2 + 0.5f * kPi));
-            if (u2 > 0.5f) phi += kPi;
-            const float c = std::cos(phi), sn = std::sin(phi);
-            const float a2 = 1 / (c * c / (alpha * alpha) + sn * sn / (alpha_y * alpha_y));
-            tan2 = a2 * u1 / (1 - u1);
-        }
-        if (!std::isfinite(tan2)) return out;
-        const float cos_h = 1 / std::sqrt(1 + tan2),
-                    sin_h = std::sqrt(std::max(0.0f, 1 - cos_h * cos_h));
-        Vec3 wh(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
-        if (wo.z < 0) wh = -wh;
+        const std::optional<Vec3> h = sample_microfacet(alpha, alpha_y, anisotropic, u1, u2);
+        if (!h) return out;
+        const Vec3 wh = wo.z < 0 ? -*h : *h;
         const float dot_oh = dot(wo, wh);
         if (dot_oh <= 0) return out;
-        wi = -wo + 2 * dot_oh * wh;
-        if (wi.z * wo.z <= 0) return out;
+        if (lobe == 0) {  // reflected about the microfacet
+            wi = -wo + 2 * dot_oh * wh;
+            if (wi.z * wo.z <= 0) return out;
+        } else {  // refracted through it, from wo's side to the other
+            const float eta = wo.z > 0 ? lobe_eta_i / lobe_eta_t : lobe_eta_t / lobe_eta_i;
+            const std::optional<Vec3> t = refract(wo, wh, eta);
+            if (!t || t->z * wo.z >= 0) return out;
+            wi = *t;
+        }
     }
     out.wi = frame.to_world(wi);
     out.pdf = pdf_local(wo, wi);
@@ -525,6 +575,46 @@ Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const
     }
     out.f = f(o, out.wi);
     return out;
+}
+
+// pbrt-v3's FresnelBlend: the diffuse base under the coat, 28 / (23 pi) kd (1 - ks) times
+// (1 - (1 - |cos|/2)^5) for each direction, plus the coat's microfacet reflection with Schlick's
+// Fresnel term, D(h) F(wi . h) / (4 |wi . h| max(|cos theta_i|, |cos theta_o|)).
+Rgb Bsdf::blend_f(const Vec3& wo, const Vec3& wi) const {
+    auto pow5 = [](float v) { return (v * v) * (v * v) * v; };
+    const float ci = std::abs(wi.z), co = std::abs(wo.z);
+    Vec3 wh = wi + wo;
+    if (wh.x == 0 && wh.y == 0 && wh.z == 0) return {};
+    const Rgb diffuse = kd * (Rgb(1) - ks) *
+                        (28 / (23 * kPi) * (1 - pow5(1 - 0.5f * ci)) * (1 - pow5(1 - 0.5f * co)));
+    wh = normalize(wh);
+    const float ih = dot(wi, wh);
+    const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+    const Rgb schlick = ks + (Rgb(1) - ks) * pow5(1 - ih);
+    const Rgb specular = schlick * (d / (4 * std::abs(ih) * std::max(ci, co)));
+    return (diffuse + specular) * blend_scale;
+}
+
+// pbrt-v3's MicrofacetTransmission for radiance: with eta the index on wi's side over wo's and
+// h = normalize(wo + eta wi), (1 - F(wo . h)) D(h) G(wo, wi) |wi . h| |wo . h| / (|cos theta_i
+// cos theta_o| (wo . h + eta wi . h)^2) times kt_rough. (pbrt-v3's eta^2 of the Jacobian and the
+// 1 / eta^2 of radiance crossing the boundary cancel.)
+Rgb Bsdf::transmission_f(const Outgoing& o, const Vec3& wi) const {
+    const Vec3& wo = o.local;
+    if (!(wo.z * wi.z < 0)) return {};
+    const float eta = wo.z > 0 ? lobe_eta_t / lobe_eta_i : lobe_eta_i / lobe_eta_t;
+    const Vec3 h = wo + wi * eta;
+    if (h.x == 0 && h.y == 0 && h.z == 0) return {};
+    Vec3 wh = normalize(h);
+    if (wh.z < 0) wh = -wh;
+    const float oh = dot(wo, wh), ih = dot(wi, wh);
+    if (oh * ih > 0) return {};
+    const float fresnel = fresnel_dielectric(oh, lobe_eta_i, lobe_eta_t);
+    const float denom = oh + eta * ih;
+    const float lambda_i = anisotropic ? tr_lambda(wi, alpha, alpha_y) : tr_lambda(wi, alpha);
+    const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+    const float g = 1 / (1 + o.lambda + lambda_i);
+    return kt_rough * ((1 - fresnel) * std::abs(d * g * ih * oh / (wi.z * wo.z * denom * denom)));
 }
 
 Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit,
@@ -608,11 +698,33 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.fresnel_noop = true;
             break;
-        case Material::Type::Glass:
+        case Material::Type::Glass: {
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.kt = clamp0(eval_texture(scene, m.kt, ctx));
             b.eta = index_of(eval_texture(scene, m.eta, ctx).r);
+            // pbrt-v3's glass is rough where its roughness is not 0 along u or v: microfacet
+            // reflection (with the dielectric's Fresnel term from air to eta) and transmission
+            // in place of the specular lobes.
+            const bool rough_anywhere = m.roughness.node >= 0 || m.vroughness.node >= 0 ||
+                                        m.roughness.value.r != 0 || m.vroughness.value.r != 0;
+            if (rough_anywhere && (eval_texture(scene, m.roughness, ctx).r != 0 ||
+                                   eval_texture(scene, m.vroughness, ctx).r != 0)) {
+                set_alphas(b, scene, m, ctx, 1e-3f);
+                b.ks = b.kr;
+                b.kt_rough = b.kt;
+                b.kr = b.kt = Rgb();
+                b.lobe_eta_i = 1;
+                b.lobe_eta_t = b.eta;
+            }
             break;
+        }
+        case Material::Type::Substrate: {
+            b.kd = clamp0(eval_texture(scene, m.kd, ctx));
+            b.ks = clamp0(eval_texture(scene, m.ks, ctx));
+            b.fresnel_blend = !b.kd.is_black() || !b.ks.is_black();
+            set_alphas(b, scene, m, ctx, -std::numeric_limits<float>::infinity());
+            break;
+        }
         case Material::Type::Uber: {
             b.kd = clamp0(eval_texture(scene, m.kd, ctx));
             b.ks = clamp0(eval_texture(scene, m.ks, ctx));

@@ -82,10 +82,23 @@ struct Bsdf {
     // (ks is then 1), instead of the dielectric's.
     bool conductor = false;
     Rgb conductor_eta{}, conductor_k{};
+    // Microfacet transmission (pbrt-v3's rough glass): the glossy lobe's distribution, through the
+    // dielectric boundary from lobe_eta_i (on the side the shading normal points to) to
+    // lobe_eta_t, weighted by 1 - Fresnel and by kt_rough.
+    Rgb kt_rough{};
+    // pbrt-v3's FresnelBlend (substrate) in place of the diffuse and glossy lobes: kd the base's
+    // colour, ks the coat's reflectance at normal incidence (Schlick's approximation), the glossy
+    // lobe's distribution; its value times blend_scale (a mix's weight).
+    bool fresnel_blend = false;
+    Rgb blend_scale{1, 1, 1};
 
-    bool has_diffuse() const { return !kd.is_black(); }
-    bool has_glossy() const { return !ks.is_black(); }
-    bool has_nonspecular() const { return has_diffuse() || has_glossy(); }
+    bool has_diffuse() const { return fresnel_blend || !kd.is_black(); }
+    bool has_glossy() const { return fresnel_blend || !ks.is_black(); }
+    bool has_transmission() const { return !kt_rough.is_black(); }
+    bool has_nonspecular() const { return has_diffuse() || has_glossy() || has_transmission(); }
+
+    /// Every lobe times w (a mix material's weight for the material it chose).
+    void scale(const Rgb& w);
 
     /// BSDF value for world directions (pbrt-v3 BSDF::f: only non-specular lobes).
     Rgb f(const Vec3& wo, const Vec3& wi) const;
@@ -101,10 +114,11 @@ struct Bsdf {
     Rgb f(const Outgoing& wo, const Vec3& wi) const;
 
     /// A direction drawn from the non-specular lobes for the outgoing direction `o`, from three
-    /// uniform numbers: the lobe (diffuse or glossy, evenly when both, as pbrt-v3 picks among its
-    /// components), then a cosine-weighted direction about the shading normal or a reflection about
-    /// a Trowbridge-Reitz microfacet normal. `pdf` is the density of the whole mixture in solid
-    /// angle (0: nothing drawn), `f` the BSDF there.
+    /// uniform numbers: the lobe (glossy, diffuse or rough transmission, evenly among those there
+    /// are, as pbrt-v3 picks among its components), then a cosine-weighted direction about the
+    /// shading normal, or a reflection or a refraction about a Trowbridge-Reitz microfacet normal.
+    /// `pdf` is the density of the whole mixture in solid angle (0: nothing drawn), `f` the BSDF
+    /// there.
     struct Sample {
         Vec3 wi;
         Rgb f;
@@ -115,7 +129,9 @@ struct Bsdf {
     float pdf(const Outgoing& o, const Vec3& wi) const;
 
   private:
-    float pdf_local(const Vec3& wo, const Vec3& wi) const;  // the same in the shading frame
+    float pdf_local(const Vec3& wo, const Vec3& wi) const;        // the same in the shading frame
+    Rgb blend_f(const Vec3& wo, const Vec3& wi) const;            // FresnelBlend, shading frame
+    Rgb transmission_f(const Outgoing& o, const Vec3& wi) const;  // wi in the shading frame
 };
 
 /// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose

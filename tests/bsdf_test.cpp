@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <complex>
 #include <limits>
 
@@ -348,13 +349,127 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
     };
     EXPECT_EQ(
         count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
-              "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
-              "substrate and translucent as plastic)"),
+              "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
+              "mix, and translucent as plastic)"),
         1);
     EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
     warnings.clear();
-    const Bsdf s = bsdf_of(
-        "Material \"substrate\" \"float uroughness\" 0.1 \"float vroughness\" 0.3", &warnings);
-    EXPECT_FLOAT_EQ(s.kd.r, 0.5f);
-    EXPECT_EQ(count("material \"substrate\" is rendered as \"plastic\""), 1);
+    const Bsdf t = bsdf_of("Material \"translucent\" \"rgb Kd\" [0.2 0.2 0.2]", &warnings);
+    EXPECT_FLOAT_EQ(t.kd.r, 0.2f);
+    EXPECT_EQ(count("material \"translucent\" is rendered as \"plastic\" (no diffuse "
+                    "transmission)"),
+              1);
+    // Substrate, uber's opacity of 1 (its default, what published scenes give) and rough glass
+    // are rendered as pbrt-v3 renders them: no warning.
+    warnings.clear();
+    (void)bsdf_of("Material \"substrate\" \"float uroughness\" 0.1 \"float vroughness\" 0.3",
+                  &warnings);
+    (void)bsdf_of("Material \"uber\" \"rgb opacity\" [1 1 1]", &warnings);
+    (void)bsdf_of("Material \"glass\" \"float uroughness\" 0.05 \"float vroughness\" 0.05",
+                  &warnings);
+    EXPECT_EQ(count("material"), 0);
+    EXPECT_EQ(count("ignored"), 0);
+    (void)bsdf_of("Material \"uber\" \"rgb opacity\" [0.5 0.5 0.5]", &warnings);
+    EXPECT_EQ(count("uber \"opacity\" ignored"), 1);
+}
+
+namespace {
+// pbrt-v3's FresnelBlend, written out in angles (theta and phi of each direction) from
+// Ashikhmin and Shirley's paper's form: the half vector from the two directions' angles, the
+// Trowbridge-Reitz D from its slope, Schlick's Fresnel term.
+double fresnel_blend(double rd, double rs, double alpha, double th_o, double ph_o, double th_i,
+                     double ph_i) {
+    const double pi = 3.14159265358979;
+    auto dir = [](double th, double ph) {
+        return std::array<double, 3>{std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph),
+                                     std::cos(th)};
+    };
+    const auto o = dir(th_o, ph_o), i = dir(th_i, ph_i);
+    std::array<double, 3> h{o[0] + i[0], o[1] + i[1], o[2] + i[2]};
+    const double len = std::sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    for (double& c : h) c /= len;
+    const double ih = i[0] * h[0] + i[1] * h[1] + i[2] * h[2];
+    const double tan2_h = (1 - h[2] * h[2]) / (h[2] * h[2]);
+    const double d =
+        1 / (pi * alpha * alpha * std::pow(h[2], 4) * std::pow(1 + tan2_h / (alpha * alpha), 2));
+    const double diffuse = 28 * rd / (23 * pi) * (1 - rs) *
+                           (1 - std::pow(1 - std::cos(th_i) / 2, 5)) *
+                           (1 - std::pow(1 - std::cos(th_o) / 2, 5));
+    const double schlick = rs + std::pow(1 - ih, 5) * (1 - rs);
+    return diffuse + d * schlick / (4 * ih * std::max(std::cos(th_i), std::cos(th_o)));
+}
+}  // namespace
+
+// pbrt-v3's substrate is a FresnelBlend: a diffuse base whose light the coat's Fresnel term
+// (Schlick's) takes away towards grazing angles, under the coat's microfacet reflection.
+TEST(Materials, SubstrateIsPbrtV3sFresnelBlend) {
+    const Bsdf b = bsdf_of(
+        "Material \"substrate\" \"rgb Kd\" [0.6 0.3 0.1] \"rgb Ks\" [0.04 0.1 0.5] "
+        "\"float uroughness\" 0.2 \"float vroughness\" 0.2 \"bool remaproughness\" \"false\"");
+    ASSERT_TRUE(b.fresnel_blend);
+    EXPECT_FLOAT_EQ(b.alpha, 0.2f);
+    EXPECT_TRUE(b.kr.is_black() && b.kt.is_black());
+    // The sphere's hit faces +z: its shading frame is the test's.
+    const float ks[3] = {0.04f, 0.1f, 0.5f}, kd[3] = {0.6f, 0.3f, 0.1f};
+    for (auto [th_o, ph_o, th_i, ph_i] : {std::array<double, 4>{0.3, 0.0, 0.5, 2.5},
+                                          {1.2, 1.0, 0.2, 4.0},
+                                          {0.7, 0.0, 0.7, 3.14159265},  // the mirror direction
+                                          {1.45, 0.5, 1.4, 3.0}}) {
+        auto world = [&](double th, double ph) {
+            const Vec3 l(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
+                         float(std::cos(th)));
+            return b.frame.to_world(l);
+        };
+        const Rgb v = b.f(world(th_o, ph_o), world(th_i, ph_i));
+        const float f[3] = {v.r, v.g, v.b};
+        for (int c = 0; c < 3; ++c) {
+            const double want = fresnel_blend(kd[c], ks[c], 0.2, th_o, ph_o, th_i, ph_i);
+            EXPECT_NEAR(f[c], want, 2e-4 * want) << th_o << " " << th_i << " channel " << c;
+        }
+        EXPECT_TRUE(b.f(world(th_o, ph_o), -world(th_i, ph_i)).is_black());  // no transmission
+    }
+    // A mix weighs its value, not its reflectances.
+    Bsdf half = b;
+    half.scale(Rgb(0.5f));
+    const Vec3 wo = normalize(Vec3(0.3f, 0.1f, 1)), wi = normalize(Vec3(-0.5f, 0.2f, 1));
+    EXPECT_NEAR(half.f(wo, wi).g, 0.5f * b.f(wo, wi).g, 1e-6f);
+}
+
+// pbrt-v3's glass with a roughness: microfacet reflection with the dielectric's Fresnel term and
+// microfacet transmission in place of the specular lobes; smooth (specular) where both
+// roughnesses are 0.
+TEST(Materials, RoughGlassIsMicrofacetReflectionAndTransmission) {
+    const Bsdf smooth = bsdf_of("Material \"glass\" \"float index\" 1.33");
+    EXPECT_FALSE(smooth.has_nonspecular());
+    EXPECT_FLOAT_EQ(smooth.kt.r, 1);
+    const Bsdf b = bsdf_of(
+        "Material \"glass\" \"float index\" 1.33 \"rgb Kt\" [0.9 0.8 0.7] \"float uroughness\" "
+        "0.3 \"float vroughness\" 0.3 \"bool remaproughness\" \"false\"");
+    EXPECT_TRUE(b.kr.is_black() && b.kt.is_black());
+    EXPECT_FLOAT_EQ(b.ks.r, 1);
+    EXPECT_FLOAT_EQ(b.kt_rough.b, 0.7f);
+    EXPECT_FLOAT_EQ(b.alpha, 0.3f);
+    EXPECT_FLOAT_EQ(b.lobe_eta_t, 1.33f);
+    // Straight through at normal incidence the microfacet normal is n: pbrt-v3's (1 - F) D(h) G
+    // |wi.h| |wo.h| / (wo.h + eta wi.h)^2 (eta the index on wi's side over wo's; its eta^2 and
+    // the radiance's 1 / eta^2 cancel) with D(n) = 1 / (pi alpha^2), G = 1 (Lambda is 0 along n):
+    // (1 - F) D / (1 - 1.33)^2 going in, (1 - F) D / (1 - 1 / 1.33)^2 coming out.
+    const double f0 = std::pow(0.33 / 2.33, 2), d = 1 / (3.14159265358979 * 0.09);
+    const Vec3 n = b.frame.to_world(Vec3(0, 0, 1));
+    const double in = 0.7 * (1 - f0) * d / (0.33 * 0.33),
+                 out = 0.7 * (1 - f0) * d / std::pow(1 - 1 / 1.33, 2);
+    EXPECT_NEAR(b.f(n, -n).b, in, 1e-4 * in);
+    EXPECT_NEAR(b.f(-n, n).b, out, 1e-4 * out);
+    // Reflection: the microfacet lobe with glass's Fresnel term from air.
+    const Vec3 wo = normalize(Vec3(0.4f, 0, 1)), wi = normalize(Vec3(-0.4f, 0, 1));
+    const Vec3 wo_w = b.frame.to_world(wo), wi_w = b.frame.to_world(wi);
+    const float cos = wo.z;
+    const double tr_d = 1 / (3.14159265358979 * 0.09);  // h = n
+    const double lambda = (-1 + std::sqrt(1 + 0.09 * (1 - cos * cos) / (cos * cos))) / 2;
+    EXPECT_NEAR(b.f(wo_w, wi_w).r,
+                fresnel_dielectric(cos, 1, 1.33f) * tr_d / (1 + 2 * lambda) / (4 * cos * cos),
+                1e-4);
+    // A roughness of 0 along both axes is smooth glass again.
+    const Bsdf zero = bsdf_of("Material \"glass\" \"float uroughness\" 0 \"float vroughness\" 0");
+    EXPECT_FALSE(zero.has_nonspecular());
 }

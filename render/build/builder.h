@@ -203,6 +203,7 @@ class Builder {
     void glass_material(const pbrt::MaterialDesc& d, Material& m);
     void plastic_material(const pbrt::MaterialDesc& d, Material& m);
     void uber_material(const pbrt::MaterialDesc& d, Material& m);
+    void substrate_material(const pbrt::MaterialDesc& d, Material& m);
     void plastic_approximation(const pbrt::MaterialDesc& d, Material& m);
     void metal_material(const pbrt::MaterialDesc& d, Material& m);
     void no_material(const pbrt::MaterialDesc& d, Material& m);

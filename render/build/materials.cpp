@@ -52,12 +52,12 @@ void Builder::glass_material(const pbrt::MaterialDesc& d, Material& m) {
     m.kt = spectrum_input(e, s, "Kt", Rgb(1));
     const char* eta = e.params.find("eta") ? "eta" : "index";
     m.eta = float_input(e, s, eta, 1.5f, true);
-    for (const char* r : {"uroughness", "vroughness"}) {
-        TexInput rough = float_input(e, s, r, 0);
-        if (rough.node >= 0 || rough.value.r != 0)
-            warn(e.params.find(r)->loc,
-                 std::string(r) + " ignored: glass is rendered perfectly smooth");
-    }
+    // pbrt-v3's glass has "uroughness" and "vroughness" (0: smooth), and no "roughness".
+    m.roughness = float_input(e, s, "uroughness", 0);
+    m.vroughness = float_input(e, s, "vroughness", 0);
+    m.anisotropic = m.roughness.node != m.vroughness.node ||
+                    (m.roughness.node < 0 && !(m.roughness.value.r == m.vroughness.value.r));
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
     e.params.get_bool("remaproughness", true);
 }
 
@@ -86,33 +86,38 @@ void Builder::uber_material(const pbrt::MaterialDesc& d, Material& m) {
     const char* eta = e.params.find("eta") ? "eta" : "index";
     m.eta = float_input(e, s, eta, 1.5f, true);
     if (const auto* op = e.params.find("opacity")) {
-        warn(op->loc, "uber \"opacity\" ignored: cmam renders the material opaque");
-        (void)spectrum_input(e, s, "opacity", Rgb(1));
+        // (Opaque, 1 1 1, is pbrt-v3's default and what published scenes give.)
+        const TexInput opacity = spectrum_input(e, s, "opacity", Rgb(1));
+        if (opacity.node >= 0 ||
+            !(opacity.value.r == 1 && opacity.value.g == 1 && opacity.value.b == 1))
+            warn(op->loc, "uber \"opacity\" ignored: cmam renders the material opaque");
     }
 }
 
-// "substrate" and "translucent", approximated by plastic: substrate's Fresnel-blended glossy
-// coat over a diffuse base, and translucent's reflection (its transmission is not rendered).
+// pbrt-v3's substrate: a Fresnel-blended glossy coat over a diffuse base (FresnelBlend).
+void Builder::substrate_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Substrate;
+    m.kd = spectrum_input(e, s, "Kd", Rgb(0.5f));
+    m.ks = spectrum_input(e, s, "Ks", Rgb(0.5f));
+    rough_inputs(e, s, 0.1f, RoughFallback::Substrate, m);
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
+}
+
+// "translucent", approximated by plastic: its reflection (its transmission is not rendered).
 void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
     const Entity& e = d.entity;
     const TextureScope& s = d.scope;
-    const std::string& t = e.type;
     m.type = Material::Type::Plastic;
-    m.kd = spectrum_input(e, s, "Kd", Rgb(t == "substrate" ? 0.5f : 0.25f));
-    m.ks = spectrum_input(e, s, "Ks", Rgb(t == "substrate" ? 0.5f : 0.25f));
-    if (t == "substrate")
-        rough_inputs(e, s, 0.1f, RoughFallback::Substrate, m);
-    else
-        m.roughness = m.vroughness = float_input(e, s, "roughness", 0.1f);
+    m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
+    m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
+    m.roughness = m.vroughness = float_input(e, s, "roughness", 0.1f);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
-    if (t == "translucent") {
-        (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
-        (void)spectrum_input(e, s, "transmit", Rgb(0.5f));
-    }
+    (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
+    (void)spectrum_input(e, s, "transmit", Rgb(0.5f));
     warn(e.loc,
-         "material " + in_quotes(t) + " is rendered as \"plastic\" (" +
-             (t == "substrate" ? "its Fresnel blend approximated" : "no diffuse transmission") +
-             ")");
+         "material " + in_quotes(e.type) + " is rendered as \"plastic\" (no diffuse transmission)");
 }
 
 // A conductor: a microfacet lobe with the Fresnel term of a conductor of index eta + i k
@@ -156,8 +161,8 @@ Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
                     (e.params.find("Kd") ? " with its Kd" : "") +
-                    " (cmam renders matte, mirror, glass, plastic, uber, metal, mix, and "
-                    "substrate and translucent as plastic)");
+                    " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, mix, "
+                    "and translucent as plastic)");
     return m;  // its other parameters are not read: no warning for each
 }
 
@@ -168,7 +173,7 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
         {"glass", &Builder::glass_material},
         {"plastic", &Builder::plastic_material},
         {"uber", &Builder::uber_material},
-        {"substrate", &Builder::plastic_approximation},
+        {"substrate", &Builder::substrate_material},
         {"translucent", &Builder::plastic_approximation},
         {"metal", &Builder::metal_material},
         {"none", &Builder::no_material},
