@@ -472,15 +472,19 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
     return out;
 }
 
-// algorithms.md §18. The glossy lobe's normals are drawn from the whole distribution D(h) cos
-// theta_h (pbrt-v3's Trowbridge-Reitz sampling without the visible-normals restriction), so the
-// reflected direction's density is D(h) |cos theta_h| / (4 |wo . h|).
+// algorithms.md §18. The microfacet lobes' normals are drawn from the normals wo sees, as
+// pbrt-v3 draws them: density D(h) G1(wo) |wo . h| / |cos theta_o|, so the reflected direction's
+// is D(h) G1(wo) / (4 |cos theta_o|) and the refracted one's that times |wo . h| dwh/dwi.
 float Bsdf::pdf(const Outgoing& o, const Vec3& wi_w) const {
-    return pdf_local(o.local, frame.to_local(wi_w));
+    return pdf_local(o, frame.to_local(wi_w));
 }
 
-float Bsdf::pdf_local(const Vec3& wo, const Vec3& wi) const {
+float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
+    const Vec3& wo = o.local;
     if (wo.z == 0) return 0;
+    // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
+    // Lambda(wo)).
+    const float g1_over_cos = 1 / ((1 + o.lambda) * std::abs(wo.z));
     const bool diffuse = has_diffuse(), glossy = has_glossy(), transmission = has_transmission();
     const int lobes = int(diffuse) + int(glossy) + int(transmission);
     const float share = lobes == 2 ? 0.5f : lobes == 3 ? 1.0f / 3 : 1.0f;
@@ -492,10 +496,10 @@ float Bsdf::pdf_local(const Vec3& wo, const Vec3& wi) const {
         const Vec3 wh = normalize(h);
         const float oh = dot(wo, wh), ih = dot(wi, wh);
         if (oh * ih > 0) return 0;  // wo and wi on one side of the microfacet: no refraction
-        // The half vector's density D |cos theta_h| times dwh/dwi = eta^2 |wi . h| / denom^2.
+        // The visible normal's density times dwh/dwi = eta^2 |wi . h| / denom^2.
         const float denom = oh + eta * ih;
         const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
-        return share * d * std::abs(wh.z) * std::abs(eta * eta * ih / (denom * denom));
+        return share * d * g1_over_cos * std::abs(oh) * std::abs(eta * eta * ih / (denom * denom));
     }
     if (wo.z * wi.z == 0) return 0;
     float p = 0;
@@ -506,32 +510,31 @@ float Bsdf::pdf_local(const Vec3& wo, const Vec3& wi) const {
         wh = normalize(wh);
         if (wh.z < 0) wh = -wh;
         const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
-        const float dot_oh = std::abs(dot(wo, wh));
-        if (dot_oh > 0) p += share * d * wh.z / (4 * dot_oh);
+        // The visible normal's density over dwi/dwh = 4 |wo . h|, which cancels its |wo . h|.
+        if (dot(wo, wh) != 0) p += share * d * g1_over_cos / 4;
     }
     return p;
 }
 
 namespace {
-// A Trowbridge-Reitz microfacet normal drawn from D(h) cos theta_h (upper hemisphere), from two
-// uniform numbers; nothing where the draw is not finite.
-std::optional<Vec3> sample_microfacet(float alpha, float alpha_y, bool anisotropic, float u1,
-                                      float u2) {
-    float tan2, phi;
-    if (!anisotropic) {
-        tan2 = alpha * alpha * u1 / (1 - u1);
-        phi = 2 * kPi * u2;
-    } else {
-        phi = std::atan(alpha_y / alpha * std::tan(2 * kPi * u2 + 0.5f * kPi));
-        if (u2 > 0.5f) phi += kPi;
-        const float c = std::cos(phi), sn = std::sin(phi);
-        const float a2 = 1 / (c * c / (alpha * alpha) + sn * sn / (alpha_y * alpha_y));
-        tan2 = a2 * u1 / (1 - u1);
-    }
-    if (!std::isfinite(tan2)) return std::nullopt;
-    const float cos_h = 1 / std::sqrt(1 + tan2),
-                sin_h = std::sqrt(std::max(0.0f, 1 - cos_h * cos_h));
-    return Vec3(sin_h * std::cos(phi), sin_h * std::sin(phi), cos_h);
+// A Trowbridge-Reitz microfacet normal drawn from the normals wo sees (algorithms.md §18):
+// density D(h) G1(wo) max(0, wo . h) / cos theta_o, pbrt-v3's "visible area" sampling (its
+// TrowbridgeReitzDistribution's default), by Heitz's 2018 construction: wo stretched by the
+// roughness, a point on the unit disk warped onto the half of it wo sees, lifted onto the
+// hemisphere about the stretched wo and unstretched. wo on the upper side; nothing where the
+// result is not finite.
+std::optional<Vec3> sample_visible_normal(const Vec3& wo, float ax, float ay, float u1, float u2) {
+    const Vec3 v = normalize(Vec3(ax * wo.x, ay * wo.y, wo.z));
+    const float len2 = v.x * v.x + v.y * v.y;
+    const Vec3 t1 = len2 > 0 ? Vec3(-v.y, v.x, 0) / std::sqrt(len2) : Vec3(1, 0, 0);
+    const Vec3 t2 = cross(v, t1);
+    const float r = std::sqrt(u1), phi = 2 * kPi * u2;
+    const float p1 = r * std::cos(phi), s = 0.5f * (1 + v.z);
+    const float p2 = (1 - s) * std::sqrt(std::max(0.0f, 1 - p1 * p1)) + s * (r * std::sin(phi));
+    const Vec3 n = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1 - p1 * p1 - p2 * p2)) * v;
+    const Vec3 h = normalize(Vec3(ax * n.x, ay * n.y, std::max(0.0f, n.z)));
+    if (!finite(h)) return std::nullopt;
+    return h;
 }
 }  // namespace
 
@@ -552,7 +555,9 @@ Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const
         const float z = std::sqrt(std::max(0.0f, 1 - u1));
         wi = Vec3(r * std::cos(phi), r * std::sin(phi), wo.z < 0 ? -z : z);
     } else {
-        const std::optional<Vec3> h = sample_microfacet(alpha, alpha_y, anisotropic, u1, u2);
+        const float ay = anisotropic ? alpha_y : alpha;
+        const Vec3 up = wo.z < 0 ? -wo : wo;  // (the normals are drawn on wo's side)
+        const std::optional<Vec3> h = sample_visible_normal(up, alpha, ay, u1, u2);
         if (!h) return out;
         const Vec3 wh = wo.z < 0 ? -*h : *h;
         const float dot_oh = dot(wo, wh);
@@ -568,7 +573,7 @@ Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const
         }
     }
     out.wi = frame.to_world(wi);
-    out.pdf = pdf_local(wo, wi);
+    out.pdf = pdf_local(o, wi);
     if (!(out.pdf > 0)) {
         out.pdf = 0;
         return out;

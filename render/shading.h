@@ -129,7 +129,7 @@ struct Bsdf {
     float pdf(const Outgoing& o, const Vec3& wi) const;
 
   private:
-    float pdf_local(const Vec3& wo, const Vec3& wi) const;        // the same in the shading frame
+    float pdf_local(const Outgoing& o, const Vec3& wi) const;     // the same in the shading frame
     Rgb blend_f(const Vec3& wo, const Vec3& wi) const;            // FresnelBlend, shading frame
     Rgb transmission_f(const Outgoing& o, const Vec3& wi) const;  // wi in the shading frame
 };
