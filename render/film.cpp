@@ -437,6 +437,7 @@ class FilmTracer {
                     ++sp.counts.non_finite_samples;
                     L = Rgb();
                 }
+                if (m_options.aov == AovKind::None) L = limit_luminance(L);
                 const auto [a, b] = m_splat->splat(sp.row_sums, packet.fx[k], packet.fy[k], L);
                 if (a < b) {
                     x0 = std::min(x0, a);
@@ -470,6 +471,7 @@ class FilmTracer {
                 if (i >= sp.prime) ++sp.counts.non_finite_samples;
                 L = Rgb();
             }
+            if (m_options.aov == AovKind::None) L = limit_luminance(L);
             r += L.r;
             g += L.g;
             b += L.b;
@@ -478,6 +480,13 @@ class FilmTracer {
         acc[1] = g;
         acc[2] = b;
         packet.n = 0;
+    }
+
+    // A sample's radiance scaled down to the film's maxsampleluminance where its luminance
+    // (pbrt-v3's y of an RGB) is above it.
+    Rgb limit_luminance(const Rgb& L) const {
+        const float y = 0.212671f * L.r + 0.715160f * L.g + 0.072169f * L.b;
+        return y > m_film.max_sample_luminance ? L * (m_film.max_sample_luminance / y) : L;
     }
 
     const Scene& m_scene;

@@ -10,6 +10,7 @@
 #include <embree3/rtcore.h>
 
 #include <array>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -80,6 +81,9 @@ struct FilmSettings {
     std::string filename = "pbrt.exr";
     float scale = 1;     // pbrt-v3's Film "scale": every pixel's radiance is multiplied by it
     PixelFilter filter;  // PixelFilter (pbrt-v3's default: the box of radius 0.5)
+    // pbrt-v3's Film "maxsampleluminance": a sample's radiance whose luminance (y of its RGB)
+    // exceeds it is scaled down to it before it reaches the film (no limit by default).
+    float max_sample_luminance = std::numeric_limits<float>::infinity();
     int width() const { return x1 - x0; }
     int height() const { return y1 - y0; }
 };

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "expect_throw.h"
 #include "pbrt/parser.h"
 #include "render/build_scene.h"
 #include "render/footprint/cmam_caches.h"
@@ -190,6 +191,37 @@ TEST(Analytic, FilmScaleMultipliesRadianceNotAovs) {
     EXPECT_GT(sum, 0);
     EXPECT_EQ(with_scale("", AovKind::Texture),
               with_scale(" \"float scale\" 2.5", AovKind::Texture));
+}
+
+// pbrt-v3's Film "maxsampleluminance": a sample whose luminance (y of its RGB) is above it is
+// scaled down to it, before the film's scale; samples below it are untouched.
+TEST(Analytic, FilmMaxSampleLuminanceScalesBrightSamplesDown) {
+    auto render_with = [](const std::string& film) {
+        const std::string text =
+            "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+            "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8" +
+            film +
+            "\nIntegrator \"whitted\"\nWorldBegin\n"
+            "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [40 20 10]\n"
+            "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+            "\"point3 P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] AttributeEnd\nWorldEnd\n";
+        return render::render(*test::scene_from(text, "t.pbrt", 1), {}, nullptr).rgb;
+    };
+    const auto plain = render_with(""), limited = render_with(" \"float maxsampleluminance\" 10"),
+               scaled = render_with(" \"float maxsampleluminance\" 10 \"float scale\" 2"),
+               above = render_with(" \"float maxsampleluminance\" 30");
+    const double y = 0.212671 * 40 + 0.715160 * 20 + 0.072169 * 10;  // 23.53
+    ASSERT_EQ(plain.size(), 8u * 8 * 3);
+    for (std::size_t p = 0; p < plain.size(); p += 3) {
+        EXPECT_FLOAT_EQ(plain[p], 40);
+        EXPECT_NEAR(limited[p], 40 * 10 / y, 1e-4);
+        EXPECT_NEAR(limited[p + 1], 20 * 10 / y, 1e-4);
+        EXPECT_NEAR(limited[p + 2], 10 * 10 / y, 1e-4);
+        EXPECT_FLOAT_EQ(scaled[p + 1], 2 * limited[p + 1]);
+        EXPECT_EQ(above[p], plain[p]);
+    }
+    EXPECT_THROW_CONTAINS(render_with(" \"float maxsampleluminance\" -1"), pbrt::SceneError,
+                          "t.pbrt:3:62: error: maxsampleluminance must be a positive");
 }
 
 TEST(Analytic, ShadowsBlockDirectLight) {

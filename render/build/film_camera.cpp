@@ -63,10 +63,11 @@ void Builder::film() {
         throw SceneError(e.params.find("cropwindow")->loc, "cropwindow selects no pixels");
     // pbrt-v3 multiplies every pixel by "scale" (radiance only, not AOVs).
     f.scale = static_cast<float>(finite_float(e, "scale", 1));
+    if (e.params.find("maxsampleluminance"))
+        f.max_sample_luminance = static_cast<float>(finite_float(e, "maxsampleluminance", 1, true));
     // The film's physical size matters to pbrt-v3's realistic camera only.
     if (m_desc.camera.type == "realistic") m_film_diagonal = finite_float(e, "diagonal", 35, true);
-    e.params.check_unused("Film \"image\"", m_warn,
-                          {"diagonal", "maxsampleluminance", "pixelbounds"});
+    e.params.check_unused("Film \"image\"", m_warn, {"diagonal", "pixelbounds"});
 }
 
 void Builder::camera() {
