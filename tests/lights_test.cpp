@@ -535,6 +535,17 @@ TEST(AreaLight, NsamplesUnderDirectLightingAveragesThatManyShadowRays) {
         EXPECT_EQ(samples("\"integer samples\" 4 \"integer nsamples\" 8"), 4);
         EXPECT_EQ(samples("\"integer nsamples\" 8"), 8);
         EXPECT_EQ(samples(""), 1);
+        // Under the other integrators pbrt-v3 reads it too and takes one sample: no warning.
+        std::vector<std::string> warnings;
+        std::string text = camera_and_plane(
+            "AttributeBegin " + std::string(light) +
+            " \"integer nsamples\" 8 Shape \"trianglemesh\" \"point3 P\" [-2 -2 1  -2 2 1  2 2 1  "
+            "2 -2 1] \"integer indices\" [0 1 2 0 2 3] AttributeEnd");
+        text.insert(text.find("WorldBegin"), "Integrator \"path\" ");
+        auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), {},
+                             [&](const std::string& w) { warnings.push_back(w); });
+        EXPECT_EQ(s->lights.at(0).samples, 1);
+        for (const std::string& w : warnings) EXPECT_EQ(w.find("nsamples"), std::string::npos) << w;
     }
     const auto [m16, s16] = radiance_stats(*direct);
     const auto [m1, s1] = radiance_stats(*whitted);

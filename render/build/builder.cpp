@@ -187,11 +187,13 @@ void Builder::read_ahead() {
 
 // Shadow rays per shading point for a light: under pbrt-v3's directlighting integrator, which
 // reads them, its "samples", or else its "nsamples" (pbrt-v3's infinite and diffuse area lights
-// read both, "samples" first); 1 otherwise, as pbrt-v3's whitted and path take.
+// read both, "samples" first); 1 otherwise, as pbrt-v3's whitted and path take. Read either way
+// (no warning): pbrt-v3 reads it whatever the integrator.
 int Builder::light_samples(const Entity& e) const {
     const char* name = e.params.find("samples") ? "samples" : "nsamples";
-    if (!m_light_samples || !e.params.find(name)) return 1;
-    return std::clamp(e.params.get_int(name, 1), 1, 1 << 16);
+    if (!e.params.find(name)) return 1;
+    const int n = std::clamp(e.params.get_int(name, 1), 1, 1 << 16);
+    return m_light_samples ? n : 1;
 }
 
 void Builder::warn(const pbrt::FileLoc& loc, const std::string& msg) {
