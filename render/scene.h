@@ -144,7 +144,18 @@ struct TextureNode {
 constexpr int kMaxTextureDepth = 256;
 
 struct Material {
-    enum class Type { Matte, Mirror, Glass, Plastic, Uber, Metal, Substrate, None, Mix };
+    enum class Type {
+        Matte,
+        Mirror,
+        Glass,
+        Plastic,
+        Uber,
+        Metal,
+        Substrate,
+        Translucent,
+        None,
+        Mix
+    };
     Type type = Type::Matte;
     TexInput kd{-1, Rgb(0.5f)}, ks, kr, kt, sigma, roughness, eta;
     TexInput k;  // metal: the conductor's absorption (eta is its index of refraction)

@@ -410,6 +410,7 @@ void Bsdf::scale(const Rgb& w) {
     kr = kr * w;
     kt = kt * w;
     kt_rough = kt_rough * w;
+    kt_diffuse = kt_diffuse * w;
 }
 
 Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
@@ -420,7 +421,11 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
-    if (!reflect) return has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
+    if (!reflect) {
+        Rgb out = has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
+        if (has_diffuse_transmission()) out += kt_diffuse * kInvPi;
+        return out;
+    }
     if (fresnel_blend) return blend_f(wo, frame.to_local(wi_w));
     if (on_b == 0 && !has_glossy()) return kd * kInvPi;  // Lambertian: wi's local frame unused
     const Vec3 wi = frame.to_local(wi_w);
@@ -485,21 +490,24 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
     const float g1_over_cos = 1 / ((1 + o.lambda) * std::abs(wo.z));
-    const bool diffuse = has_diffuse(), glossy = has_glossy(), transmission = has_transmission();
-    const int lobes = int(diffuse) + int(glossy) + int(transmission);
-    const float share = lobes == 2 ? 0.5f : lobes == 3 ? 1.0f / 3 : 1.0f;
-    if (wo.z * wi.z < 0) {  // through the surface: the rough transmission alone
-        if (!transmission) return 0;
+    const bool diffuse = has_diffuse(), glossy = has_glossy(), transmission = has_transmission(),
+               diffuse_t = has_diffuse_transmission();
+    const int lobes = int(diffuse) + int(glossy) + int(transmission) + int(diffuse_t);
+    const float share = lobes == 2 ? 0.5f : lobes == 3 ? 1.0f / 3 : lobes == 4 ? 0.25f : 1.0f;
+    if (wo.z * wi.z < 0) {  // through the surface: the transmission lobes
+        const float p_diffuse = diffuse_t ? share * std::abs(wi.z) * kInvPi : 0.0f;
+        if (!transmission) return p_diffuse;
         const float eta = wo.z > 0 ? lobe_eta_t / lobe_eta_i : lobe_eta_i / lobe_eta_t;
         const Vec3 h = wo + wi * eta;
-        if (h.x == 0 && h.y == 0 && h.z == 0) return 0;
+        if (h.x == 0 && h.y == 0 && h.z == 0) return p_diffuse;
         const Vec3 wh = normalize(h);
         const float oh = dot(wo, wh), ih = dot(wi, wh);
-        if (oh * ih > 0) return 0;  // wo and wi on one side of the microfacet: no refraction
+        if (oh * ih > 0) return p_diffuse;  // wo, wi on one side of the microfacet: no refraction
         // The visible normal's density times dwh/dwi = eta^2 |wi . h| / denom^2.
         const float denom = oh + eta * ih;
         const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
-        return share * d * g1_over_cos * std::abs(oh) * std::abs(eta * eta * ih / (denom * denom));
+        return p_diffuse +
+               share * d * g1_over_cos * std::abs(oh) * std::abs(eta * eta * ih / (denom * denom));
     }
     if (wo.z * wi.z == 0) return 0;
     float p = 0;
@@ -542,18 +550,19 @@ Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const
     Sample out;
     const Vec3& wo = o.local;
     if (wo.z == 0 || !has_nonspecular()) return out;
-    // The lobe: glossy, diffuse, transmission, evenly among those there are.
-    const bool glossy = has_glossy(), diffuse = has_diffuse(), transmission = has_transmission();
-    const int lobes = int(glossy) + int(diffuse) + int(transmission);
-    int lobe = std::min(static_cast<int>(u0 * float(lobes)), lobes - 1);
-    if (!glossy) ++lobe;
-    if (lobe == 1 && !diffuse) ++lobe;
+    // The lobe: glossy (0), diffuse (1), transmission (2), diffuse transmission (3), evenly
+    // among those there are.
+    const bool present[4] = {has_glossy(), has_diffuse(), has_transmission(),
+                             has_diffuse_transmission()};
+    const int lobes = int(present[0]) + int(present[1]) + int(present[2]) + int(present[3]);
+    int k = std::min(static_cast<int>(u0 * float(lobes)), lobes - 1), lobe = 0;
+    while (!present[lobe] || k-- > 0) ++lobe;
     Vec3 wi;
-    if (lobe == 1) {
-        // Cosine-weighted on wo's side of the shading normal.
+    if (lobe == 1 || lobe == 3) {
+        // Cosine-weighted on wo's side of the shading normal, or the other side.
         const float r = std::sqrt(u1), phi = 2 * kPi * u2;
         const float z = std::sqrt(std::max(0.0f, 1 - u1));
-        wi = Vec3(r * std::cos(phi), r * std::sin(phi), wo.z < 0 ? -z : z);
+        wi = Vec3(r * std::cos(phi), r * std::sin(phi), (wo.z < 0) == (lobe == 1) ? -z : z);
     } else {
         const float ay = anisotropic ? alpha_y : alpha;
         const Vec3 up = wo.z < 0 ? -wo : wo;  // (the normals are drawn on wo's side)
@@ -720,6 +729,26 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
                 b.kr = b.kt = Rgb();
                 b.lobe_eta_i = 1;
                 b.lobe_eta_t = b.eta;
+            }
+            break;
+        }
+        case Material::Type::Translucent: {
+            // pbrt-v3's translucent: Lambertian reflection and transmission (Kd times reflect and
+            // transmit) and microfacet reflection and transmission into an index of 1.5 (Ks times
+            // each), each lobe where its colour is not black.
+            const Rgb r = clamp0(eval_texture(scene, m.kr, ctx)),
+                      t = clamp0(eval_texture(scene, m.kt, ctx));
+            if (r.is_black() && t.is_black()) break;
+            const Rgb kd = clamp0(eval_texture(scene, m.kd, ctx)),
+                      ks = clamp0(eval_texture(scene, m.ks, ctx));
+            b.kd = r * kd;
+            b.kt_diffuse = t * kd;
+            if (!ks.is_black()) {
+                set_alphas(b, scene, m, ctx, -std::numeric_limits<float>::infinity());
+                b.ks = r * ks;
+                b.kt_rough = t * ks;
+                b.lobe_eta_i = 1;
+                b.lobe_eta_t = 1.5f;
             }
             break;
         }

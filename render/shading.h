@@ -86,6 +86,8 @@ struct Bsdf {
     // dielectric boundary from lobe_eta_i (on the side the shading normal points to) to
     // lobe_eta_t, weighted by 1 - Fresnel and by kt_rough.
     Rgb kt_rough{};
+    // Lambertian transmission (pbrt-v3's translucent): kt_diffuse / pi on the far side.
+    Rgb kt_diffuse{};
     // pbrt-v3's FresnelBlend (substrate) in place of the diffuse and glossy lobes: kd the base's
     // colour, ks the coat's reflectance at normal incidence (Schlick's approximation), the glossy
     // lobe's distribution; its value times blend_scale (a mix's weight).
@@ -95,7 +97,10 @@ struct Bsdf {
     bool has_diffuse() const { return fresnel_blend || !kd.is_black(); }
     bool has_glossy() const { return fresnel_blend || !ks.is_black(); }
     bool has_transmission() const { return !kt_rough.is_black(); }
-    bool has_nonspecular() const { return has_diffuse() || has_glossy() || has_transmission(); }
+    bool has_diffuse_transmission() const { return !kt_diffuse.is_black(); }
+    bool has_nonspecular() const {
+        return has_diffuse() || has_glossy() || has_transmission() || has_diffuse_transmission();
+    }
 
     /// Every lobe times w (a mix material's weight for the material it chose).
     void scale(const Rgb& w);
@@ -114,9 +119,10 @@ struct Bsdf {
     Rgb f(const Outgoing& wo, const Vec3& wi) const;
 
     /// A direction drawn from the non-specular lobes for the outgoing direction `o`, from three
-    /// uniform numbers: the lobe (glossy, diffuse or rough transmission, evenly among those there
-    /// are, as pbrt-v3 picks among its components), then a cosine-weighted direction about the
-    /// shading normal, or a reflection or a refraction about a Trowbridge-Reitz microfacet normal.
+    /// uniform numbers: the lobe (glossy, diffuse, rough or diffuse transmission, evenly among
+    /// those there are, as pbrt-v3 picks among its components), then a cosine-weighted direction
+    /// about the shading normal (on wo's side, or the other for the diffuse transmission), or a
+    /// reflection or a refraction about a Trowbridge-Reitz microfacet normal.
     /// `pdf` is the density of the whole mixture in solid angle (0: nothing drawn), `f` the BSDF
     /// there.
     struct Sample {

@@ -350,21 +350,17 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
     EXPECT_EQ(
         count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
               "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-              "mix, and translucent as plastic)"),
+              "translucent and mix)"),
         1);
     EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
     warnings.clear();
-    const Bsdf t = bsdf_of("Material \"translucent\" \"rgb Kd\" [0.2 0.2 0.2]", &warnings);
-    EXPECT_FLOAT_EQ(t.kd.r, 0.2f);
-    EXPECT_EQ(count("material \"translucent\" is rendered as \"plastic\" (no diffuse "
-                    "transmission)"),
-              1);
-    // Substrate, uber's opacity of 1 (its default, what published scenes give) and rough glass
-    // are rendered as pbrt-v3 renders them: no warning.
+    // Substrate, translucent, uber's opacity of 1 (its default, what published scenes give) and
+    // rough glass are rendered as pbrt-v3 renders them: no warning.
     warnings.clear();
     (void)bsdf_of("Material \"substrate\" \"float uroughness\" 0.1 \"float vroughness\" 0.3",
                   &warnings);
     (void)bsdf_of("Material \"uber\" \"rgb opacity\" [1 1 1]", &warnings);
+    (void)bsdf_of("Material \"translucent\" \"rgb Kd\" [0.2 0.2 0.2]", &warnings);
     (void)bsdf_of("Material \"glass\" \"float uroughness\" 0.05 \"float vroughness\" 0.05",
                   &warnings);
     EXPECT_EQ(count("material"), 0);
@@ -433,6 +429,34 @@ TEST(Materials, SubstrateIsPbrtV3sFresnelBlend) {
     half.scale(Rgb(0.5f));
     const Vec3 wo = normalize(Vec3(0.3f, 0.1f, 1)), wi = normalize(Vec3(-0.5f, 0.2f, 1));
     EXPECT_NEAR(half.f(wo, wi).g, 0.5f * b.f(wo, wi).g, 1e-6f);
+}
+
+// pbrt-v3's translucent: Lambertian reflection and transmission of Kd times reflect and
+// transmit, and microfacet reflection and transmission (into 1.5) of Ks times each.
+TEST(Materials, TranslucentReflectsAndTransmitsBothItsLobes) {
+    const Bsdf b = bsdf_of(
+        "Material \"translucent\" \"rgb Kd\" [0.5 0.4 0.3] \"rgb Ks\" [0.2 0.2 0.2] "
+        "\"rgb reflect\" [0.5 0.5 0.5] \"rgb transmit\" [0.25 0.5 1] "
+        "\"float roughness\" 0.3 \"bool remaproughness\" \"false\"");
+    EXPECT_FLOAT_EQ(b.kd.r, 0.25f);
+    EXPECT_FLOAT_EQ(b.kt_diffuse.g, 0.2f);
+    EXPECT_FLOAT_EQ(b.ks.b, 0.1f);
+    EXPECT_FLOAT_EQ(b.kt_rough.b, 0.2f);
+    EXPECT_FLOAT_EQ(b.lobe_eta_t, 1.5f);
+    EXPECT_FLOAT_EQ(b.alpha, 0.3f);
+    EXPECT_TRUE(b.kr.is_black() && b.kt.is_black());  // no specular lobe
+    // Across the surface, away from the refracted direction's lobe: the Lambertian transmission.
+    const Vec3 n = b.frame.to_world(Vec3(0, 0, 1));
+    const Vec3 wo = b.frame.to_world(normalize(Vec3(0.9f, 0, 0.2f))),
+               wi = b.frame.to_world(normalize(Vec3(0.9f, 0, -0.2f)));
+    Bsdf diffuse_only = b;
+    diffuse_only.kt_rough = Rgb();
+    EXPECT_NEAR(diffuse_only.f(wo, wi).g, 0.2 / 3.14159265, 1e-6);
+    EXPECT_GT(b.f(n, -n).g, diffuse_only.f(n, -n).g);  // the microfacet lobe straight through
+    // Reflect and transmit both black: no lobe at all.
+    const Bsdf none =
+        bsdf_of("Material \"translucent\" \"rgb reflect\" [0 0 0] \"rgb transmit\" [0 0 0]");
+    EXPECT_FALSE(none.has_nonspecular());
 }
 
 // pbrt-v3's glass with a roughness: microfacet reflection with the dielectric's Fresnel term and

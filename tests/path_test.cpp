@@ -23,13 +23,14 @@ using namespace cmam::render;
 namespace {
 
 // Lambertian; glossy alone; diffuse under an anisotropic glossy lobe; rough glass (microfacet
-// reflection and transmission); substrate (FresnelBlend), isotropic and anisotropic.
+// reflection and transmission); substrate (FresnelBlend), isotropic and anisotropic; translucent
+// (Lambertian and microfacet, each reflected and transmitted).
 std::vector<Bsdf> test_bsdfs() {
     Bsdf base;
     base.frame = Frame::from_z(Vec3(0, 0, 1));
     base.ng = Vec3(0, 0, 1);
     Bsdf lambert = base, glossy = base, both = base, glass = base, substrate = base,
-         substrate_aniso = base;
+         substrate_aniso = base, translucent = base;
     lambert.kd = Rgb(0.8f);
     glossy.ks = Rgb(1);
     glossy.alpha = 0.2f;
@@ -51,7 +52,14 @@ std::vector<Bsdf> test_bsdfs() {
     substrate_aniso = substrate;
     substrate_aniso.alpha_y = 0.05f;
     substrate_aniso.anisotropic = true;
-    return {lambert, glossy, both, glass, substrate, substrate_aniso};
+    translucent.kd = Rgb(0.3f);
+    translucent.kt_diffuse = Rgb(0.4f);
+    translucent.ks = Rgb(0.1f);
+    translucent.kt_rough = Rgb(0.2f);
+    translucent.alpha = 0.2f;
+    translucent.lobe_eta_i = 1;
+    translucent.lobe_eta_t = 1.5f;
+    return {lambert, glossy, both, glass, substrate, substrate_aniso, translucent};
 }
 
 }  // namespace
@@ -76,6 +84,8 @@ TEST(PathTracing, BsdfSamplesHaveTheDensityTheyReport) {
             SCOPED_TRACE(theta_o);
             const Vec3 wo(std::sin(theta_o), 0, std::cos(theta_o));
             const Bsdf::Outgoing o = bsdf.outgoing(wo);
+            const int lobes = int(bsdf.has_diffuse()) + int(bsdf.has_glossy()) +
+                              int(bsdf.has_transmission()) + int(bsdf.has_diffuse_transmission());
             // The density over the sphere, by a midpoint rule in (cos theta, phi).
             const int n = 800;
             double integral = 0, uniform = 0, everywhere = 0;
@@ -89,10 +99,17 @@ TEST(PathTracing, BsdfSamplesHaveTheDensityTheyReport) {
                     if (z * wo.z < 0) {
                         // The microfacet's normal, h = wo + eta wi turned to face wo, on wo's
                         // side of the surface (eta: the index on wi's side over wo's).
-                        const float eta = wo.z > 0 ? 1.5f : 1 / 1.5f;
+                        const float eta = wo.z > 0 ? 1.5f : 1 / 1.5f;  // (both have 1.5)
                         const Vec3 h = wo + wi * eta;
                         const Vec3 m = dot(wo, h) > 0 ? h : -h;
-                        if (m.z * wo.z <= 0) continue;
+                        if (m.z * wo.z <= 0 && bsdf.has_transmission()) {
+                            // Only a Lambertian transmission reaches such a pair.
+                            if (bsdf.has_diffuse_transmission()) {
+                                integral += std::abs(z) * kInvPi / lobes * w;
+                                uniform += bsdf.kt_diffuse.g * kInvPi * std::abs(z) * w;
+                            }
+                            continue;
+                        }
                     }
                     integral += bsdf.pdf(o, wi) * w;
                     uniform += bsdf.f(o, wi).g * std::abs(z) * w;
@@ -178,15 +195,23 @@ TEST(PathTracing, ClosedEmittingSphereSeesEveryBounce) {
 // (eta_i / eta_t)^2 on the way in is undone on the way out), so every path that reaches the
 // emitter carries 1, reflected or transmitted by the lobe chosen at each hit and weighted by the
 // inverse of its probability. One ray per hit: 30 hits deep, both lobes' children would be 2^30.
-TEST(PathTracing, GlassInsideAnEmittingSphereIsInvisible) {
-    auto s = test::scene_from(
+namespace {
+// A sphere of radius 1 of `material` inside a sphere of radius 10 that emits 1 on both sides and
+// reflects nothing, seen from 3 units away (16 x 16 pixels, 64 spp, path tracing to depth 30).
+std::unique_ptr<Scene> inside_emitter(const std::string& material) {
+    return test::scene_from(
         "LookAt 0 0 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
         "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
         "Sampler \"stratified\" \"integer xsamples\" 8 \"integer ysamples\" 8 "
         "Integrator \"path\" \"integer maxdepth\" 30 WorldBegin "
         "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" \"true\" "
-        "Material \"matte\" \"rgb Kd\" [0 0 0] Shape \"sphere\" \"float radius\" 10 AttributeEnd "
-        "Material \"glass\" \"float index\" 1.5 Shape \"sphere\" \"float radius\" 1 WorldEnd");
+        "Material \"matte\" \"rgb Kd\" [0 0 0] Shape \"sphere\" \"float radius\" 10 AttributeEnd " +
+        material + " Shape \"sphere\" \"float radius\" 1 WorldEnd");
+}
+}  // namespace
+
+TEST(PathTracing, GlassInsideAnEmittingSphereIsInvisible) {
+    auto s = inside_emitter("Material \"glass\" \"float index\" 1.5");
     RenderStats stats;
     const Framebuffer fb = render::render(*s, {}, &stats);
     const double mean = std::accumulate(fb.rgb.begin(), fb.rgb.end(), 0.0) / fb.rgb.size();
@@ -205,24 +230,28 @@ TEST(PathTracing, GlassInsideAnEmittingSphereIsInvisible) {
 // 2304).
 TEST(PathTracing, RoughGlassInsideAnEmittingSphereIsNearlyInvisible) {
     auto mean_of = [](const char* roughness) {
-        auto s = test::scene_from(
-            std::string("LookAt 0 0 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
-                        "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
-                        "Sampler \"stratified\" \"integer xsamples\" 8 \"integer ysamples\" 8 "
-                        "Integrator \"path\" \"integer maxdepth\" 30 WorldBegin "
-                        "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] "
-                        "\"bool twosided\" \"true\" Material \"matte\" \"rgb Kd\" [0 0 0] "
-                        "Shape \"sphere\" \"float radius\" 10 AttributeEnd "
-                        "Material \"glass\" \"float index\" 1.5 \"bool remaproughness\" \"false\" "
+        auto s = inside_emitter(
+            std::string("Material \"glass\" \"float index\" 1.5 \"bool remaproughness\" \"false\" "
                         "\"float uroughness\" ") +
-            roughness + " \"float vroughness\" " + roughness +
-            " Shape \"sphere\" \"float radius\" 1 WorldEnd");
+            roughness + " \"float vroughness\" " + roughness);
         const Framebuffer fb = render::render(*s, {}, nullptr);
         return std::accumulate(fb.rgb.begin(), fb.rgb.end(), 0.0) / fb.rgb.size();
     };
     const double smooth = mean_of("0.02"), rough = mean_of("0.3");
     EXPECT_NEAR(smooth, 1, 0.02);
     EXPECT_NEAR(rough, 0.773, 0.02);
+}
+
+// pbrt-v3's translucent material with a white Kd, no Ks, and half reflected, half transmitted
+// loses no light: a sphere of it inside a sphere emitting 1 everywhere is invisible (mean 1),
+// every path leaving it, after any number of diffuse reflections and transmissions, carrying 1.
+TEST(PathTracing, LosslessTranslucentSphereInsideAnEmitterIsInvisible) {
+    auto s = inside_emitter(
+        "Material \"translucent\" \"rgb Kd\" [1 1 1] \"rgb Ks\" [0 0 0] "
+        "\"rgb reflect\" [0.5 0.5 0.5] \"rgb transmit\" [0.5 0.5 0.5]");
+    const Framebuffer fb = render::render(*s, {}, nullptr);
+    const double mean = std::accumulate(fb.rgb.begin(), fb.rgb.end(), 0.0) / fb.rgb.size();
+    EXPECT_NEAR(mean, 1, 0.01);
 }
 
 // Multiple importance sampling: on a glossy plane under a large area light, path tracing's

@@ -204,7 +204,7 @@ class Builder {
     void plastic_material(const pbrt::MaterialDesc& d, Material& m);
     void uber_material(const pbrt::MaterialDesc& d, Material& m);
     void substrate_material(const pbrt::MaterialDesc& d, Material& m);
-    void plastic_approximation(const pbrt::MaterialDesc& d, Material& m);
+    void translucent_material(const pbrt::MaterialDesc& d, Material& m);
     void metal_material(const pbrt::MaterialDesc& d, Material& m);
     void no_material(const pbrt::MaterialDesc& d, Material& m);
     void mix_material(const pbrt::MaterialDesc& d, Material& m);

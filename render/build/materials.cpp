@@ -105,19 +105,18 @@ void Builder::substrate_material(const pbrt::MaterialDesc& d, Material& m) {
     m.remap_roughness = e.params.get_bool("remaproughness", true);
 }
 
-// "translucent", approximated by plastic: its reflection (its transmission is not rendered).
-void Builder::plastic_approximation(const pbrt::MaterialDesc& d, Material& m) {
+// pbrt-v3's translucent: Kd and Ks lobes, each reflecting "reflect" and transmitting "transmit"
+// (kept in kr and kt).
+void Builder::translucent_material(const pbrt::MaterialDesc& d, Material& m) {
     const Entity& e = d.entity;
     const TextureScope& s = d.scope;
-    m.type = Material::Type::Plastic;
+    m.type = Material::Type::Translucent;
     m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
     m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
+    m.kr = spectrum_input(e, s, "reflect", Rgb(0.5f));
+    m.kt = spectrum_input(e, s, "transmit", Rgb(0.5f));
     m.roughness = m.vroughness = float_input(e, s, "roughness", 0.1f);
     m.remap_roughness = e.params.get_bool("remaproughness", true);
-    (void)spectrum_input(e, s, "reflect", Rgb(0.5f));
-    (void)spectrum_input(e, s, "transmit", Rgb(0.5f));
-    warn(e.loc,
-         "material " + in_quotes(e.type) + " is rendered as \"plastic\" (no diffuse transmission)");
 }
 
 // A conductor: a microfacet lobe with the Fresnel term of a conductor of index eta + i k
@@ -161,8 +160,8 @@ Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
                     (e.params.find("Kd") ? " with its Kd" : "") +
-                    " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, mix, "
-                    "and translucent as plastic)");
+                    " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
+                    "translucent and mix)");
     return m;  // its other parameters are not read: no warning for each
 }
 
@@ -174,7 +173,7 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
         {"plastic", &Builder::plastic_material},
         {"uber", &Builder::uber_material},
         {"substrate", &Builder::substrate_material},
-        {"translucent", &Builder::plastic_approximation},
+        {"translucent", &Builder::translucent_material},
         {"metal", &Builder::metal_material},
         {"none", &Builder::no_material},
         {"", &Builder::no_material},
