@@ -58,14 +58,26 @@ TEST(QuadricMesh, ConeParaboloidAndHyperboloid) {
     h = hit_towards_axis(*p, 2.0f, 1.0f);
     EXPECT_NEAR(std::hypot(h.p.x, h.p.y), 0.5f, 2e-3);
     EXPECT_NEAR(h.v, 0.25f, 2e-3);
-    // Hyperboloid from (1, 0, 0) to (0, 1, 1): at v = 1/2 the point (1/2, 1/2, 1/2) turned by
-    // phi; the radius is sqrt(1/2).
-    auto y = shape("Shape \"hyperboloid\" \"point3 p1\" [1 0 0] \"point3 p2\" [0 1 1]");
-    h = hit_towards_axis(*y, kPi / 4 + 0.5f, 0.5f);
-    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), std::sqrt(0.5f), 1e-3);
-    EXPECT_NEAR(h.v, 0.5f, 1e-5);
+    // Hyperboloid, pbrt-v3's: the surface ah (x^2 + y^2) - ch z^2 = 1 through p2 and the point
+    // p1 + 2 (p2 - p1). From (1, -1, -1) to (1, 1, 1) (closest to the axis at z = 0) that is
+    // the segment swept about z, r^2 = 1 + z^2; phi is counted from the segment's point at that
+    // height, (1, z, z).
+    auto y = shape("Shape \"hyperboloid\" \"point3 p1\" [1 -1 -1] \"point3 p2\" [1 1 1]");
+    h = hit_towards_axis(*y, std::atan2(0.5f, 1.0f) + 0.5f, 0.5f);
+    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), std::sqrt(1.25f), 1e-3);
+    EXPECT_NEAR(h.v, 0.75f, 1e-5);
     EXPECT_NEAR(h.u, 0.5f / (2 * kPi), 1e-3);
     EXPECT_GT(h.ns.x * h.p.x + h.ns.y * h.p.y, 0);  // outwards
+    // From (1, 0, 0) to (0, 1, 1) the fit goes through (-1, 2, 2) and (0, 1, 1): ah 5 - ch 4 = 1
+    // and ah - ch = 1, so ah = -3, ch = -4, a hyperboloid of two sheets, r^2 = (4 z^2 - 1) / 3,
+    // with nothing below z = 1/2 (the swept segment has radius sqrt(1/2) at z = 1/2 and 1 at 0).
+    auto two = shape("Shape \"hyperboloid\" \"point3 p1\" [1 0 0] \"point3 p2\" [0 1 1]");
+    h = hit_towards_axis(*two, std::atan2(0.75f, 0.25f) + 0.5f, 0.75f);
+    EXPECT_NEAR(std::hypot(h.p.x, h.p.y), std::sqrt(1.25f / 3), 2e-3);
+    EXPECT_NEAR(h.v, 0.75f, 1e-5);
+    EXPECT_NEAR(h.u, 0.5f / (2 * kPi), 1e-3);
+    for (float z : {0.1f, 0.3f, 0.45f})
+        EXPECT_FALSE(two->intersect(Vec3(0, 0, z) + Vec3(10, 0, 0), Vec3(-1, 0, 0), 0, 100)) << z;
 }
 
 TEST(QuadricMesh, PartialSweepsAndUnsupportedShapes) {
