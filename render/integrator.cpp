@@ -659,7 +659,9 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     if (aov->recorded) return;
     const Material& m =
         h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
-    const bool specular = m.type == Material::Type::Mirror || m.type == Material::Type::Glass;
+    // (Glass with a roughness has no specular chain: its own hit is the first non-specular one.)
+    const bool specular = (m.type == Material::Type::Mirror || m.type == Material::Type::Glass) &&
+                          !bsdf.has_nonspecular();
     if (specular) return;  // follow the specular chain
     aov->recorded = true;
     if (aov->kind == AovKind::Texture) {

@@ -224,6 +224,35 @@ TEST(Analytic, FilmMaxSampleLuminanceScalesBrightSamplesDown) {
                           "t.pbrt:3:62: error: maxsampleluminance must be a positive");
 }
 
+// The texture AOV is the Kd of the first non-specular hit: through smooth glass, the surface
+// behind it; at rough glass (no specular chain to follow), the glass itself, which has none.
+TEST(Analytic, TextureAovStopsAtRoughGlass) {
+    auto aov_of = [](const std::string& glass, const std::string& integrator) {
+        const std::string text =
+            "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 10\n"
+            "Film \"image\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+            "Integrator \"" +
+            integrator +
+            "\"\nWorldBegin\nLightSource \"distant\" \"rgb L\" [1 1 1]\n"
+            "AttributeBegin Material \"matte\" \"rgb Kd\" [0.5 0.25 0.125]\n"
+            "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+            "\"point3 P\" [-9 -9 -2  9 -9 -2  9 9 -2  -9 9 -2] AttributeEnd\n"
+            "Material \"glass\" " +
+            glass + "\nShape \"sphere\" \"float radius\" 2\nWorldEnd\n";
+        RenderOptions o;
+        o.aov = AovKind::Texture;
+        return render::render(*test::scene_from(text, "t.pbrt", 1), o, nullptr).rgb;
+    };
+    // (Path tracing goes on past the rough glass's hit: the plane behind it would be next.)
+    const auto smooth = aov_of("", "whitted"),
+               rough = aov_of("\"float uroughness\" 0.2 \"float vroughness\" 0.2", "path");
+    ASSERT_EQ(smooth.size(), 4u * 4 * 3);
+    for (std::size_t p = 0; p < smooth.size(); p += 3) {
+        EXPECT_FLOAT_EQ(smooth[p + 1], 0.25f);  // the plane's Kd, seen through the glass
+        EXPECT_FLOAT_EQ(rough[p + 1], 0);       // the rough glass's own (none)
+    }
+}
+
 TEST(Analytic, ShadowsBlockDirectLight) {
     auto s = test::scene_from(
         plane_with(
