@@ -58,7 +58,6 @@ void Builder::glass_material(const pbrt::MaterialDesc& d, Material& m) {
     m.anisotropic = m.roughness.node != m.vroughness.node ||
                     (m.roughness.node < 0 && !(m.roughness.value.r == m.vroughness.value.r));
     m.remap_roughness = e.params.get_bool("remaproughness", true);
-    e.params.get_bool("remaproughness", true);
 }
 
 void Builder::plastic_material(const pbrt::MaterialDesc& d, Material& m) {
