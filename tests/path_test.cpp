@@ -1,7 +1,7 @@
 // Path tracing (pbrt-v3's "path" integrator): BSDF sampling against its own density and against
 // uniform sampling, a closed emitting sphere seen from inside against the sum of its bounces, a
-// glass sphere inside an emitting one, multiple importance sampling's mean and noise, the
-// stratified numbers, and the integrators a scene may name.
+// glass sphere (smooth, rough, translucent) inside an emitting one, multiple importance sampling's
+// mean and noise, the stratified numbers, and the integrators a scene may name.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -190,11 +190,6 @@ TEST(PathTracing, ClosedEmittingSphereSeesEveryBounce) {
     for (float v : fw.rgb) EXPECT_NEAR(v, bounces(1), 1e-4);
 }
 
-// A glass sphere inside a sphere that emits 1 everywhere (and reflects nothing) is invisible:
-// glass loses no light (its Fresnel reflection and transmission add up to 1, and the radiance's
-// (eta_i / eta_t)^2 on the way in is undone on the way out), so every path that reaches the
-// emitter carries 1, reflected or transmitted by the lobe chosen at each hit and weighted by the
-// inverse of its probability. One ray per hit: 30 hits deep, both lobes' children would be 2^30.
 namespace {
 // A sphere of radius 1 of `material` inside a sphere of radius 10 that emits 1 on both sides and
 // reflects nothing, seen from 3 units away (16 x 16 pixels, 64 spp, path tracing to depth 30).
@@ -210,6 +205,11 @@ std::unique_ptr<Scene> inside_emitter(const std::string& material) {
 }
 }  // namespace
 
+// A glass sphere inside a sphere that emits 1 everywhere (and reflects nothing) is invisible:
+// glass loses no light (its Fresnel reflection and transmission add up to 1, and the radiance's
+// (eta_i / eta_t)^2 on the way in is undone on the way out), so every path that reaches the
+// emitter carries 1, reflected or transmitted by the lobe chosen at each hit and weighted by the
+// inverse of its probability. One ray per hit: 30 hits deep, both lobes' children would be 2^30.
 TEST(PathTracing, GlassInsideAnEmittingSphereIsInvisible) {
     auto s = inside_emitter("Material \"glass\" \"float index\" 1.5");
     RenderStats stats;
