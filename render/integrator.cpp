@@ -139,7 +139,7 @@ struct Tracer {
         next2(u1, u2);
         const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
         const bool mixture = !(ns.x == ng.x && ns.y == ng.y && ns.z == ng.z);
-        const float share = mixture ? std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f) : 0.0f;
+        const float share = mixture ? uniform_share(ng, ns) : 0.0f;
         const bool uniform = u1 < share;
         if (mixture) u1 = uniform ? u1 / share : (u1 - share) / (1 - share);
         const float phi = 2 * kPi * u2;
@@ -159,6 +159,12 @@ struct Tracer {
         return ls;
     }
 
+    // The share of sample_infinite's samples uniform over ng's hemisphere where the shading
+    // normal ns differs from the geometric one ng.
+    static float uniform_share(const Vec3& ng, const Vec3& ns) {
+        return std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f);
+    }
+
     // The density of sample_infinite's mixture (a share uniform over ng's hemisphere, the rest
     // cosine-weighted about ns) at wi.
     static float mixture_pdf(const Vec3& ng, const Vec3& ns, float share, const Vec3& wi) {
@@ -174,7 +180,7 @@ struct Tracer {
         const Vec3 ng = faceforward(h.ng, wo), ns = faceforward(h.ns, wo);
         if (ns.x == ng.x && ns.y == ng.y && ns.z == ng.z)
             return std::max(0.0f, dot(wi, ng)) * kInvPi;
-        return mixture_pdf(ng, ns, std::clamp(1 - dot(ns, ng), 1e-3f, 0.5f), wi);
+        return mixture_pdf(ng, ns, uniform_share(ng, ns), wi);
     }
     float area_pdf(const Light& light, const SurfaceHit& h, const Vec3& wi,
                    const SurfaceHit& y) const {
@@ -403,7 +409,8 @@ struct Tracer {
     //
     // `after_diffuse`: the ray left a non-specular bounce of a path (path tracing), so what it
     // meets lights the path only through the bounce's light samples: the lights it hits or
-    // escapes to add nothing (pbrt-v3's path integrator without multiple importance sampling).
+    // escapes to add nothing: the bounce's direct light estimate counted them (its BSDF sample
+    // weighted against its light sample), as pbrt-v3's path integrator counts them.
     Rgb li(const Ray& camera_or_child, int depth, std::optional<SurfaceHit>* first = nullptr,
            int deferred = -1, bool after_diffuse = false) {
         // A ray that is not finite (a NaN or infinite index, texel or parameter upstream) has no

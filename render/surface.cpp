@@ -13,15 +13,31 @@ namespace cmam::render {
 using namespace xform;
 
 namespace {
-// A quadric's world-space area element for the object-space one `cross_obj` (dP/du1 x dP/du2 of
-// sample_area's parameters): det(M) M^-T applied to it; 0 when not finite.
-double area_element_of(const Primitive& pr, const D3& cross_obj) {
+// A quadric's world-space area element from `cw`, the object-space one (dP/du1 x dP/du2 of
+// sample_area's parameters) transformed as a normal (M^-T): |det(M)| |cw|; 0 when not finite.
+double area_element_of(const Primitive& pr, const D3& cw) {
     const auto& m = pr.world_from_object;
     const double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
                        m[2] * (m[4] * m[9] - m[5] * m[8]);
-    const D3 cw = xform_normal(pr.object_from_world, cross_obj);
     const double e = std::abs(det) * std::sqrt(cw[0] * cw[0] + cw[1] * cw[1] + cw[2] * cw[2]);
     return e > 0 && std::isfinite(e) ? e : 0.0;
+}
+
+// The cone of directions a round sphere of radius R subtends from a point outside it: the
+// direction to its centre, the distance to it (and its square), and 1 - cos of the half-angle,
+// written sin^2 / (1 + cos) to keep its precision for small, distant spheres. Nothing from
+// inside or on the sphere.
+struct SphereCone {
+    Vec3 to_c;
+    float d2, dc, one_minus_cos_max;
+};
+std::optional<SphereCone> sphere_cone(const Vec3& centre, float R, const Vec3& ref) {
+    if (!(R > 0)) return std::nullopt;
+    const Vec3 to_c = centre - ref;
+    const float d2 = dot(to_c, to_c);
+    if (!(d2 > R * R * 1.0001f)) return std::nullopt;
+    const float sin2_max = R * R / d2, cos_max = std::sqrt(std::max(0.0f, 1 - sin2_max));
+    return SphereCone{to_c, d2, std::sqrt(d2), sin2_max / (1 + cos_max)};
 }
 }  // namespace
 
@@ -72,10 +88,11 @@ SurfaceSample Primitive::sample_area(float u1, float u2) const {
         po = {rho * std::cos(phi), rho * std::sin(phi), height};
         cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
     }
-    const double area_element = area_element_of(*this, cross_obj);
+    const D3 cw = xform_normal(object_from_world, cross_obj);
+    const double area_element = area_element_of(*this, cw);
     if (!(area_element > 0)) return out;
     out.p = to_vec(xform_point(world_from_object, po));
-    Vec3 nw = normalize(to_vec(xform_normal(object_from_world, cross_obj)));
+    Vec3 nw = normalize(to_vec(cw));
     out.n = flip ? -nw : nw;
     out.pdf = float(1 / area_element);
     return out;
@@ -112,27 +129,21 @@ float Primitive::area_pdf(const Vec3& p) const {
     } else {
         cross_obj = {0, 0, 0.5 * (radius * radius - inner_radius * inner_radius) * phi_max};
     }
-    const double area_element = area_element_of(*this, cross_obj);
+    const double area_element = area_element_of(*this, xform_normal(object_from_world, cross_obj));
     return area_element > 0 ? float(1 / area_element) : 0.0f;
 }
 
 std::optional<float> Primitive::cone_pdf(const Vec3& ref) const {
-    // (uniform in the cone: any point's density)
-    const std::optional<SurfaceSample> s = sample_cone(ref, 0.5f, 0.5f);
-    return s ? std::optional<float>(s->pdf) : std::nullopt;
+    const std::optional<SphereCone> c = sphere_cone(sphere_center, sphere_radius, ref);
+    if (!c) return std::nullopt;
+    return 1 / (2 * kPi * c->one_minus_cos_max);  // uniform in the cone
 }
 
 std::optional<SurfaceSample> Primitive::sample_cone(const Vec3& ref, float u1, float u2) const {
-    const float R = sphere_radius;
-    if (!(R > 0)) return std::nullopt;
-    const Vec3 to_c = sphere_center - ref;
-    const float d2 = dot(to_c, to_c);
-    if (!(d2 > R * R * 1.0001f)) return std::nullopt;
-    const float dc = std::sqrt(d2);
-    // The cone's half-angle: sin^2 = R^2 / d^2; 1 - cos written as sin^2 / (1 + cos), which
-    // keeps its precision for small, distant spheres.
-    const float sin2_max = R * R / d2, cos_max = std::sqrt(std::max(0.0f, 1 - sin2_max));
-    const float one_minus_cos_max = sin2_max / (1 + cos_max);
+    const std::optional<SphereCone> c = sphere_cone(sphere_center, sphere_radius, ref);
+    if (!c) return std::nullopt;
+    const float R = sphere_radius, d2 = c->d2, dc = c->dc, one_minus_cos_max = c->one_minus_cos_max;
+    const Vec3& to_c = c->to_c;
     const float cos_t = 1 - u1 * one_minus_cos_max;
     const float sin2_t = std::max(0.0f, u1 * one_minus_cos_max * (1 + cos_t));
     const float phi = 2 * kPi * u2;

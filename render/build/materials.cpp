@@ -104,18 +104,13 @@ void Builder::substrate_material(const pbrt::MaterialDesc& d, Material& m) {
     m.remap_roughness = e.params.get_bool("remaproughness", true);
 }
 
-// pbrt-v3's translucent: Kd and Ks lobes, each reflecting "reflect" and transmitting "transmit"
-// (kept in kr and kt).
+// pbrt-v3's translucent: plastic's parameters (and defaults), each lobe reflecting "reflect" and
+// transmitting "transmit" (kept in kr and kt).
 void Builder::translucent_material(const pbrt::MaterialDesc& d, Material& m) {
-    const Entity& e = d.entity;
-    const TextureScope& s = d.scope;
+    plastic_material(d, m);
     m.type = Material::Type::Translucent;
-    m.kd = spectrum_input(e, s, "Kd", Rgb(0.25f));
-    m.ks = spectrum_input(e, s, "Ks", Rgb(0.25f));
-    m.kr = spectrum_input(e, s, "reflect", Rgb(0.5f));
-    m.kt = spectrum_input(e, s, "transmit", Rgb(0.5f));
-    m.roughness = m.vroughness = float_input(e, s, "roughness", 0.1f);
-    m.remap_roughness = e.params.get_bool("remaproughness", true);
+    m.kr = spectrum_input(d.entity, d.scope, "reflect", Rgb(0.5f));
+    m.kt = spectrum_input(d.entity, d.scope, "transmit", Rgb(0.5f));
 }
 
 // A conductor: a microfacet lobe with the Fresnel term of a conductor of index eta + i k
