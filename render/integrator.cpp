@@ -368,29 +368,68 @@ struct Tracer {
         return L;
     }
 
-    // A "mix" material is one of its two materials, chosen per shading point with probability
-    // p = the amount's mean for the first, and weighted by amount / p or (1 - amount) / (1 - p)
-    // per channel: in expectation pbrt-v3's amount x first + (1 - amount) x second, for every
-    // lobe, specular ones included. The weight is applied to the BSDF make_bsdf builds.
-    Rgb mix_weight{1, 1, 1};
-    const Material& pick_mixed(const Material& m, const TexContext& ctx) {
-        mix_weight = Rgb(1);
-        const Material* cur = &m;
-        // A mix names materials made before it, so the chain ends within their number (a bound
-        // of 16 left deeper chains as an unresolved mix: black).
-        for (std::size_t k = 0; k <= scene.materials.size() && cur->type == Material::Type::Mix;
-             ++k) {
-            Rgb a = eval_texture(scene, cur->amount, ctx);
-            a = Rgb(std::clamp(a.r, 0.0f, 1.0f), std::clamp(a.g, 0.0f, 1.0f),
-                    std::clamp(a.b, 0.0f, 1.0f));
-            const float p = (a.r + a.g + a.b) / 3;
-            const bool first = next() < p;
-            mix_weight = mix_weight * (first ? a / p : (Rgb(1) - a) / (1 - p));
-            const int next = cur->mix[first ? 0 : 1];
-            cur = next >= 0 ? &scene.materials[static_cast<std::size_t>(next)]
-                            : &scene.default_material;
+    // A "mix" material is pbrt-v3's: amount x its first material's BSDF + (1 - amount) x its
+    // second's, per channel, their lobes added into one BSDF (Bsdf::add). As in pbrt-v3 the sum
+    // is in the first material's shading frame, down the tree (frame_material: its bump map is
+    // applied, the others' are not). Where one Bsdf cannot hold the sum (a kind of lobe in both
+    // with different parameters, or material "none" in either) and in trees of more than
+    // kMaxMixMaterials materials, one of the two is picked per shading point with probability
+    // p = the amount's mean for the first, and weighted by amount / p or (1 - amount) / (1 - p):
+    // the blend in expectation, noise instead of bias (docs/algorithms.md §18, "Mix").
+    static constexpr int kMaxMixMaterials = 8;
+
+    // A mix's material `i` (0: namedmaterial1).
+    const Material& mix_child(const Material& m, int i) const {
+        const int c = m.mix[i];
+        return c >= 0 ? scene.materials[static_cast<std::size_t>(c)] : scene.default_material;
+    }
+    // The materials of m's tree, counted up to cap (more: cap + 1). A mix names materials made
+    // before it, so a tree is no deeper than their number.
+    int mix_materials(const Material& m, int cap, std::size_t depth) const {
+        if (m.type != Material::Type::Mix || depth > scene.materials.size()) return 1;
+        int n = 0;
+        for (int i = 0; i < 2; ++i) {
+            n += mix_materials(mix_child(m, i), cap, depth + 1);
+            if (n > cap) return cap + 1;
         }
+        return n;
+    }
+    // The material whose shading frame (and bump map) a mix keeps: its first's, down the tree.
+    const Material& frame_material(const Material& m) const {
+        const Material* cur = &m;
+        for (std::size_t k = 0; k <= scene.materials.size() && cur->type == Material::Type::Mix;
+             ++k)
+            cur = &mix_child(*cur, 0);
         return *cur;
+    }
+    // The BSDF of m at h (none: pass through), mixes resolved as above.
+    std::optional<Bsdf> material_bsdf(const Material& m, const SurfaceHit& h, const TexContext& ctx,
+                                      std::size_t depth = 0) {
+        if (m.type != Material::Type::Mix || depth > scene.materials.size())
+            return make_bsdf(scene, m, h, ctx);
+        Rgb a = eval_texture(scene, m.amount, ctx);
+        a = Rgb(std::clamp(a.r, 0.0f, 1.0f), std::clamp(a.g, 0.0f, 1.0f),
+                std::clamp(a.b, 0.0f, 1.0f));
+        const Rgb b = Rgb(1) - a;
+        const float p = (a.r + a.g + a.b) / 3;
+        const bool whole = mix_materials(m, kMaxMixMaterials, depth) <= kMaxMixMaterials;
+        std::optional<Bsdf> first, second;
+        if (whole) {
+            first = material_bsdf(mix_child(m, 0), h, ctx, depth + 1);
+            second = material_bsdf(mix_child(m, 1), h, ctx, depth + 1);
+            if (first && second) {
+                Bsdf sum = *first, other = *second;
+                sum.scale(a);
+                other.scale(b);
+                if (sum.add(other)) return sum;
+            }
+        }
+        // One of the two; in a tree too large, only it is shaded (its textures read).
+        const bool one = next() < p;
+        std::optional<Bsdf> c = whole ? std::move(one ? first : second)
+                                      : material_bsdf(mix_child(m, one ? 0 : 1), h, ctx, depth + 1);
+        if (c) c->scale(one ? a / p : b / (1 - p));
+        return c;
     }
 
     using Ray = TracedRay;
@@ -458,12 +497,12 @@ struct Tracer {
                 ctx.cmam_record = record_cmam_of(m, cmam_record.get());
             }
             Vec3 wo = -ray.dir;
-            const Material& chosen = pick_mixed(m, ctx);
-            if (chosen.bump.node >= 0)  // pbrt-v3's bump map: the shading normal only
-                h.ns = bump_normal(scene, chosen.bump, h, ctx,
+            const Material& framed = frame_material(m);
+            if (framed.bump.node >= 0)  // pbrt-v3's bump map: the shading normal only
+                h.ns = bump_normal(scene, framed.bump, h, ctx,
                                    0.5f * (std::abs(hd.dudx) + std::abs(hd.dudy)),
                                    0.5f * (std::abs(hd.dvdx) + std::abs(hd.dvdy)));
-            std::optional<Bsdf> made = make_bsdf(scene, chosen, h, ctx);
+            std::optional<Bsdf> made = material_bsdf(m, h, ctx);
             if (!made) {
                 // Continue through: the footprint state moves to the hit point.
                 RayFootprint fp = footprints.passed_through(ray.fp, at, h);
@@ -474,7 +513,6 @@ struct Tracer {
                 continue;
             }
             Bsdf& bsdf = *made;
-            if (m.type == Material::Type::Mix) bsdf.scale(mix_weight);
             if (aov) record_aov(ctx, h, bsdf);
             Rgb L = after_diffuse ? Rgb() : emitted(h, wo);
             if (deferred >= 0) {

@@ -413,6 +413,87 @@ void Bsdf::scale(const Rgb& w) {
     kt_diffuse = kt_diffuse * w;
 }
 
+namespace {
+bool same(const Vec3& a, const Vec3& b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+bool same(const Rgb& a, const Rgb& b) {
+    return a.r == b.r && a.g == b.g && a.b == b.b;
+}
+}  // namespace
+
+bool Bsdf::add(const Bsdf& o) {
+    if (!same(frame.n, o.frame.n) || !same(ng, o.ng)) return false;
+    // Only an anisotropic distribution turns with the frame about its normal: two of them need
+    // the same frame; with one, the sum takes its frame.
+    const bool same_frame = same(frame.s, o.frame.s) && same(frame.t, o.frame.t);
+    if (!same_frame && anisotropic && o.anisotropic) return false;
+    // The microfacet lobes (glossy, FresnelBlend's coat, rough transmission) share one
+    // distribution and Fresnel term.
+    auto microfacet = [](const Bsdf& b) {
+        return b.fresnel_blend || !b.ks.is_black() || !b.kt_rough.is_black();
+    };
+    const bool mf = microfacet(*this), mf_o = microfacet(o);
+    if (mf && mf_o &&
+        (alpha != o.alpha || alpha_y != o.alpha_y || anisotropic != o.anisotropic ||
+         lobe_eta_i != o.lobe_eta_i || lobe_eta_t != o.lobe_eta_t || conductor != o.conductor ||
+         !same(conductor_eta, o.conductor_eta) || !same(conductor_k, o.conductor_k) ||
+         fresnel_blend != o.fresnel_blend))
+        return false;
+    // A FresnelBlend's kd and ks are its colours, not weights: two add only when they are the
+    // same colours, and a blend takes no Lambertian lobe beside it.
+    if (fresnel_blend || o.fresnel_blend) {
+        if (fresnel_blend && o.fresnel_blend && !(same(kd, o.kd) && same(ks, o.ks))) return false;
+        if (fresnel_blend != o.fresnel_blend && !(fresnel_blend ? o.kd : kd).is_black())
+            return false;
+    }
+    const bool diffuse = !fresnel_blend && !kd.is_black(),
+               diffuse_o = !o.fresnel_blend && !o.kd.is_black();
+    if (diffuse && diffuse_o && (on_a != o.on_a || on_b != o.on_b)) return false;
+    // The specular lobes: a mirror's reflection has no Fresnel term, a glass's reflection and
+    // transmission its index's.
+    if (!kr.is_black() && !o.kr.is_black() && fresnel_noop != o.fresnel_noop) return false;
+    auto uses_eta = [](const Bsdf& b) {
+        return (!b.kr.is_black() && !b.fresnel_noop) || !b.kt.is_black();
+    };
+    if (uses_eta(*this) && uses_eta(o) && eta != o.eta) return false;
+
+    // The sum.
+    if (!same_frame && o.anisotropic) frame = o.frame;
+    if (fresnel_blend && o.fresnel_blend) {
+        blend_scale += o.blend_scale;
+    } else if (o.fresnel_blend) {
+        fresnel_blend = true;
+        kd = o.kd;
+        ks = o.ks;
+        blend_scale = o.blend_scale;
+    } else if (!fresnel_blend) {
+        if (diffuse_o && !diffuse) {
+            on_a = o.on_a;
+            on_b = o.on_b;
+        }
+        kd += o.kd;
+        ks += o.ks;
+    }
+    if (mf_o && !mf) {
+        alpha = o.alpha;
+        alpha_y = o.alpha_y;
+        anisotropic = o.anisotropic;
+        lobe_eta_i = o.lobe_eta_i;
+        lobe_eta_t = o.lobe_eta_t;
+        conductor = o.conductor;
+        conductor_eta = o.conductor_eta;
+        conductor_k = o.conductor_k;
+    }
+    kt_rough += o.kt_rough;
+    if (kr.is_black() && !o.kr.is_black()) fresnel_noop = o.fresnel_noop;
+    if (!uses_eta(*this) && uses_eta(o)) eta = o.eta;
+    kr += o.kr;
+    kt += o.kt;
+    kt_diffuse += o.kt_diffuse;
+    return true;
+}
+
 Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
     return f(outgoing(wo_w), wi_w);
 }
@@ -779,7 +860,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             break;
         }
         case Material::Type::None:
-        case Material::Type::Mix:  // the integrator picks one of its materials first
+        case Material::Type::Mix:  // the integrator resolves its materials (material_bsdf)
             made.reset();
             return made;
     }

@@ -102,8 +102,15 @@ struct Bsdf {
         return has_diffuse() || has_glossy() || has_transmission() || has_diffuse_transmission();
     }
 
-    /// Every lobe times w (a mix material's weight for the material it chose).
+    /// Every lobe times w (a mix material's weight for one of its materials).
     void scale(const Rgb& w);
+
+    /// This BSDF plus `o` (both built at one hit, in one shading frame), as pbrt-v3's mix adds
+    /// its materials' lobes into one BSDF, when one Bsdf can hold the sum: no kind of lobe is in
+    /// both with different parameters (Oren-Nayar's sigma, a microfacet distribution or Fresnel
+    /// term, a specular index, two FresnelBlends of different colours). Lobes of one kind with
+    /// the same parameters add their weights. False, and nothing changed, otherwise.
+    bool add(const Bsdf& o);
 
     /// BSDF value for world directions (pbrt-v3 BSDF::f: only non-specular lobes).
     Rgb f(const Vec3& wo, const Vec3& wi) const;
@@ -140,8 +147,8 @@ struct Bsdf {
     Rgb transmission_f(const Outgoing& o, const Vec3& wi) const;  // wi in the shading frame
 };
 
-/// Builds the BSDF of `material` at `hit`; returns false for material "none" (and "mix", whose
-/// materials the integrator chooses between).
+/// Builds the BSDF of `material` at `hit`; returns none for material "none" (and "mix", whose
+/// materials the integrator builds and adds: Bsdf::add).
 std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& material, const SurfaceHit& hit,
                               const TexContext& ctx);
 

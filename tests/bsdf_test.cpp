@@ -431,6 +431,59 @@ TEST(Materials, SubstrateIsPbrtV3sFresnelBlend) {
     EXPECT_NEAR(half.f(wo, wi).g, 0.5f * b.f(wo, wi).g, 1e-6f);
 }
 
+// pbrt-v3's mix adds its materials' lobes into one BSDF. Bsdf::add holds the sum where no kind of
+// lobe is in both with different parameters.
+TEST(Materials, AddSumsLobesThatFitOneBsdf) {
+    const Bsdf matte = bsdf_of("Material \"matte\" \"rgb Kd\" [0.5 0.4 0.3]");
+    const Bsdf glass = bsdf_of("Material \"glass\" \"float index\" 1.33");
+    const Bsdf plastic = bsdf_of(
+        "Material \"plastic\" \"rgb Kd\" [0.2 0.2 0.2] \"rgb Ks\" [0.3 0.3 0.3] "
+        "\"float roughness\" 0.1");
+    const Vec3 wo = normalize(Vec3(0.3f, 0.1f, 1)), wi = normalize(Vec3(-0.5f, 0.2f, 1));
+    // Glass's specular lobes and a matte's Lambertian one, each weighted.
+    Bsdf sum = glass, part = matte;
+    sum.scale(Rgb(0.25f));
+    part.scale(Rgb(0.75f));
+    ASSERT_TRUE(sum.add(part));
+    EXPECT_FLOAT_EQ(sum.kr.g, 0.25f * glass.kr.g);
+    EXPECT_FLOAT_EQ(sum.kt.g, 0.25f * glass.kt.g);
+    EXPECT_FLOAT_EQ(sum.eta, 1.33f);
+    EXPECT_FALSE(sum.fresnel_noop);
+    EXPECT_NEAR(sum.f(wo, wi).r, 0.75f * matte.f(wo, wi).r, 1e-7f);
+    // A matte and a plastic: the Lambertian lobes add, the glossy one is plastic's.
+    sum = plastic;
+    ASSERT_TRUE(sum.add(matte));
+    EXPECT_FLOAT_EQ(sum.kd.b, 0.2f + 0.3f);
+    EXPECT_NEAR(sum.f(wo, wi).b, plastic.f(wo, wi).b + matte.f(wo, wi).b, 1e-6f);
+    // The other way round: the same sum.
+    sum = matte;
+    ASSERT_TRUE(sum.add(plastic));
+    EXPECT_NEAR(sum.f(wo, wi).b, plastic.f(wo, wi).b + matte.f(wo, wi).b, 1e-6f);
+    // Lobes of one kind with different parameters do not fit, and nothing changes: two
+    // roughnesses, two Oren-Nayar sigmas, a mirror's reflection (no Fresnel term) and a glass's,
+    // two glasses' indices.
+    const std::pair<const char*, const char*> misfits[] = {
+        {"Material \"plastic\" \"float roughness\" 0.1",
+         "Material \"plastic\" \"float roughness\" 0.3"},
+        {"Material \"matte\" \"float sigma\" 10", "Material \"matte\" \"float sigma\" 30"},
+        {"Material \"mirror\"", "Material \"glass\""},
+        {"Material \"glass\" \"float index\" 1.5", "Material \"glass\" \"float index\" 1.33"}};
+    for (const auto& [a, b] : misfits) {
+        const Bsdf first = bsdf_of(a);
+        Bsdf s = first;
+        EXPECT_FALSE(s.add(bsdf_of(b))) << a << " + " << b;
+        EXPECT_EQ(s.f(wo, wi).g, first.f(wo, wi).g) << a;
+        EXPECT_EQ(s.kr.g, first.kr.g) << a;
+        EXPECT_EQ(s.eta, first.eta) << a;
+    }
+    // A lobe weighted zero is no lobe: a mix of amount 1 always fits.
+    Bsdf none = bsdf_of("Material \"plastic\" \"float roughness\" 0.3");
+    none.scale(Rgb(0));
+    sum = plastic;
+    EXPECT_TRUE(sum.add(none));
+    EXPECT_EQ(sum.f(wo, wi).g, plastic.f(wo, wi).g);
+}
+
 // pbrt-v3's translucent: Lambertian reflection and transmission of Kd times reflect and
 // transmit, and microfacet reflection and transmission (into 1.5) of Ks times each.
 TEST(Materials, TranslucentReflectsAndTransmitsBothItsLobes) {

@@ -1,5 +1,6 @@
 // pbrt-v3's "mix" material: amount x the first named material + (1 - amount) x the second, per
-// channel, in expectation over the integrator's choice of one per shading point.
+// channel: their lobes added into one BSDF where they fit one, else in expectation over the
+// integrator's choice of one per shading point.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,17 +14,23 @@ using namespace cmam::render;
 
 namespace {
 
-// A plane lit head-on by a distant light of radiance pi: its radiance is its reflectance.
-std::unique_ptr<Scene> mixed_plane(const std::string& amount) {
+// A plane lit head-on by a distant light of radiance pi: its radiance is its reflectance. The
+// mix of materials a and b (by default two mattes of Kd 0.8 and (0.2, 0.4, 0.2)). Whitted: a
+// pick between the two draws independent numbers (path tracing stratifies them per pixel).
+std::unique_ptr<Scene> mixed_plane(
+    const std::string& amount,
+    const std::string& a = "\"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8]",
+    const std::string& b = "\"string type\" \"matte\" \"rgb Kd\" [0.2 0.4 0.2]") {
     return test::scene_from(
         "LookAt 0 0 10  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 30 "
-        "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 WorldBegin "
+        "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
+        "Integrator \"whitted\" WorldBegin "
         "LightSource \"distant\" \"point from\" [0 0 1] \"point to\" [0 0 0] "
         "\"rgb L\" [3.14159265 3.14159265 3.14159265] "
-        "MakeNamedMaterial \"a\" \"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8] "
-        "MakeNamedMaterial \"b\" \"string type\" \"matte\" \"rgb Kd\" [0.2 0.4 0.2] "
-        "MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string namedmaterial1\" \"a\" "
-        "\"string namedmaterial2\" \"b\" " +
+        "MakeNamedMaterial \"a\" " +
+            a + " MakeNamedMaterial \"b\" " + b +
+            " MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string namedmaterial1\" \"a\" "
+            "\"string namedmaterial2\" \"b\" " +
             amount +
             " NamedMaterial \"m\" "
             "Shape \"trianglemesh\" \"point3 P\" [-20 -20 0  20 -20 0  20 20 0  -20 20 0] "
@@ -50,6 +57,39 @@ TEST(MixMaterial, BlendsItsMaterialsByAmountPerChannel) {
     EXPECT_NEAR(c.r, 0.8f, 0.02f);
     EXPECT_NEAR(c.g, 0.4f, 0.02f);
     EXPECT_NEAR(c.b, 0.5f * 0.8f + 0.5f * 0.2f, 0.02f);
+}
+
+// Lobes that fit one BSDF (here two Lambertian ones) are added, as pbrt-v3 adds them: every
+// pixel is the blend, none is one material or the other.
+TEST(MixMaterial, LobesThatFitOneBsdfAreAddedAtEveryPixel) {
+    const Framebuffer fb = render::render(*mixed_plane("\"rgb amount\" [0.25 0.5 1]"), {}, nullptr);
+    const float want[3] = {0.25f * 0.8f + 0.75f * 0.2f, 0.5f * 0.8f + 0.5f * 0.4f, 0.8f};
+    ASSERT_FALSE(fb.rgb.empty());
+    for (std::size_t i = 0; i < fb.rgb.size(); ++i)
+        ASSERT_NEAR(fb.rgb[i], want[i % 3], 1e-4f) << "pixel " << i / 3 << " channel " << i % 3;
+}
+
+// Two Oren-Nayar lobes of different sigma do not fit one BSDF: one material is picked per
+// shading point and weighted, the blend in expectation. Lit and seen head-on, Oren-Nayar's value
+// is Kd (1 - sigma^2 / (2 (sigma^2 + 0.33))) / pi (sigma in radians).
+TEST(MixMaterial, LobesThatDoNotFitOneBsdfArePickedAndWeighted) {
+    const Framebuffer fb = render::render(
+        *mixed_plane("\"rgb amount\" [0.25 0.25 0.25]",
+                     "\"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8] \"float sigma\" 20",
+                     "\"string type\" \"matte\" \"rgb Kd\" [0.2 0.4 0.2] \"float sigma\" 40"),
+        {}, nullptr);
+    auto oren_nayar_a = [](double degrees) {
+        const double s = degrees * 3.14159265358979 / 180, s2 = s * s;
+        return 1 - s2 / (2 * (s2 + 0.33));
+    };
+    const double a = 0.8 * oren_nayar_a(20), b = 0.4 * oren_nayar_a(40);
+    const Rgb c = mean(fb);
+    EXPECT_NEAR(c.g, 0.25 * a + 0.75 * b, 0.01);
+    // Per pixel one material or the other: some pixels are far from the blend.
+    std::size_t apart = 0;
+    for (std::size_t i = 1; i < fb.rgb.size(); i += 3)
+        apart += std::abs(fb.rgb[i] - (0.25 * a + 0.75 * b)) > 0.01;
+    EXPECT_GT(apart, fb.rgb.size() / 3 / 4);
 }
 
 TEST(MixMaterial, NamesResolveWhereTheMixIsDeclared) {
