@@ -369,13 +369,15 @@ struct Tracer {
     }
 
     // A "mix" material is pbrt-v3's: amount x its first material's BSDF + (1 - amount) x its
-    // second's, per channel, their lobes added into one BSDF (Bsdf::add). As in pbrt-v3 the sum
-    // is in the first material's shading frame, down the tree (frame_material: its bump map is
-    // applied, the others' are not). Where one Bsdf cannot hold the sum (a kind of lobe in both
-    // with different parameters, or material "none" in either) and in trees of more than
-    // kMaxMixMaterials materials, one of the two is picked per shading point with probability
-    // p = the amount's mean for the first, and weighted by amount / p or (1 - amount) / (1 - p):
-    // the blend in expectation, noise instead of bias (docs/algorithms.md §18, "Mix").
+    // second's, per channel, their lobes added into one BSDF (Bsdf::add: into the first's lobes
+    // where they fit, else as a layer of the first). As in pbrt-v3 the sum is in the first
+    // material's shading frame, down the tree (frame_material: its bump map is applied, the
+    // others' are not). Where the two have specular lobes the integrator cannot follow as one
+    // (a mirror's reflection and a glass's, two indices: Bsdf::takes), where either is material
+    // "none", and in trees of more than kMaxMixMaterials materials, one of the two is picked per
+    // shading point with probability p = the amount's mean for the first, and weighted by
+    // amount / p or (1 - amount) / (1 - p): the blend in expectation, noise instead of bias
+    // (docs/algorithms.md §18, "Mix").
     static constexpr int kMaxMixMaterials = 8;
 
     // A mix's material `i` (0: namedmaterial1).
@@ -402,9 +404,10 @@ struct Tracer {
             cur = &mix_child(*cur, 0);
         return *cur;
     }
-    // The BSDF of m at h (none: pass through), mixes resolved as above.
+    // The BSDF of m at h (none: pass through), mixes resolved as above, their layers kept in
+    // `layers`.
     std::optional<Bsdf> material_bsdf(const Material& m, const SurfaceHit& h, const TexContext& ctx,
-                                      std::size_t depth = 0) {
+                                      std::forward_list<Bsdf>& layers, std::size_t depth = 0) {
         if (m.type != Material::Type::Mix || depth > scene.materials.size())
             return make_bsdf(scene, m, h, ctx);
         Rgb a = eval_texture(scene, m.amount, ctx);
@@ -415,19 +418,20 @@ struct Tracer {
         const bool whole = mix_materials(m, kMaxMixMaterials, depth) <= kMaxMixMaterials;
         std::optional<Bsdf> first, second;
         if (whole) {
-            first = material_bsdf(mix_child(m, 0), h, ctx, depth + 1);
-            second = material_bsdf(mix_child(m, 1), h, ctx, depth + 1);
-            if (first && second) {
-                Bsdf sum = *first, other = *second;
-                sum.scale(a);
-                other.scale(b);
-                if (sum.add(other)) return sum;
+            first = material_bsdf(mix_child(m, 0), h, ctx, layers, depth + 1);
+            second = material_bsdf(mix_child(m, 1), h, ctx, layers, depth + 1);
+            if (first && second && first->takes(*second)) {
+                first->scale(a);
+                second->scale(b);
+                first->add(*second, layers);
+                return first;
             }
         }
         // One of the two; in a tree too large, only it is shaded (its textures read).
         const bool one = next() < p;
-        std::optional<Bsdf> c = whole ? std::move(one ? first : second)
-                                      : material_bsdf(mix_child(m, one ? 0 : 1), h, ctx, depth + 1);
+        std::optional<Bsdf> c =
+            whole ? std::move(one ? first : second)
+                  : material_bsdf(mix_child(m, one ? 0 : 1), h, ctx, layers, depth + 1);
         if (c) c->scale(one ? a / p : b / (1 - p));
         return c;
     }
@@ -502,7 +506,8 @@ struct Tracer {
                 h.ns = bump_normal(scene, framed.bump, h, ctx,
                                    0.5f * (std::abs(hd.dudx) + std::abs(hd.dudy)),
                                    0.5f * (std::abs(hd.dvdx) + std::abs(hd.dvdy)));
-            std::optional<Bsdf> made = material_bsdf(m, h, ctx);
+            std::forward_list<Bsdf> layers;  // a mix's (material_bsdf), mostly none
+            std::optional<Bsdf> made = material_bsdf(m, h, ctx, layers);
             if (!made) {
                 // Continue through: the footprint state moves to the hit point.
                 RayFootprint fp = footprints.passed_through(ray.fp, at, h);

@@ -411,6 +411,7 @@ void Bsdf::scale(const Rgb& w) {
     kt = kt * w;
     kt_rough = kt_rough * w;
     kt_diffuse = kt_diffuse * w;
+    if (layer) layer->scale(w);
 }
 
 namespace {
@@ -420,21 +421,31 @@ bool same(const Vec3& a, const Vec3& b) {
 bool same(const Rgb& a, const Rgb& b) {
     return a.r == b.r && a.g == b.g && a.b == b.b;
 }
+
+// The microfacet lobes (glossy, FresnelBlend's coat, rough transmission) share one distribution
+// and Fresnel term.
+bool microfacet(const Bsdf& b) {
+    return b.fresnel_blend || !b.ks.is_black() || !b.kt_rough.is_black();
+}
+// Specular lobes with the index's Fresnel term: a glass's reflection and transmission (a
+// mirror's reflection has none).
+bool uses_eta(const Bsdf& b) {
+    return (!b.kr.is_black() && !b.fresnel_noop) || !b.kt.is_black();
+}
 }  // namespace
 
-bool Bsdf::add(const Bsdf& o) {
+bool Bsdf::takes(const Bsdf& o) const {
     if (!same(frame.n, o.frame.n) || !same(ng, o.ng)) return false;
+    if (!kr.is_black() && !o.kr.is_black() && fresnel_noop != o.fresnel_noop) return false;
+    return !(uses_eta(*this) && uses_eta(o) && eta != o.eta);
+}
+
+bool Bsdf::fits(const Bsdf& o) const {
     // Only an anisotropic distribution turns with the frame about its normal: two of them need
     // the same frame; with one, the sum takes its frame.
     const bool same_frame = same(frame.s, o.frame.s) && same(frame.t, o.frame.t);
     if (!same_frame && anisotropic && o.anisotropic) return false;
-    // The microfacet lobes (glossy, FresnelBlend's coat, rough transmission) share one
-    // distribution and Fresnel term.
-    auto microfacet = [](const Bsdf& b) {
-        return b.fresnel_blend || !b.ks.is_black() || !b.kt_rough.is_black();
-    };
-    const bool mf = microfacet(*this), mf_o = microfacet(o);
-    if (mf && mf_o &&
+    if (microfacet(*this) && microfacet(o) &&
         (alpha != o.alpha || alpha_y != o.alpha_y || anisotropic != o.anisotropic ||
          lobe_eta_i != o.lobe_eta_i || lobe_eta_t != o.lobe_eta_t || conductor != o.conductor ||
          !same(conductor_eta, o.conductor_eta) || !same(conductor_k, o.conductor_k) ||
@@ -442,63 +453,84 @@ bool Bsdf::add(const Bsdf& o) {
         return false;
     // A FresnelBlend's kd and ks are its colours, not weights: two add only when they are the
     // same colours, and a blend takes no Lambertian lobe beside it.
-    if (fresnel_blend || o.fresnel_blend) {
-        if (fresnel_blend && o.fresnel_blend && !(same(kd, o.kd) && same(ks, o.ks))) return false;
-        if (fresnel_blend != o.fresnel_blend && !(fresnel_blend ? o.kd : kd).is_black())
-            return false;
-    }
+    if (fresnel_blend && o.fresnel_blend && !(same(kd, o.kd) && same(ks, o.ks))) return false;
+    if (fresnel_blend != o.fresnel_blend && !(fresnel_blend ? o.kd : kd).is_black()) return false;
     const bool diffuse = !fresnel_blend && !kd.is_black(),
                diffuse_o = !o.fresnel_blend && !o.kd.is_black();
-    if (diffuse && diffuse_o && (on_a != o.on_a || on_b != o.on_b)) return false;
-    // The specular lobes: a mirror's reflection has no Fresnel term, a glass's reflection and
-    // transmission its index's.
-    if (!kr.is_black() && !o.kr.is_black() && fresnel_noop != o.fresnel_noop) return false;
-    auto uses_eta = [](const Bsdf& b) {
-        return (!b.kr.is_black() && !b.fresnel_noop) || !b.kt.is_black();
-    };
-    if (uses_eta(*this) && uses_eta(o) && eta != o.eta) return false;
+    return !(diffuse && diffuse_o && (on_a != o.on_a || on_b != o.on_b));
+}
 
-    // The sum.
-    if (!same_frame && o.anisotropic) frame = o.frame;
-    if (fresnel_blend && o.fresnel_blend) {
-        blend_scale += o.blend_scale;
-    } else if (o.fresnel_blend) {
-        fresnel_blend = true;
-        kd = o.kd;
-        ks = o.ks;
-        blend_scale = o.blend_scale;
-    } else if (!fresnel_blend) {
-        if (diffuse_o && !diffuse) {
-            on_a = o.on_a;
-            on_b = o.on_b;
+void Bsdf::add(const Bsdf& o, std::forward_list<Bsdf>& layers) {
+    Bsdf* tail = nullptr;  // what goes on the end of the chain
+    const bool mf = microfacet(*this);
+    if (fits(o)) {
+        if (!(same(frame.s, o.frame.s) && same(frame.t, o.frame.t)) && o.anisotropic)
+            frame = o.frame;
+        const bool diffuse = !fresnel_blend && !kd.is_black(),
+                   diffuse_o = !o.fresnel_blend && !o.kd.is_black();
+        if (fresnel_blend && o.fresnel_blend) {
+            blend_scale += o.blend_scale;
+        } else if (o.fresnel_blend) {
+            fresnel_blend = true;
+            kd = o.kd;
+            ks = o.ks;
+            blend_scale = o.blend_scale;
+        } else if (!fresnel_blend) {
+            if (diffuse_o && !diffuse) {
+                on_a = o.on_a;
+                on_b = o.on_b;
+            }
+            kd += o.kd;
+            ks += o.ks;
         }
-        kd += o.kd;
-        ks += o.ks;
+        if (microfacet(o) && !mf) {
+            alpha = o.alpha;
+            alpha_y = o.alpha_y;
+            anisotropic = o.anisotropic;
+            lobe_eta_i = o.lobe_eta_i;
+            lobe_eta_t = o.lobe_eta_t;
+            conductor = o.conductor;
+            conductor_eta = o.conductor_eta;
+            conductor_k = o.conductor_k;
+        }
+        kt_rough += o.kt_rough;
+        kt_diffuse += o.kt_diffuse;
+        tail = o.layer;
+    } else {
+        Bsdf& l = layers.emplace_front(o);  // (its own layers stay behind it)
+        l.kr = Rgb();
+        l.kt = Rgb();
+        tail = &l;
     }
-    if (mf_o && !mf) {
-        alpha = o.alpha;
-        alpha_y = o.alpha_y;
-        anisotropic = o.anisotropic;
-        lobe_eta_i = o.lobe_eta_i;
-        lobe_eta_t = o.lobe_eta_t;
-        conductor = o.conductor;
-        conductor_eta = o.conductor_eta;
-        conductor_k = o.conductor_k;
-    }
-    kt_rough += o.kt_rough;
+    // The specular lobes, in this Bsdf either way (takes(o): they fit).
     if (kr.is_black() && !o.kr.is_black()) fresnel_noop = o.fresnel_noop;
     if (!uses_eta(*this) && uses_eta(o)) eta = o.eta;
     kr += o.kr;
     kt += o.kt;
-    kt_diffuse += o.kt_diffuse;
-    return true;
+    Bsdf* end = this;
+    while (end->layer) end = end->layer;
+    end->layer = tail;
 }
 
 Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
     return f(outgoing(wo_w), wi_w);
 }
 
+int Bsdf::own_lobes() const {
+    return int(has_glossy()) + int(has_diffuse()) + int(has_transmission()) +
+           int(has_diffuse_transmission());
+}
+
+// The layers' lobes are evaluated in their own frames, from wo in the world.
 Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
+    Rgb out = own_f(o, wi_w);
+    if (!layer) return out;
+    const Vec3 wo_w = frame.to_world(o.local);
+    for (const Bsdf* l = layer; l; l = l->layer) out += l->own_f(l->outgoing(wo_w), wi_w);
+    return out;
+}
+
+Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
@@ -562,7 +594,20 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
 // pbrt-v3 draws them: density D(h) G1(wo) |wo . h| / |cos theta_o|, so the reflected direction's
 // is D(h) G1(wo) / (4 |cos theta_o|) and the refracted one's that times |wo . h| dwh/dwi.
 float Bsdf::pdf(const Outgoing& o, const Vec3& wi_w) const {
-    return pdf_local(o, frame.to_local(wi_w));
+    const float p = pdf_local(o, frame.to_local(wi_w));
+    if (!layer) return p;
+    // The chain's lobes evenly, as pbrt-v3 picks among all its BSDF's components: each Bsdf's
+    // density (even among its own lobes) weighted by its share of the lobes.
+    int n = own_lobes();
+    float sum = float(n) * p;
+    const Vec3 wo_w = frame.to_world(o.local);
+    for (const Bsdf* l = layer; l; l = l->layer) {
+        const int k = l->own_lobes();
+        if (k == 0) continue;
+        sum += float(k) * l->pdf_local(l->outgoing(wo_w), l->frame.to_local(wi_w));
+        n += k;
+    }
+    return n > 0 ? sum / float(n) : 0.0f;
 }
 
 float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
@@ -628,9 +673,33 @@ std::optional<Vec3> sample_visible_normal(const Vec3& wo, float ax, float ay, fl
 }  // namespace
 
 Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const {
+    if (!layer) return own_sample(o, u0, u1, u2);
+    // A lobe of the chain evenly (u0 rescaled within the Bsdf that has it), then the chain's
+    // value and density in the direction drawn.
+    int n = 0;
+    for (const Bsdf* l = this; l; l = l->layer) n += l->own_lobes();
+    if (n == 0) return {};
+    const float x = u0 * float(n);
+    const int k = std::min(static_cast<int>(x), n - 1);
+    int start = 0;  // b's first lobe in the chain
+    const Bsdf* b = this;
+    while (k >= start + b->own_lobes()) {
+        start += b->own_lobes();
+        b = b->layer;
+    }
+    const float v0 = std::min((x - float(start)) / float(b->own_lobes()), 0x1.fffffep-1f);
+    Sample s = b->own_sample(b == this ? o : b->outgoing(frame.to_world(o.local)), v0, u1, u2);
+    if (!(s.pdf > 0)) return s;
+    s.pdf = pdf(o, s.wi);
+    if (!(s.pdf > 0)) return Sample{};
+    s.f = f(o, s.wi);
+    return s;
+}
+
+Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) const {
     Sample out;
     const Vec3& wo = o.local;
-    if (wo.z == 0 || !has_nonspecular()) return out;
+    if (wo.z == 0 || own_lobes() == 0) return out;
     // The lobe: glossy (0), diffuse (1), transmission (2), diffuse transmission (3), evenly
     // among those there are.
     const bool present[4] = {has_glossy(), has_diffuse(), has_transmission(),
@@ -668,7 +737,7 @@ Bsdf::Sample Bsdf::sample(const Outgoing& o, float u0, float u1, float u2) const
         out.pdf = 0;
         return out;
     }
-    out.f = f(o, out.wi);
+    out.f = own_f(o, out.wi);
     return out;
 }
 

@@ -3,6 +3,8 @@
 // reach the filtering library.
 #pragma once
 
+#include <forward_list>
+
 #include "render/footprint/cmam_caches.h"
 #include "render/footprint/footprint.h"
 #include "render/scene.h"
@@ -93,24 +95,34 @@ struct Bsdf {
     // lobe's distribution; its value times blend_scale (a mix's weight).
     bool fresnel_blend = false;
     Rgb blend_scale{1, 1, 1};
+    // Non-specular lobes of a mix's other material that do not fit this Bsdf (add), each Bsdf of
+    // the chain in its own frame about the same shading normal: f, pdf and sample take the whole
+    // chain, as pbrt-v3's BSDF takes all its components. Null for a single material.
+    Bsdf* layer = nullptr;
 
     bool has_diffuse() const { return fresnel_blend || !kd.is_black(); }
     bool has_glossy() const { return fresnel_blend || !ks.is_black(); }
     bool has_transmission() const { return !kt_rough.is_black(); }
     bool has_diffuse_transmission() const { return !kt_diffuse.is_black(); }
     bool has_nonspecular() const {
-        return has_diffuse() || has_glossy() || has_transmission() || has_diffuse_transmission();
+        return has_diffuse() || has_glossy() || has_transmission() || has_diffuse_transmission() ||
+               (layer && layer->has_nonspecular());
     }
 
-    /// Every lobe times w (a mix material's weight for one of its materials).
+    /// Every lobe times w, the layers' too (a mix material's weight for one of its materials).
     void scale(const Rgb& w);
 
-    /// This BSDF plus `o` (both built at one hit, in one shading frame), as pbrt-v3's mix adds
-    /// its materials' lobes into one BSDF, when one Bsdf can hold the sum: no kind of lobe is in
-    /// both with different parameters (Oren-Nayar's sigma, a microfacet distribution or Fresnel
-    /// term, a specular index, two FresnelBlends of different colours). Lobes of one kind with
-    /// the same parameters add their weights. False, and nothing changed, otherwise.
-    bool add(const Bsdf& o);
+    /// Whether add(o) can hold this BSDF plus `o` (both built at one hit): the same shading
+    /// normal, and specular lobes that fit one Bsdf (the integrator follows those of this one
+    /// only): a mirror's reflection (no Fresnel term) not beside a glass's, one specular index.
+    bool takes(const Bsdf& o) const;
+    /// This BSDF plus `o` (takes(o) must hold), as pbrt-v3's mix adds its materials' lobes into
+    /// one BSDF: into this Bsdf where no kind of lobe is in both with different parameters
+    /// (Oren-Nayar's sigma, a microfacet distribution or Fresnel term, two FresnelBlends of
+    /// different colours), lobes of one kind with the same parameters adding their weights;
+    /// otherwise o's specular lobes are added here and the rest of o becomes a layer, kept in
+    /// `layers` (which must outlive this Bsdf). o's own layers go on the chain either way.
+    void add(const Bsdf& o, std::forward_list<Bsdf>& layers);
 
     /// BSDF value for world directions (pbrt-v3 BSDF::f: only non-specular lobes).
     Rgb f(const Vec3& wo, const Vec3& wi) const;
@@ -142,6 +154,11 @@ struct Bsdf {
     float pdf(const Outgoing& o, const Vec3& wi) const;
 
   private:
+    bool fits(const Bsdf& o) const;  // whether o's lobes fit into this Bsdf's (add)
+    int own_lobes() const;           // the non-specular lobes of this Bsdf, not its layers'
+    // f, pdf and sample of this Bsdf's own lobes (the public ones add the layers').
+    Rgb own_f(const Outgoing& o, const Vec3& wi_w) const;
+    Sample own_sample(const Outgoing& o, float u0, float u1, float u2) const;
     float pdf_local(const Outgoing& o, const Vec3& wi) const;     // the same in the shading frame
     Rgb blend_f(const Vec3& wo, const Vec3& wi) const;            // FresnelBlend, shading frame
     Rgb transmission_f(const Outgoing& o, const Vec3& wi) const;  // wi in the shading frame

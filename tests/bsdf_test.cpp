@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <complex>
+#include <forward_list>
 #include <limits>
 
 #include "render/build_scene.h"
@@ -431,56 +432,76 @@ TEST(Materials, SubstrateIsPbrtV3sFresnelBlend) {
     EXPECT_NEAR(half.f(wo, wi).g, 0.5f * b.f(wo, wi).g, 1e-6f);
 }
 
-// pbrt-v3's mix adds its materials' lobes into one BSDF. Bsdf::add holds the sum where no kind of
-// lobe is in both with different parameters.
-TEST(Materials, AddSumsLobesThatFitOneBsdf) {
+// pbrt-v3's mix adds its materials' lobes into one BSDF. Bsdf::add sums lobes of different kinds,
+// and of one kind with the same parameters, into one Bsdf; lobes of one kind with different
+// parameters go on a layer, whose value adds to the sum's. Specular lobes the integrator could
+// not follow as one are refused.
+TEST(Materials, AddSumsTheLobesOfTwoBsdfs) {
     const Bsdf matte = bsdf_of("Material \"matte\" \"rgb Kd\" [0.5 0.4 0.3]");
     const Bsdf glass = bsdf_of("Material \"glass\" \"float index\" 1.33");
     const Bsdf plastic = bsdf_of(
         "Material \"plastic\" \"rgb Kd\" [0.2 0.2 0.2] \"rgb Ks\" [0.3 0.3 0.3] "
         "\"float roughness\" 0.1");
     const Vec3 wo = normalize(Vec3(0.3f, 0.1f, 1)), wi = normalize(Vec3(-0.5f, 0.2f, 1));
+    std::forward_list<Bsdf> layers;
     // Glass's specular lobes and a matte's Lambertian one, each weighted.
     Bsdf sum = glass, part = matte;
     sum.scale(Rgb(0.25f));
     part.scale(Rgb(0.75f));
-    ASSERT_TRUE(sum.add(part));
+    ASSERT_TRUE(sum.takes(part));
+    sum.add(part, layers);
+    EXPECT_EQ(sum.layer, nullptr);
     EXPECT_FLOAT_EQ(sum.kr.g, 0.25f * glass.kr.g);
     EXPECT_FLOAT_EQ(sum.kt.g, 0.25f * glass.kt.g);
     EXPECT_FLOAT_EQ(sum.eta, 1.33f);
     EXPECT_FALSE(sum.fresnel_noop);
     EXPECT_NEAR(sum.f(wo, wi).r, 0.75f * matte.f(wo, wi).r, 1e-7f);
-    // A matte and a plastic: the Lambertian lobes add, the glossy one is plastic's.
-    sum = plastic;
-    ASSERT_TRUE(sum.add(matte));
-    EXPECT_FLOAT_EQ(sum.kd.b, 0.2f + 0.3f);
-    EXPECT_NEAR(sum.f(wo, wi).b, plastic.f(wo, wi).b + matte.f(wo, wi).b, 1e-6f);
-    // The other way round: the same sum.
-    sum = matte;
-    ASSERT_TRUE(sum.add(plastic));
-    EXPECT_NEAR(sum.f(wo, wi).b, plastic.f(wo, wi).b + matte.f(wo, wi).b, 1e-6f);
-    // Lobes of one kind with different parameters do not fit, and nothing changes: two
-    // roughnesses, two Oren-Nayar sigmas, a mirror's reflection (no Fresnel term) and a glass's,
-    // two glasses' indices.
-    const std::pair<const char*, const char*> misfits[] = {
+    // A matte and a plastic: the Lambertian lobes add, the glossy one is plastic's; either way
+    // round.
+    for (const bool plastic_first : {true, false}) {
+        sum = plastic_first ? plastic : matte;
+        sum.add(plastic_first ? matte : plastic, layers);
+        EXPECT_EQ(sum.layer, nullptr);
+        EXPECT_FLOAT_EQ(sum.kd.b, 0.2f + 0.3f);
+        EXPECT_NEAR(sum.f(wo, wi).b, plastic.f(wo, wi).b + matte.f(wo, wi).b, 1e-6f);
+    }
+    // Lobes of one kind with different parameters: the second material's go on a layer, and the
+    // value is the sum. Two roughnesses, two Oren-Nayar sigmas, a metal's Fresnel term and a
+    // dielectric's, a glass (whose specular lobes stay in the sum) and a rough glass.
+    const std::pair<const char*, const char*> layered[] = {
         {"Material \"plastic\" \"float roughness\" 0.1",
          "Material \"plastic\" \"float roughness\" 0.3"},
         {"Material \"matte\" \"float sigma\" 10", "Material \"matte\" \"float sigma\" 30"},
-        {"Material \"mirror\"", "Material \"glass\""},
-        {"Material \"glass\" \"float index\" 1.5", "Material \"glass\" \"float index\" 1.33"}};
-    for (const auto& [a, b] : misfits) {
-        const Bsdf first = bsdf_of(a);
-        Bsdf s = first;
-        EXPECT_FALSE(s.add(bsdf_of(b))) << a << " + " << b;
-        EXPECT_EQ(s.f(wo, wi).g, first.f(wo, wi).g) << a;
-        EXPECT_EQ(s.kr.g, first.kr.g) << a;
-        EXPECT_EQ(s.eta, first.eta) << a;
+        {"Material \"metal\"", "Material \"uber\" \"float roughness\" 0.2"},
+        {"Material \"uber\" \"rgb Kr\" [0.5 0.5 0.5] \"float roughness\" 0.05",
+         "Material \"glass\" \"float uroughness\" 0.3 \"float vroughness\" 0.3"}};
+    for (const auto& [a, b] : layered) {
+        const Bsdf first = bsdf_of(a), second = bsdf_of(b);
+        sum = first;
+        ASSERT_TRUE(sum.takes(second)) << a << " + " << b;
+        sum.add(second, layers);
+        ASSERT_NE(sum.layer, nullptr) << a;
+        for (const Vec3& w : {wi, Vec3(wi.x, wi.y, -wi.z)}) {  // reflected and transmitted
+            const Rgb want = first.f(wo, w) + second.f(wo, w), got = sum.f(wo, w);
+            EXPECT_NEAR(got.g, want.g, 1e-6f * (1 + want.g)) << a << " + " << b;
+        }
+        EXPECT_EQ(sum.kr.g, first.kr.g + second.kr.g) << a;
+        // Scaling scales the layers too.
+        const float whole = sum.f(wo, wi).g;
+        sum.scale(Rgb(0.5f));
+        EXPECT_NEAR(sum.f(wo, wi).g, 0.5f * whole, 1e-6f) << a;
     }
-    // A lobe weighted zero is no lobe: a mix of amount 1 always fits.
+    // Specular lobes that do not fit: a mirror's reflection (no Fresnel term) and a glass's, two
+    // glasses' indices.
+    EXPECT_FALSE(bsdf_of("Material \"mirror\"").takes(bsdf_of("Material \"glass\"")));
+    EXPECT_FALSE(bsdf_of("Material \"glass\" \"float index\" 1.5")
+                     .takes(bsdf_of("Material \"glass\" \"float index\" 1.33")));
+    // A lobe weighted zero is no lobe: a mix of amount 1 adds nothing, and no layer.
     Bsdf none = bsdf_of("Material \"plastic\" \"float roughness\" 0.3");
     none.scale(Rgb(0));
     sum = plastic;
-    EXPECT_TRUE(sum.add(none));
+    sum.add(none, layers);
+    EXPECT_EQ(sum.layer, nullptr);
     EXPECT_EQ(sum.f(wo, wi).g, plastic.f(wo, wi).g);
 }
 

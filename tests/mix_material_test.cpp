@@ -69,10 +69,10 @@ TEST(MixMaterial, LobesThatFitOneBsdfAreAddedAtEveryPixel) {
         ASSERT_NEAR(fb.rgb[i], want[i % 3], 1e-4f) << "pixel " << i / 3 << " channel " << i % 3;
 }
 
-// Two Oren-Nayar lobes of different sigma do not fit one BSDF: one material is picked per
-// shading point and weighted, the blend in expectation. Lit and seen head-on, Oren-Nayar's value
-// is Kd (1 - sigma^2 / (2 (sigma^2 + 0.33))) / pi (sigma in radians).
-TEST(MixMaterial, LobesThatDoNotFitOneBsdfArePickedAndWeighted) {
+// Two Oren-Nayar lobes of different sigma do not fit one Bsdf: the second is a layer, and every
+// pixel is still the blend. Lit and seen head-on, Oren-Nayar's value is
+// Kd (1 - sigma^2 / (2 (sigma^2 + 0.33))) / pi (sigma in radians).
+TEST(MixMaterial, LobesOfOneKindWithDifferentParametersAreAddedAtEveryPixel) {
     const Framebuffer fb = render::render(
         *mixed_plane("\"rgb amount\" [0.25 0.25 0.25]",
                      "\"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8] \"float sigma\" 20",
@@ -82,13 +82,25 @@ TEST(MixMaterial, LobesThatDoNotFitOneBsdfArePickedAndWeighted) {
         const double s = degrees * 3.14159265358979 / 180, s2 = s * s;
         return 1 - s2 / (2 * (s2 + 0.33));
     };
-    const double a = 0.8 * oren_nayar_a(20), b = 0.4 * oren_nayar_a(40);
-    const Rgb c = mean(fb);
-    EXPECT_NEAR(c.g, 0.25 * a + 0.75 * b, 0.01);
-    // Per pixel one material or the other: some pixels are far from the blend.
+    const double want = 0.25 * 0.8 * oren_nayar_a(20) + 0.75 * 0.4 * oren_nayar_a(40);
+    ASSERT_FALSE(fb.rgb.empty());
+    for (std::size_t i = 1; i < fb.rgb.size(); i += 3)
+        ASSERT_NEAR(fb.rgb[i], want, 1e-4) << "pixel " << i / 3;
+}
+
+// A mix with material "none" (pbrt-v3 has no sum for it) picks one of the two per shading
+// point, weighted: "none" passes the ray on (here into the black beyond), so the mean is
+// amount x the matte, and each pixel is one or the other.
+TEST(MixMaterial, MixesThatCannotBeAddedArePickedAndWeighted) {
+    const Framebuffer fb =
+        render::render(*mixed_plane("\"rgb amount\" [0.25 0.25 0.25]",
+                                    "\"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8]",
+                                    "\"string type\" \"none\""),
+                       {}, nullptr);
+    EXPECT_NEAR(mean(fb).g, 0.25 * 0.8, 0.01);
     std::size_t apart = 0;
     for (std::size_t i = 1; i < fb.rgb.size(); i += 3)
-        apart += std::abs(fb.rgb[i] - (0.25 * a + 0.75 * b)) > 0.01;
+        apart += std::abs(fb.rgb[i] - 0.25 * 0.8) > 0.01;
     EXPECT_GT(apart, fb.rgb.size() / 3 / 4);
 }
 

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <forward_list>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -24,8 +25,10 @@ namespace {
 
 // Lambertian; glossy alone; diffuse under an anisotropic glossy lobe; rough glass (microfacet
 // reflection and transmission); substrate (FresnelBlend), isotropic and anisotropic; translucent
-// (Lambertian and microfacet, each reflected and transmitted).
+// (Lambertian and microfacet, each reflected and transmitted); a mix whose lobes do not fit one
+// Bsdf (a metal's glossy lobe, and a layer of an Oren-Nayar lobe under a rougher dielectric one).
 std::vector<Bsdf> test_bsdfs() {
+    static std::forward_list<Bsdf> layers;  // the mix's
     Bsdf base;
     base.frame = Frame::from_z(Vec3(0, 0, 1));
     base.ng = Vec3(0, 0, 1);
@@ -59,7 +62,23 @@ std::vector<Bsdf> test_bsdfs() {
     translucent.alpha = 0.2f;
     translucent.lobe_eta_i = 1;
     translucent.lobe_eta_t = 1.5f;
-    return {lambert, glossy, both, glass, substrate, substrate_aniso, translucent};
+    Bsdf metal = base, under = base;
+    metal.ks = Rgb(1);
+    metal.alpha = 0.1f;
+    metal.conductor = true;
+    metal.conductor_eta = Rgb(0.2f, 0.9f, 1.1f);
+    metal.conductor_k = Rgb(3.9f, 2.4f, 2.1f);
+    under.kd = Rgb(0.6f);
+    under.on_a = 0.8f;
+    under.on_b = 0.3f;
+    under.ks = Rgb(0.3f);
+    under.alpha = 0.5f;
+    metal.scale(Rgb(0.4f));
+    under.scale(Rgb(0.6f));
+    Bsdf mix = metal;
+    mix.add(under, layers);
+    EXPECT_NE(mix.layer, nullptr);
+    return {lambert, glossy, both, glass, substrate, substrate_aniso, translucent, mix};
 }
 
 }  // namespace
