@@ -716,8 +716,9 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     aov->recorded = true;
     if (aov->kind == AovKind::Texture) {
         // The Kd the BSDF was built with: the same lookup (a second one would disturb the
-        // CMAM's cache).
-        const Rgb& k = bsdf.kd;
+        // CMAM's cache); a mix's, its layers' too.
+        Rgb k = bsdf.kd;
+        for (const Bsdf* l = bsdf.layer; l; l = l->layer) k += l->kd;
         aov->v[0] = k.r;
         aov->v[1] = k.g;
         aov->v[2] = k.b;

@@ -73,11 +73,11 @@ TEST(MixMaterial, LobesThatFitOneBsdfAreAddedAtEveryPixel) {
 // pixel is still the blend. Lit and seen head-on, Oren-Nayar's value is
 // Kd (1 - sigma^2 / (2 (sigma^2 + 0.33))) / pi (sigma in radians).
 TEST(MixMaterial, LobesOfOneKindWithDifferentParametersAreAddedAtEveryPixel) {
-    const Framebuffer fb = render::render(
-        *mixed_plane("\"rgb amount\" [0.25 0.25 0.25]",
-                     "\"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8] \"float sigma\" 20",
-                     "\"string type\" \"matte\" \"rgb Kd\" [0.2 0.4 0.2] \"float sigma\" 40"),
-        {}, nullptr);
+    const auto scene =
+        mixed_plane("\"rgb amount\" [0.25 0.25 0.25]",
+                    "\"string type\" \"matte\" \"rgb Kd\" [0.8 0.8 0.8] \"float sigma\" 20",
+                    "\"string type\" \"matte\" \"rgb Kd\" [0.2 0.4 0.2] \"float sigma\" 40");
+    const Framebuffer fb = render::render(*scene, {}, nullptr);
     auto oren_nayar_a = [](double degrees) {
         const double s = degrees * 3.14159265358979 / 180, s2 = s * s;
         return 1 - s2 / (2 * (s2 + 0.33));
@@ -86,6 +86,12 @@ TEST(MixMaterial, LobesOfOneKindWithDifferentParametersAreAddedAtEveryPixel) {
     ASSERT_FALSE(fb.rgb.empty());
     for (std::size_t i = 1; i < fb.rgb.size(); i += 3)
         ASSERT_NEAR(fb.rgb[i], want, 1e-4) << "pixel " << i / 3;
+    // The texture AOV: the blend of the two Kd, the layer's included.
+    RenderOptions ro;
+    ro.aov = AovKind::Texture;
+    const Framebuffer aov = render::render(*scene, ro, nullptr);
+    for (std::size_t i = 1; i < aov.rgb.size(); i += 3)
+        ASSERT_NEAR(aov.rgb[i], 0.25 * 0.8 + 0.75 * 0.4, 1e-5) << "pixel " << i / 3;
 }
 
 // A mix with material "none" (pbrt-v3 has no sum for it) picks one of the two per shading
