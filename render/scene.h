@@ -143,6 +143,8 @@ struct TextureNode {
 /// declared (a chain of 6000 crashed a render thread).
 constexpr int kMaxTextureDepth = 256;
 
+struct FourierTable;  // render/fourier.h
+
 struct Material {
     enum class Type {
         Matte,
@@ -153,6 +155,7 @@ struct Material {
         Metal,
         Substrate,
         Translucent,
+        Fourier,
         None,
         Mix
     };
@@ -167,6 +170,8 @@ struct Material {
     // into Scene::materials; -1 is the default matte).
     int mix[2] = {-1, -1};
     TexInput amount;
+    // Fourier: pbrt-v3's tabulated BSDF (shared by the materials that name one file).
+    std::shared_ptr<const FourierTable> fourier;
     bool remap_roughness = true;
     // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
     // node -1 and a constant: none (a constant displacement leaves the normal as it is here).

@@ -411,6 +411,7 @@ void Bsdf::scale(const Rgb& w) {
     kt = kt * w;
     kt_rough = kt_rough * w;
     kt_diffuse = kt_diffuse * w;
+    fourier_scale = fourier_scale * w;
     if (layer) layer->scale(w);
 }
 
@@ -445,6 +446,8 @@ bool Bsdf::fits(const Bsdf& o) const {
     // the same frame; with one, the sum takes its frame.
     const bool same_frame = same(frame.s, o.frame.s) && same(frame.t, o.frame.t);
     if (!same_frame && anisotropic && o.anisotropic) return false;
+    // A Fourier BSDF takes no other non-specular lobe beside it.
+    if ((fourier && o.own_lobes() > 0) || (o.fourier && own_lobes() > 0)) return false;
     if (microfacet(*this) && microfacet(o) &&
         (alpha != o.alpha || alpha_y != o.alpha_y || anisotropic != o.anisotropic ||
          lobe_eta_i != o.lobe_eta_i || lobe_eta_t != o.lobe_eta_t || conductor != o.conductor ||
@@ -495,6 +498,10 @@ void Bsdf::add(const Bsdf& o, std::forward_list<Bsdf>& layers) {
         }
         kt_rough += o.kt_rough;
         kt_diffuse += o.kt_diffuse;
+        if (o.fourier) {
+            fourier = o.fourier;
+            fourier_scale = o.fourier_scale;
+        }
         tail = o.layer;
     } else {
         Bsdf& l = layers.emplace_front(o);  // (its own layers stay behind it)
@@ -518,7 +525,7 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
 
 int Bsdf::own_lobes() const {
     return int(has_glossy()) + int(has_diffuse()) + int(has_transmission()) +
-           int(has_diffuse_transmission());
+           int(has_diffuse_transmission()) + int(fourier != nullptr);
 }
 
 // The layers' lobes are evaluated in their own frames, from wo in the world.
@@ -533,6 +540,7 @@ Rgb Bsdf::f(const Outgoing& o, const Vec3& wi_w) const {
 Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
+    if (fourier) return fourier_f(*fourier, wo, frame.to_local(wi_w)) * fourier_scale;
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
     if (!reflect) {
         Rgb out = has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
@@ -613,6 +621,7 @@ float Bsdf::pdf(const Outgoing& o, const Vec3& wi_w) const {
 float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return 0;
+    if (fourier) return fourier_pdf(*fourier, wo, wi);
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
     const float g1_over_cos = 1 / ((1 + o.lambda) * std::abs(wo.z));
@@ -700,6 +709,14 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
     Sample out;
     const Vec3& wo = o.local;
     if (wo.z == 0 || own_lobes() == 0) return out;
+    if (fourier) {  // its own density (pdf() is its tabulated one, equal up to interpolation)
+        const FourierSample s = fourier_sample(*fourier, wo, u1, u2);
+        if (!(s.pdf > 0)) return out;
+        out.wi = frame.to_world(s.wi);
+        out.pdf = s.pdf;
+        out.f = s.f * fourier_scale;
+        return out;
+    }
     // The lobe: glossy (0), diffuse (1), transmission (2), diffuse transmission (3), evenly
     // among those there are.
     const bool present[4] = {has_glossy(), has_diffuse(), has_transmission(),
@@ -928,6 +945,9 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             set_alphas(b, scene, m, ctx, 1e-3f);
             break;
         }
+        case Material::Type::Fourier:
+            b.fourier = m.fourier.get();
+            break;
         case Material::Type::None:
         case Material::Type::Mix:  // the integrator resolves its materials (material_bsdf)
             made.reset();

@@ -80,7 +80,8 @@ class Builder {
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;
     std::unique_ptr<Scene> m_scene;
-    std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;  // by resolved path
+    std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;           // by resolved path
+    std::map<std::string, std::shared_ptr<const FourierTable>> m_fourier;  // by resolved path
 
     // Files read ahead, in parallel, before the directives are built in order (read_ahead):
     // each is taken by the directive that reads it, which reports its error (or warning) where
@@ -208,6 +209,7 @@ class Builder {
     void metal_material(const pbrt::MaterialDesc& d, Material& m);
     void no_material(const pbrt::MaterialDesc& d, Material& m);
     void mix_material(const pbrt::MaterialDesc& d, Material& m);
+    void fourier_material(const pbrt::MaterialDesc& d, Material& m);
     Material unrendered_material(const pbrt::MaterialDesc& d);
 
     // --- shapes, instances and area lights (shapes.cpp) -----------------------------------

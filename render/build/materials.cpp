@@ -1,6 +1,9 @@
 // render — scene building: one Material per Material or MakeNamedMaterial directive, with
 // pbrt-v3's parameters and defaults.
+#include "pbrt/parser.h"
 #include "render/build/builder.h"
+#include "render/error.h"
+#include "render/fourier.h"
 
 namespace cmam::render::build_detail {
 
@@ -145,8 +148,36 @@ void Builder::mix_material(const pbrt::MaterialDesc& d, Material& m) {
     }
 }
 
+// pbrt-v3's tabulated BSDF, its file read once however many materials name it. A file that
+// cannot be read (pbrt-v3 renders such a material black) gives a warning with the reason, and
+// the material is rendered as matte with its Kd, as the materials cmam does not render.
+void Builder::fourier_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const pbrt::Param* file = e.params.find("bsdffile");
+    const std::string name = e.params.get_string("bsdffile", "");
+    if (!file) {
+        warn(e.loc, "material \"fourier\" has no \"string bsdffile\"");
+        m = unrendered_material(d);
+        return;
+    }
+    const std::string path = pbrt::resolve_path(m_desc.base_dir, file->loc, name);
+    std::shared_ptr<const FourierTable>& table = m_fourier[path];
+    if (!table) {
+        try {
+            table = std::make_shared<const FourierTable>(read_fourier_table(path));
+        } catch (const RenderError& err) {
+            m_fourier.erase(path);
+            warn(file->loc, err.what());
+            m = unrendered_material(d);
+            return;
+        }
+    }
+    m.type = Material::Type::Fourier;
+    m.fourier = table;
+}
+
 // pbrt-v3 renders a material it does not know as matte, with a warning; so does
-// cmam with the ones it does not render (subsurface scattering, Fourier BSDFs, hair).
+// cmam with the ones it does not render (subsurface scattering, hair).
 Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     const Entity& e = d.entity;
     Material m;
@@ -155,7 +186,7 @@ Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
                     (e.params.find("Kd") ? " with its Kd" : "") +
                     " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-                    "translucent and mix)");
+                    "translucent, fourier and mix)");
     return m;  // its other parameters are not read: no warning for each
 }
 
@@ -169,6 +200,7 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
         {"substrate", &Builder::substrate_material},
         {"translucent", &Builder::translucent_material},
         {"metal", &Builder::metal_material},
+        {"fourier", &Builder::fourier_material},
         {"none", &Builder::no_material},
         {"", &Builder::no_material},
         {"mix", &Builder::mix_material}};
