@@ -153,13 +153,15 @@ void Builder::mix_material(const pbrt::MaterialDesc& d, Material& m) {
 // the material is rendered as matte with its Kd, as the materials cmam does not render.
 void Builder::fourier_material(const pbrt::MaterialDesc& d, Material& m) {
     const Entity& e = d.entity;
+    auto as_matte = [&](const pbrt::FileLoc& loc, const std::string& why) {
+        warn(loc, why + "; the material is rendered as \"matte\"" +
+                      (e.params.find("Kd") ? " with its Kd" : ""));
+        m.type = Material::Type::Matte;
+        m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
+    };
     const pbrt::Param* file = e.params.find("bsdffile");
     const std::string name = e.params.get_string("bsdffile", "");
-    if (!file) {
-        warn(e.loc, "material \"fourier\" has no \"string bsdffile\"");
-        m = unrendered_material(d);
-        return;
-    }
+    if (!file) return as_matte(e.loc, "material \"fourier\" has no \"string bsdffile\"");
     const std::string path = pbrt::resolve_path(m_desc.base_dir, file->loc, name);
     std::shared_ptr<const FourierTable>& table = m_fourier[path];
     if (!table) {
@@ -167,9 +169,7 @@ void Builder::fourier_material(const pbrt::MaterialDesc& d, Material& m) {
             table = std::make_shared<const FourierTable>(read_fourier_table(path));
         } catch (const RenderError& err) {
             m_fourier.erase(path);
-            warn(file->loc, err.what());
-            m = unrendered_material(d);
-            return;
+            return as_matte(file->loc, err.what());
         }
     }
     m.type = Material::Type::Fourier;
