@@ -13,7 +13,7 @@ CMAM := $(BUILD)/app/cmam
 DEMO_OUT ?= $(BUILD)/demo.png
 
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS ?= parse scene ply image filter
+FUZZ_TARGETS ?= parse scene ply image bsdf filter
 
 .PHONY: all build deps configure demo test bench paper-figures results fuzz clean
 

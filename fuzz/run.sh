@@ -8,7 +8,7 @@
 #                                          crashing inputs go to fuzz/regressions/TARGET (with
 #                                          ci: to build/fuzz/artifacts/TARGET; the corpus then
 #                                          starts from the seeds each time)
-# TARGET is parse, scene, ply, image or filter; the binaries are build/fuzz/fuzz/fuzz_TARGET.
+# TARGET is parse, scene, ply, image, bsdf or filter; the binaries are build/fuzz/fuzz/fuzz_TARGET.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=build/fuzz

@@ -48,20 +48,22 @@ int last_below(int size, const Pred& below) {
 // The weights of the four nodes offset..offset+3 whose Catmull-Rom spline through `nodes` gives
 // the value at x (a cubic Hermite segment whose end derivatives are the neighbours' finite
 // differences, one-sided at the ends: a weight of a node outside the table is 0). False when x
-// is outside [nodes[0], nodes[size - 1]].
+// is outside [nodes[0], nodes[size - 1]]. Repeated nodes (published tables have -0 and 0) can
+// make the interval found one of no width (at the table's end, where the search stops): x there
+// is its node, and a difference over no width is taken one-sided.
 bool spline_weights(int size, const float* nodes, float x, int* offset, float w[4]) {
     if (!(x >= nodes[0] && x <= nodes[size - 1])) return false;
     const int i = last_below(size, [&](int k) { return nodes[k] <= x; });
     *offset = i - 1;
     const float x0 = nodes[i], x1 = nodes[i + 1];
-    const float t = (x - x0) / (x1 - x0), t2 = t * t, t3 = t2 * t;
+    const float t = x1 > x0 ? (x - x0) / (x1 - x0) : 0.0f, t2 = t * t, t3 = t2 * t;
     // Hermite basis: values at t = 0 and 1, then the derivatives' terms.
     w[0] = 0;
     w[1] = 2 * t3 - 3 * t2 + 1;
     w[2] = -2 * t3 + 3 * t2;
     w[3] = 0;
     const float d0 = t3 - 2 * t2 + t, d1 = t3 - t2;  // times the derivative at x0, at x1
-    if (i > 0) {  // derivative at x0: (f(x1) - f(x_{-1})) / (x1 - x_{-1}), per unit t
+    if (i > 0 && x1 > nodes[i - 1]) {  // derivative at x0: (f(x1) - f(x_{-1})) / (x1 - x_{-1})
         const float s = d0 * (x1 - x0) / (x1 - nodes[i - 1]);
         w[0] -= s;
         w[2] += s;
@@ -69,7 +71,7 @@ bool spline_weights(int size, const float* nodes, float x, int* offset, float w[
         w[1] -= d0;
         w[2] += d0;
     }
-    if (i + 2 < size) {  // derivative at x1: (f(x2) - f(x0)) / (x2 - x0), per unit t
+    if (i + 2 < size && nodes[i + 2] > x0) {  // derivative at x1: (f(x2) - f(x0)) / (x2 - x0)
         const float s = d1 * (x1 - x0) / (nodes[i + 2] - x0);
         w[1] -= s;
         w[3] += s;
@@ -101,8 +103,8 @@ int interpolated_series(const FourierTable& t, float mu_i, float mu_o, int chann
     int longest = 0;
     for (int b = 0; b < 4; ++b)
         for (int a = 0; a < 4; ++a) {
+            if (wi[a] == 0 || wo[b] == 0) continue;  // (the nodes beyond the table's ends)
             const float w = wi[a] * wo[b];
-            if (w == 0) continue;
             int m;
             const float* c = t.series(oi + a, oo + b, &m);
             longest = std::max(longest, m);
@@ -268,10 +270,14 @@ float sample_elevation(const FourierTable& t, float mu_o, float u, float* pdf) {
     const int i = last_below(n, [&](int k) { return at(t.cdf, k) <= u; });
     const float f0 = at(t.a0, i), f1 = at(t.a0, i + 1);
     const float x0 = t.mu[i], x1 = t.mu[i + 1], width = x1 - x0;
+    if (!(width > 0)) return 0;
     u = (u - at(t.cdf, i)) / width;
     // The segment's end derivatives (per unit t), by finite differences as the spline's.
-    const float d0 = i > 0 ? width * (f1 - at(t.a0, i - 1)) / (x1 - t.mu[i - 1]) : f1 - f0;
-    const float d1 = i + 2 < n ? width * (at(t.a0, i + 2) - f0) / (t.mu[i + 2] - x0) : f1 - f0;
+    const float d0 =
+        i > 0 && x1 > t.mu[i - 1] ? width * (f1 - at(t.a0, i - 1)) / (x1 - t.mu[i - 1]) : f1 - f0;
+    const float d1 = i + 2 < n && t.mu[i + 2] > x0
+                         ? width * (at(t.a0, i + 2) - f0) / (t.mu[i + 2] - x0)
+                         : f1 - f0;
     // The first guess: the same inversion for the linear interpolant.
     float s = f0 != f1 ? (f0 - std::sqrt(std::max(0.0f, f0 * f0 + 2 * u * (f1 - f0)))) / (f0 - f1)
                        : u / f0;

@@ -37,10 +37,12 @@ struct Table {
     int channels;
 };
 
-Table lambertian(int channels) {
+Table lambertian(int channels, std::vector<float> nodes = {}) {
     Table t;
     t.channels = channels;
-    for (int k = 0; k <= 8; ++k) t.mu.push_back(-1 + 0.25f * k);
+    t.mu = std::move(nodes);
+    if (t.mu.empty())
+        for (int k = 0; k <= 8; ++k) t.mu.push_back(-1 + 0.25f * k);
     const int n = static_cast<int>(t.mu.size());
     for (int o = 0; o < n; ++o) {
         float integral = 0;  // of a0 over mu_i up to node i (trapezoids: a0 is linear between)
@@ -120,6 +122,25 @@ TEST(Fourier, EvaluatesTheTablesSeries) {
                     EXPECT_NEAR(fourier_pdf(t, wo, wi), std::cos(th_i) / kPi, 2e-3f);
                 }
     }
+}
+
+// Published tables repeat the node 0 (as -0 and 0): values stay finite at the horizon and near
+// the reflector's elsewhere. (A repeat at a table's end, the interval of no width that a lookup
+// can land in, is fuzz/regressions/bsdf's input.)
+TEST(Fourier, RepeatedNodesGiveFiniteValues) {
+    TempDir tmp;
+    write_table(tmp.dir / "r.bsdf", lambertian(1, {-1, -0.5f, -0.0f, 0, 0.5f, 1}));
+    const FourierTable t = read_fourier_table((tmp.dir / "r.bsdf").string());
+    const Vec3 grazing(1, 0, 0), up = normalize(Vec3(0.3f, 0, 1));
+    for (const Vec3& wo : {grazing, up})
+        for (const Vec3& wi : {grazing, up, Vec3(0, 0.6f, 0.8f)}) {
+            EXPECT_TRUE(std::isfinite(fourier_f(t, wo, wi).r));
+            EXPECT_TRUE(std::isfinite(fourier_pdf(t, wo, wi)));
+        }
+    // (Within 1%: the spline in mu_o reads the horizon's node, where the table steps to 0.)
+    EXPECT_NEAR(fourier_f(t, up, Vec3(0, 0.6f, 0.8f)).r, kAlbedo / kPi, 0.01f * kAlbedo / kPi);
+    const FourierSample s = fourier_sample(t, up, 0.3f, 0.6f);
+    EXPECT_TRUE(std::isfinite(s.pdf) && std::isfinite(s.f.r));
 }
 
 // Directions drawn from the table: on wo's side, with the density they report (close to the
