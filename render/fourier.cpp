@@ -89,16 +89,22 @@ float cos_dphi(const Vec3& a, const Vec3& b) {
     return std::clamp((a.x * b.x + a.y * b.y) / std::sqrt(aa * bb), -1.0f, 1.0f);
 }
 
-// The series for elevations (mu_i, mu_o): the 4 x 4 nodes' coefficients weighted by the two
-// splines' weights, channel c at ak[c * m_max]. Returns the longest series' length, or -1 when
-// an elevation is outside the table.
-int interpolated_series(const FourierTable& t, float mu_i, float mu_o, int channels,
+// An elevation's place in the table: the spline's first node and its four weights.
+struct Spline {
+    int offset;
+    float w[4];
+};
+bool spline_at(const FourierTable& t, float mu, Spline& s) {
+    return spline_weights(t.n_mu, t.mu.data(), mu, &s.offset, s.w);
+}
+
+// The series for elevations (mu_i, mu_o), placed by si and so: the 4 x 4 nodes' coefficients
+// weighted by the two splines' weights, channel c at ak[c * m_max]. Returns the longest series'
+// length.
+int interpolated_series(const FourierTable& t, const Spline& si, const Spline& so, int channels,
                         std::vector<double>& ak) {
-    int oi, oo;
-    float wi[4], wo[4];
-    if (!spline_weights(t.n_mu, t.mu.data(), mu_i, &oi, wi) ||
-        !spline_weights(t.n_mu, t.mu.data(), mu_o, &oo, wo))
-        return -1;
+    const int oi = si.offset, oo = so.offset;
+    const float *wi = si.w, *wo = so.w;
     ak.assign(static_cast<std::size_t>(t.m_max) * channels, 0.0);
     int longest = 0;
     for (int b = 0; b < 4; ++b)
@@ -223,25 +229,25 @@ FourierTable read_fourier_table(const std::string& path) {
 Rgb fourier_f(const FourierTable& t, const Vec3& wo, const Vec3& wi) {
     const float mu_i = -wi.z, mu_o = wo.z;
     const double cos_phi = cos_dphi(-wi, wo);
+    Spline si, so;
+    if (!spline_at(t, mu_i, si) || !spline_at(t, mu_o, so)) return {};
     std::vector<double>& ak = scratch();
-    const int m = interpolated_series(t, mu_i, mu_o, t.channels, ak);
-    if (m < 0) return {};
+    const int m = interpolated_series(t, si, so, t.channels, ak);
     const double y = std::max(0.0, series_at(ak, 0, m, cos_phi));
     return fourier_value(t, ak, m, cos_phi, y, mu_i, mu_o);
 }
 
 float fourier_pdf(const FourierTable& t, const Vec3& wo, const Vec3& wi) {
     const float mu_i = -wi.z, mu_o = wo.z;
+    Spline si, so;
+    if (!spline_at(t, mu_i, si) || !spline_at(t, mu_o, so)) return 0;
     std::vector<double>& ak = scratch();
-    const int m = interpolated_series(t, mu_i, mu_o, 1, ak);
-    if (m < 0) return 0;
-    int oo;
-    float w[4];
-    spline_weights(t.n_mu, t.mu.data(), mu_o, &oo, w);
+    const int m = interpolated_series(t, si, so, 1, ak);
     // The luminance's integral over the sphere for wo: 2 pi times the spline of a0's integrals.
     double rho = 0;
     for (int o = 0; o < 4; ++o)
-        if (w[o] != 0) rho += w[o] * t.cdf[std::size_t(oo + o) * t.n_mu + t.n_mu - 1] * (2 * kPi);
+        if (so.w[o] != 0)
+            rho += so.w[o] * t.cdf[std::size_t(so.offset + o) * t.n_mu + t.n_mu - 1] * (2 * kPi);
     const double y = series_at(ak, 0, m, cos_dphi(-wi, wo));
     return rho > 0 && y > 0 ? float(y / rho) : 0.0f;
 }
@@ -251,12 +257,11 @@ namespace {
 // mu_i drawn from the spline of a0 over mu_i (its integral tabulated in cdf), interpolated in
 // mu_o: the spline segment by the interpolated integrals, then t within it by inverting the
 // segment's cubic integral (Newton's method, bisection where a step leaves the bracket). `pdf`:
-// the density in mu_i.
-float sample_elevation(const FourierTable& t, float mu_o, float u, float* pdf) {
+// the density in mu_i. `so` places mu_o.
+float sample_elevation(const FourierTable& t, const Spline& so, float u, float* pdf) {
     *pdf = 0;
-    int oo;
-    float w[4];
-    if (!spline_weights(t.n_mu, t.mu.data(), mu_o, &oo, w)) return 0;
+    const int oo = so.offset;
+    const float* w = so.w;
     const int n = t.n_mu;
     auto at = [&](const std::vector<float>& table, int i) {
         float v = 0;
@@ -342,11 +347,13 @@ double sample_azimuth(const std::vector<double>& a, int m, float u, float* pdf, 
 FourierSample fourier_sample(const FourierTable& t, const Vec3& wo, float u_phi, float u_mu) {
     FourierSample out;
     const float mu_o = wo.z;
+    Spline so, si;
+    if (!spline_at(t, mu_o, so)) return out;
     float pdf_mu;
-    const float mu_i = sample_elevation(t, mu_o, u_mu, &pdf_mu);
-    if (!(pdf_mu > 0)) return out;
+    const float mu_i = sample_elevation(t, so, u_mu, &pdf_mu);
+    if (!(pdf_mu > 0) || !spline_at(t, mu_i, si)) return out;
     std::vector<double>& ak = scratch();
-    const int m = interpolated_series(t, mu_i, mu_o, t.channels, ak);
+    const int m = interpolated_series(t, si, so, t.channels, ak);
     if (m <= 0 || !(ak[0] > 0)) return out;
     float pdf_phi, phi;
     const double y = sample_azimuth(ak, m, u_phi, &pdf_phi, &phi);

@@ -82,6 +82,7 @@ class Builder {
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;           // by resolved path
     std::map<std::string, std::shared_ptr<const FourierTable>> m_fourier;  // by resolved path
+    std::map<std::string, std::string> m_fourier_errors;  // files that could not be read: why
 
     // Files read ahead, in parallel, before the directives are built in order (read_ahead):
     // each is taken by the directive that reads it, which reports its error (or warning) where

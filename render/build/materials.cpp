@@ -163,13 +163,16 @@ void Builder::fourier_material(const pbrt::MaterialDesc& d, Material& m) {
     const std::string name = e.params.get_string("bsdffile", "");
     if (!file) return as_matte(e.loc, "material \"fourier\" has no \"string bsdffile\"");
     const std::string path = pbrt::resolve_path(m_desc.base_dir, file->loc, name);
+    // Each file is read once: a table, or the reason it could not be read.
+    if (const auto e = m_fourier_errors.find(path); e != m_fourier_errors.end())
+        return as_matte(file->loc, e->second);
     std::shared_ptr<const FourierTable>& table = m_fourier[path];
     if (!table) {
         try {
             table = std::make_shared<const FourierTable>(read_fourier_table(path));
         } catch (const RenderError& err) {
             m_fourier.erase(path);
-            return as_matte(file->loc, err.what());
+            return as_matte(file->loc, m_fourier_errors[path] = err.what());
         }
     }
     m.type = Material::Type::Fourier;
