@@ -56,10 +56,10 @@ std::span<const Directive> Parser::directives() {
         {"ObjectEnd", &Parser::object_end, B::Anywhere, S::Full},
         {"ObjectInstance", &Parser::object_instance, B::World, S::Full},
         {"SurfaceIntegrator", &Parser::integrator, B::Options, S::Alias},
+        {"MakeNamedMedium", &Parser::make_named_medium, B::Anywhere, S::Full},
+        {"MediumInterface", &Parser::medium_interface, B::Anywhere, S::Full},
         {"ActiveTransform", &Parser::active_transform, B::Anywhere, S::Ignored},
         {"TransformTimes", &Parser::transform_times, B::Anywhere, S::Ignored},
-        {"MakeNamedMedium", &Parser::make_named_medium, B::Anywhere, S::Ignored},
-        {"MediumInterface", &Parser::medium_interface, B::Anywhere, S::Ignored},
     };
     static_assert(well_formed(kTable));
     return kTable;
@@ -139,11 +139,13 @@ void Parser::world_begin(const Token&) {
     m_coord_systems["world"] = m_gs.ctm;
 }
 
-void Parser::world_end(const Token&) {
+void Parser::world_end(const Token& dir) {
     if (!m_stack.empty())
         throw SceneError(m_stack.back().loc,
                          std::string(m_stack.back().begin()) + " is not closed before WorldEnd");
     m_world_ended = true;
+    // pbrt-v3 makes the camera when the world ends, in the medium outside the interface then.
+    m_desc.camera_medium = medium_index(m_gs.outside_medium, dir.loc);
 }
 
 void Parser::attribute_begin(const Token& dir) {
@@ -267,6 +269,8 @@ void Parser::shape(const Token& dir) {
     s.material = m_gs.material;
     s.area_light = m_gs.area_light;
     s.scope = m_names.scope_for(s.entity.params);
+    s.medium_inside = medium_index(m_gs.inside_medium, dir.loc);
+    s.medium_outside = medium_index(m_gs.outside_medium, dir.loc);
     if (m_in_object && s.area_light >= 0) {
         warn(dir.loc,
              "this shape is inside an object definition: pbrt-v3 does not make instanced "
@@ -363,7 +367,7 @@ void Parser::object_instance(const Token& dir) {
     m_desc.instances.push_back({it->second, m_gs.ctm, dir.loc});
 }
 
-// Directives read and dropped: cmam renders no motion blur and no participating media.
+// Directives read and dropped: cmam renders no motion blur.
 
 void Parser::active_transform(const Token& dir) {
     Token t = expect_any(dir, "All, StartTime or EndTime");
@@ -375,16 +379,37 @@ void Parser::transform_times(const Token& dir) {
     warn(dir.loc, "TransformTimes ignored: cmam renders no motion blur");
 }
 
+// Participating media. A medium is named globally (AttributeEnd does not scope it) and its
+// "type" parameter says what it is; the builder reads the rest. MediumInterface names the media
+// inside and outside the shapes that follow (one name: both), looked up at each shape, as pbrt-v3
+// does; "" is vacuum.
+
 void Parser::make_named_medium(const Token& dir) {
-    expect_string(dir, "a quoted medium name");
-    param_list();
-    warn(dir.loc, "MakeNamedMedium ignored: cmam renders no participating media");
+    MediumDesc m;
+    m.name = expect_string(dir, "a quoted medium name");
+    m.entity.params = param_list();
+    m.entity.loc = dir.loc;
+    m.entity.given = true;
+    m.entity.type = m.entity.params.get_string("type", "");
+    m.world_from_medium = m_gs.ctm;
+    m_media[m.name] = static_cast<int>(m_desc.media.size());
+    m_desc.media.push_back(std::move(m));
 }
 
 void Parser::medium_interface(const Token& dir) {
-    expect_string(dir, "a quoted medium name");
-    if (peek() && peek()->quoted) next();
-    warn(dir.loc, "MediumInterface ignored: cmam renders no participating media");
+    m_gs.inside_medium = expect_string(dir, "a quoted medium name");
+    m_gs.outside_medium = peek() && peek()->quoted ? next()->text : m_gs.inside_medium;
+    if (m_desc.medium_interface.line == 0) m_desc.medium_interface = dir.loc;
+}
+
+// The medium named `name` as defined so far (-1 for "" and, with a warning at `loc` the first
+// time, for a name not defined: pbrt-v3 reports it and takes vacuum).
+int Parser::medium_index(const std::string& name, const FileLoc& loc) {
+    if (name.empty()) return -1;
+    if (auto it = m_media.find(name); it != m_media.end()) return it->second;
+    if (m_undefined_media.insert(name).second)
+        warn(loc, "medium " + in_quotes(name) + " is not defined; vacuum is used there");
+    return -1;
 }
 
 // The named textures and materials.

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <string_view>
@@ -25,6 +26,8 @@ struct GraphicsState {
     bool reverse_orientation = false;
     int material = -1;
     int area_light = -1;  // the AreaLightSource in effect (index into SceneDesc::area_lights)
+    // The MediumInterface in effect: names, looked up when a shape uses them (as pbrt-v3 does).
+    std::string inside_medium, outside_medium;
 };
 
 // The named textures and materials visible at the current point of the file: one table each,
@@ -86,7 +89,7 @@ enum class Block {
 enum class Support {
     Full,     // read as pbrt-v3 reads it; listed when an unknown directive is reported
     Alias,    // another name of a listed directive (pbrt-v2's SurfaceIntegrator)
-    Ignored,  // read and dropped with a warning (motion blur, participating media)
+    Ignored,  // read and dropped with a warning (motion blur)
 };
 
 struct Directive {
@@ -120,7 +123,10 @@ class Parser {
     NamedTables m_names;
     std::vector<StackEntry> m_stack;
     std::map<std::string, Mat4> m_coord_systems;
-    std::map<std::string, int> m_objects;  // name -> index in m_desc.objects (the latest)
+    std::map<std::string, int> m_objects;     // name -> index in m_desc.objects (the latest)
+    std::map<std::string, int> m_media;       // name -> index in m_desc.media (the latest)
+    std::set<std::string> m_undefined_media;  // names warned about as undefined (once each)
+    int medium_index(const std::string& name, const FileLoc& loc);
     bool m_world_begun = false, m_world_ended = false;
     bool m_in_object = false;
     std::string m_object_name;

@@ -53,6 +53,17 @@ struct ShapeDesc {
     int material = -1;    // index into SceneDesc::materials; -1 is the default matte
     int area_light = -1;  // index into SceneDesc::area_lights; -1: the shape does not emit
     TextureScope scope;   // the textures its parameters name ("alpha"), as visible there
+    // The MediumInterface in effect: the media inside and outside the surface (indices into
+    // SceneDesc::media; -1: none, i.e. vacuum).
+    int medium_inside = -1, medium_outside = -1;
+};
+
+/// A MakeNamedMedium: its name, its "type" ("homogeneous" or "heterogeneous"; entity.type) and
+/// parameters, and the transform current at the directive (a grid's placement).
+struct MediumDesc {
+    std::string name;
+    Entity entity;
+    Mat4 world_from_medium;
 };
 
 /// An object (ObjectBegin ... ObjectEnd): its shapes, each placed by the transform current at
@@ -85,7 +96,12 @@ struct SceneDesc {
     std::vector<ObjectDesc> objects;
     std::vector<InstanceDesc> instances;
     std::vector<LightDesc> lights;
-    std::vector<Entity> area_lights;   // AreaLightSource directives (each shape in scope emits)
+    std::vector<Entity> area_lights;  // AreaLightSource directives (each shape in scope emits)
+    std::vector<MediumDesc> media;    // MakeNamedMedium directives, in file order
+    // The camera's medium: as in pbrt-v3, the outside medium of the MediumInterface in effect
+    // when the world ends (index into media; -1: none).
+    int camera_medium = -1;
+    FileLoc medium_interface;          // the first MediumInterface directive (line 0: none)
     std::vector<std::string> sources;  // every scene file read (the main file, then Includes)
     std::string base_dir;  // directory of the main file, which relative paths resolve against
                            // (pbrt-v3), Included files' too (resolve_path())

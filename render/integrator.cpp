@@ -182,11 +182,10 @@ struct Tracer {
             return std::max(0.0f, dot(wi, ng)) * kInvPi;
         return mixture_pdf(ng, ns, uniform_share(ng, ns), wi);
     }
-    float area_pdf(const Light& light, const SurfaceHit& h, const Vec3& wi,
-                   const SurfaceHit& y) const {
+    float area_pdf(const Light& light, const Vec3& p, const Vec3& wi, const SurfaceHit& y) const {
         const Primitive& prim = *scene.primitives[static_cast<std::size_t>(light.prim)];
-        if (const std::optional<float> cone = prim.cone_pdf(h.p)) return *cone;
-        const Vec3 d = y.p - h.p;
+        if (const std::optional<float> cone = prim.cone_pdf(p)) return *cone;
+        const Vec3 d = y.p - p;
         const float cos_l = std::abs(dot(y.ng, wi));
         return cos_l > 0 ? prim.area_pdf(y.p) * dot(d, d) / cos_l : 0.0f;
     }
@@ -319,7 +318,18 @@ struct Tracer {
     Rgb direct(const SurfaceHit& h, const Bsdf& bsdf, const Vec3& wo, const Bsdf::Outgoing& o) {
         const std::size_t first = shadow.size();
         shadow_rays(h, bsdf, wo, o, shadow);
-        for (std::size_t i = first; i < shadow.size(); ++i) trace_shadow_ray(scene, shadow[i]);
+        for (std::size_t i = first; i < shadow.size(); ++i) {
+            ShadowRay& r = shadow[i];
+            if (!scene.volumetric || !r.traced) {
+                trace_shadow_ray(scene, r);
+                continue;
+            }
+            // Through media: the light arrives attenuated (and only through surfaces of
+            // material "none").
+            const Rgb tr = transmittance(r.org, r.dir, r.tmax, medium_toward(h, r.dir));
+            r.contribution = r.contribution * tr;
+            r.clear = !tr.is_black();
+        }
         Rgb L = direct_from(shadow.data() + first, shadow.size() - first);
         shadow.resize(first);
         if (scene.path_tracing) L += direct_by_bsdf(h, bsdf, wo, o);
@@ -349,8 +359,13 @@ struct Tracer {
             const Bsdf::Sample s = bsdf.sample(o, u0, u1, u2);
             if (s.pdf == 0 || s.f.is_black() || !finite(s.wi)) continue;
             if (counts) ++counts->shadow;
-            const std::optional<SurfaceHit> y = scene.intersect(
-                offset_origin(h, s.wi), s.wi, 0, std::numeric_limits<float>::infinity(), false);
+            Rgb tr(1);
+            const std::optional<SurfaceHit> y =
+                scene.volumetric
+                    ? intersect_tr(offset_origin(h, s.wi), s.wi, medium_toward(h, s.wi), tr)
+                    : scene.intersect(offset_origin(h, s.wi), s.wi, 0,
+                                      std::numeric_limits<float>::infinity(), false);
+            if (tr.is_black()) continue;
             Rgb le;
             float p_light;
             if (light.type == Light::Type::Infinite) {
@@ -360,11 +375,181 @@ struct Tracer {
             } else {
                 if (!y || y->prim->area_light != static_cast<int>(l)) continue;
                 le = emitted(*y, -s.wi);
-                p_light = area_pdf(light, h, s.wi, *y);
+                p_light = area_pdf(light, h.p, s.wi, *y);
             }
             if (le.is_black()) continue;
-            L += s.f * le * (absdot(s.wi, h.ns) / s.pdf * power_heuristic(s.pdf, p_light));
+            L += s.f * le * tr * (absdot(s.wi, h.ns) / s.pdf * power_heuristic(s.pdf, p_light));
         }
+        return L;
+    }
+
+    // --- participating media (volpath; algorithms.md §19) ---
+
+    // The medium of the ray being traced (li), -1 for vacuum; a child ray's is set around its li.
+    int medium = -1;
+    float uniform() { return rng.next_float(); }
+
+    // The medium a ray leaving h along w is in: the side of h's boundary it leaves by, or where
+    // h is no boundary, the medium of the ray that found h (pbrt-v3).
+    int medium_toward(const SurfaceHit& h, const Vec3& w) const {
+        if (!h.prim || !h.prim->medium_boundary()) return medium;
+        return dot(w, h.ng) > 0 ? h.prim->medium_outside : h.prim->medium_inside;
+    }
+    static bool passes_light(const Scene& sc, const SurfaceHit& y) {
+        const Material& m =
+            y.prim->material >= 0 ? sc.materials[y.prim->material] : sc.default_material;
+        return m.type == Material::Type::None;
+    }
+
+    // The transmittance from org along dir over (0, tmax), starting in medium `med`: the media's
+    // along the way, through surfaces of material "none" (which change the medium where they
+    // bound one); 0 when any other surface is in the way (pbrt-v3's VisibilityTester::Tr).
+    Rgb transmittance(Vec3 org, const Vec3& dir, float tmax, int med) {
+        Rgb tr(1);
+        for (int guard = 0; guard < 256; ++guard) {
+            const std::optional<SurfaceHit> y = scene.intersect(org, dir, 0, tmax, false);
+            if (med >= 0)
+                tr = tr * medium_transmittance(scene.media[static_cast<std::size_t>(med)], org, dir,
+                                               y ? y->t : tmax, [this] { return uniform(); });
+            if (!y || tr.is_black()) return tr;
+            if (!passes_light(scene, *y)) return Rgb();
+            if (y->prim->medium_boundary())
+                med = dot(dir, y->ng) > 0 ? y->prim->medium_outside : y->prim->medium_inside;
+            const Vec3 next = offset_origin(*y, dir);
+            tmax -= dot(next - org, dir);
+            org = next;
+            if (!(tmax > 0)) return tr;
+        }
+        return Rgb();
+    }
+
+    // The first surface along org + t dir (t > 0) that is not of material "none", starting in
+    // medium `med`, with the transmittance up to it (or to infinity) multiplied into tr
+    // (pbrt-v3's Scene::IntersectTr).
+    std::optional<SurfaceHit> intersect_tr(Vec3 org, const Vec3& dir, int med, Rgb& tr) {
+        const float inf = std::numeric_limits<float>::infinity();
+        for (int guard = 0; guard < 256; ++guard) {
+            std::optional<SurfaceHit> y = scene.intersect(org, dir, 0, inf, false);
+            if (med >= 0)
+                tr = tr * medium_transmittance(scene.media[static_cast<std::size_t>(med)], org, dir,
+                                               y ? y->t : inf, [this] { return uniform(); });
+            if (!y || tr.is_black() || !passes_light(scene, *y)) return y;
+            if (y->prim->medium_boundary())
+                med = dot(dir, y->ng) > 0 ? y->prim->medium_outside : y->prim->medium_inside;
+            org = offset_origin(*y, dir);
+        }
+        tr = Rgb();
+        return std::nullopt;
+    }
+
+    // A light sample at a point p in a medium (no surface, so an infinite light without a map
+    // is sampled uniformly over the sphere).
+    std::optional<LightSample> sample_light_in_medium(const Light& light, const Vec3& p) {
+        if (light.type == Light::Type::Infinite && !light.env) {
+            float u1, u2;
+            next2(u1, u2);
+            const float z = 1 - 2 * u1, r = std::sqrt(std::max(0.0f, 1 - z * z)),
+                        phi = 2 * kPi * u2;
+            LightSample ls;
+            ls.wi = Vec3(r * std::cos(phi), r * std::sin(phi), z);
+            ls.pdf = 1 / (4 * kPi);
+            ls.li = light.intensity;
+            return ls;
+        }
+        SurfaceHit at;  // (the other lights read only the point)
+        at.p = p;
+        return sample_light(light, at, Vec3());
+    }
+
+    // Light scattered at a point p of medium m towards wo (pbrt-v3's EstimateDirect for a medium
+    // interaction, over every light): each light's samples, attenuated on their way, and for
+    // area and infinite lights a direction drawn from the phase function too, the two weighted
+    // by the power heuristic.
+    Rgb direct_in_medium(const Vec3& p, const Vec3& wo, const Medium& m) {
+        Rgb L{};
+        for (std::size_t l = 0; l < scene.lights.size(); ++l) {
+            const Light& light = scene.lights[l];
+            const bool mis = light.type == Light::Type::Area || light.type == Light::Type::Infinite;
+            Rgb sum{};
+            for (int k = 0; k < light.samples; ++k) {
+                const std::optional<LightSample> ls = sample_light_in_medium(light, p);
+                if (!ls || ls->li.is_black() || ls->pdf == 0) continue;
+                const float f = hg_phase(dot(wo, ls->wi), m.g);
+                if (f == 0) continue;
+                if (counts) ++counts->shadow;
+                float tmax = ls->dist * (1 - 1e-4f);
+                Vec3 wi = ls->wi;
+                if (light.type == Light::Type::Area) {
+                    const Vec3 d = ls->target - p;
+                    const float len = length(d);
+                    wi = d / len;
+                    tmax = len - ray_epsilon(ls->target);
+                }
+                if (!(tmax > 0)) continue;
+                const Rgb tr = transmittance(p, wi, tmax, medium);
+                if (tr.is_black()) continue;
+                Rgb c = ls->li * tr * (f / ls->pdf);
+                if (mis) c = c * power_heuristic(ls->pdf, f);
+                sum += c;
+            }
+            L += light.samples == 1 ? sum : sum / float(light.samples);
+            if (!mis) continue;
+            // The phase function's sample (its value over its density is 1).
+            float u1, u2;
+            next2(u1, u2);
+            Vec3 wi;
+            const float pf = hg_sample(wo, m.g, u1, u2, wi);
+            if (!(pf > 0) || !finite(wi)) continue;
+            if (counts) ++counts->shadow;
+            Rgb tr(1);
+            const std::optional<SurfaceHit> y = intersect_tr(p, wi, medium, tr);
+            if (tr.is_black()) continue;
+            Rgb le;
+            float p_light;
+            if (light.type == Light::Type::Infinite) {
+                if (y) continue;
+                le = light.env ? light.intensity * light.env->radiance(wi) : light.intensity;
+                p_light = light.env ? light.env->pdf(wi) : 1 / (4 * kPi);
+            } else {
+                if (!y || y->prim->area_light != static_cast<int>(l)) continue;
+                le = emitted(*y, -wi);
+                p_light = area_pdf(light, p, wi, *y);
+            }
+            if (le.is_black()) continue;
+            L += le * tr * power_heuristic(pf, p_light);
+        }
+        return L;
+    }
+
+    // A ray scattered at p in medium m (it came along -wo): the light there, and with depth to
+    // spare one more ray drawn from the phase function, continued by Russian roulette as
+    // bounce() continues a surface's. What it meets lights the path only through its own light
+    // samples (after_diffuse).
+    Rgb scatter(const Vec3& p, const Vec3& wo, const Medium& m, int depth) {
+        Rgb L = direct_in_medium(p, wo, m);
+        if (depth + 1 >= scene.max_depth) return L;
+        float u1, u2;
+        next2(u1, u2);
+        Vec3 wi;
+        if (!(hg_sample(wo, m.g, u1, u2, wi) > 0) || !finite(wi)) return L;
+        Rgb weight(1);
+        const float mx = std::max({beta.r, beta.g, beta.b});
+        if (depth > 3 && mx < scene.rr_threshold) {
+            const float q = std::max(0.05f, 1 - mx);
+            if (next() < q) return L;
+            weight = weight / (1 - q);
+        }
+        if (counts) ++counts->secondary;
+        const Ray next_ray{p, wi, RayFootprint{}};
+        CmamRowState* const caches = cmam;
+        const Rgb saved = beta;
+        const int saved_medium = medium;
+        cmam = nullptr;
+        beta = beta * weight;
+        L += weight * li(next_ray, depth + 1, nullptr, -1, true);
+        beta = saved;
+        medium = saved_medium;
+        cmam = caches;
         return L;
     }
 
@@ -463,6 +648,7 @@ struct Tracer {
         // The ray, or past surfaces of material "none" its continuation (not copied otherwise).
         const Ray* cur = &camera_or_child;
         std::unique_ptr<Ray> through;                // allocated only then: most rays need none
+        Rgb through_media(1);                        // the media's weights on the way (volpath)
         for (int guard = 0; guard < 256; ++guard) {  // passes through material "none"
             const Ray& ray = *cur;
             // The hit found already, or traced (each initialised in place, not copied).
@@ -472,7 +658,21 @@ struct Tracer {
                                         false);
             std::optional<SurfaceHit>& hit = first ? *first : traced;
             first = nullptr;
-            if (!hit) return after_diffuse ? Rgb() : escaped(ray.dir, ray.fp.diff);
+            if (scene.volumetric && medium >= 0) {
+                // The ray's medium, up to the hit: it scatters there, or what lies beyond is
+                // weighted by the medium's sample (its transmittance over the sample's density).
+                const Medium& m = scene.media[static_cast<std::size_t>(medium)];
+                const MediumSample ms = sample_medium(
+                    m, ray.org, ray.dir, hit ? hit->t : std::numeric_limits<float>::infinity(),
+                    [this] { return uniform(); });
+                if (ms.weight.is_black() || !std::isfinite(ms.weight.r + ms.weight.g + ms.weight.b))
+                    return {};
+                through_media = through_media * ms.weight;
+                beta = beta * ms.weight;
+                if (ms.scattered)
+                    return through_media * scatter(ray.org + ms.t * ray.dir, -ray.dir, m, depth);
+            }
+            if (!hit) return after_diffuse ? Rgb() : through_media * escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m =
                 h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
@@ -512,6 +712,7 @@ struct Tracer {
                 // Continue through: the footprint state moves to the hit point.
                 RayFootprint fp = footprints.passed_through(ray.fp, at, h);
                 const Vec3 org = offset_origin(h, ray.dir), dir = ray.dir;
+                medium = medium_toward(h, dir);
                 if (!through) through = std::make_unique<Ray>();
                 *through = Ray{org, dir, fp};
                 cur = through.get();
@@ -549,7 +750,7 @@ struct Tracer {
                     L += continue_path(ray, h, at, bsdf, wo, o, depth);
                 }
             }
-            return L;
+            return scene.volumetric ? through_media * L : L;
         }
         return {};
     }
@@ -605,10 +806,13 @@ struct Tracer {
         const Ray next{offset_origin(h, s.wi), s.wi, RayFootprint{}};
         CmamRowState* const caches = cmam;
         const Rgb saved = beta;
+        const int saved_medium = medium;
         cmam = nullptr;
         beta = beta * weight;
+        medium = medium_toward(h, s.wi);
         const Rgb L = weight * li(next, depth + 1, nullptr, -1, true);
         beta = saved;
+        medium = saved_medium;
         cmam = caches;
         return L;
     }
@@ -641,9 +845,12 @@ struct Tracer {
         next.org = offset_origin(h, next.dir);
         if (parent < 0) {
             const Rgb saved = beta;
+            const int saved_medium = medium;
             beta = beta * weight;
+            medium = medium_toward(h, next.dir);
             const Rgb L = weight * li(next, depth + 1);
             beta = saved;
+            medium = saved_medium;
             return L;
         }
         (*deferred_hits)[static_cast<std::size_t>(parent)].child[lobe] = {true, weight, -1};
@@ -771,6 +978,7 @@ Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Ve
     std::vector<ShadowRay> shadow;
     Tracer t{scene, footprints, counts, rng, cmam, shadow};
     t.aov = aov;
+    t.medium = scene.volumetric ? scene.camera_medium : -1;
     if (counts) ++counts->camera;
     return t.li({org, dir, fp}, 0);
 }
@@ -828,6 +1036,7 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
             t.strata_x = std::max(1u, p.samples_x);
         }
         t.aov = p.aov;
+        t.medium = scene.volumetric ? scene.camera_medium : -1;
         t.deferred_hits = &deferred;
         t.made_rays = made + 2 * k;
         t.made_count = &children;

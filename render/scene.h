@@ -22,6 +22,7 @@
 #include "render/footprint/method.h"
 #include "render/huge_pages.h"
 #include "render/math.h"
+#include "render/medium.h"
 #include "render/pixel_filter.h"
 
 namespace cmam::render {
@@ -251,6 +252,11 @@ struct Primitive {
     // Area light ("AreaLightSource" in the shape's scope): its index in Scene::lights, and for
     // triangles the cumulative areas that pick one by area.
     int area_light = -1;
+    // Its MediumInterface: the media inside and outside the surface (indices into
+    // Scene::media; -1: vacuum). Only where they differ is it a boundary between media; a ray
+    // crossing any other surface stays in its medium (pbrt-v3).
+    int medium_inside = -1, medium_outside = -1;
+    bool medium_boundary() const { return medium_inside != medium_outside; }
     std::vector<double> area_cdf;
 
     // Triangles: pbrt-v3's cut-out masks, float inputs; where one is 0 the surface is not there
@@ -397,6 +403,11 @@ class Scene {
     // (algorithms.md §18), continued past three bounces by Russian roulette below rr_threshold.
     bool path_tracing = false;
     float rr_threshold = 1;
+    // Participating media (pbrt-v3's volpath, bdpt and mlt integrators render them; the others
+    // do not): `volumetric` when the integrator does and the scene has some.
+    std::vector<Medium> media;
+    int camera_medium = -1;  // the medium the camera is in (-1: vacuum)
+    bool volumetric = false;
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;

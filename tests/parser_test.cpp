@@ -403,10 +403,10 @@ TEST(Parser, TheUnknownDirectiveErrorListsTheDirectivesItReads) {
         {"ObjectEnd", true, "", "ObjectBegin \"o\" ObjectEnd"},
         {"ObjectInstance", true, "", "ObjectBegin \"o\" ObjectEnd ObjectInstance \"o\""},
         {"SurfaceIntegrator", false, "SurfaceIntegrator \"whitted\"", ""},
+        {"MakeNamedMedium", true, "", "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\""},
+        {"MediumInterface", true, "", "MediumInterface \"fog\" \"\""},
         {"ActiveTransform", false, "", "ActiveTransform All"},
         {"TransformTimes", false, "", "TransformTimes 0 1"},
-        {"MakeNamedMedium", false, "", "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\""},
-        {"MediumInterface", false, "", "MediumInterface \"fog\" \"\""},
     };
     std::string listed;
     for (const Use& u : uses) {
@@ -424,5 +424,6 @@ TEST(Parser, TheUnknownDirectiveErrorListsTheDirectivesItReads) {
         "ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, "
         "TransformBegin, TransformEnd, Include, MakeNamedMaterial, NamedMaterial, Material, "
         "Texture, Shape, LightSource, AreaLightSource, Camera, Film, Sampler, PixelFilter, "
-        "Integrator, Accelerator, ObjectBegin, ObjectEnd, ObjectInstance)");
+        "Integrator, Accelerator, ObjectBegin, ObjectEnd, ObjectInstance, MakeNamedMedium, "
+        "MediumInterface)");
 }

@@ -43,6 +43,7 @@ std::unique_ptr<Scene> Builder::run() {
     attempt([&] { sampler(); });
     attempt([&] { filter(); });
     attempt([&] { integrator(); });
+    attempt([&] { media(); });
     attempt([&] {
         if (m_desc.accelerator.given)
             m_desc.accelerator.params.check_unused("Accelerator", m_warn,

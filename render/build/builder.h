@@ -160,6 +160,11 @@ class Builder {
     void filter();
     void integrator();
 
+    // --- participating media (media.cpp) -------------------------------------------------
+    void media();
+    int medium(int desc_index) const;  // the scene's medium of a MakeNamedMedium (-1: vacuum)
+    std::vector<int> m_medium_index;   // per MakeNamedMedium: its index in Scene::media, or -1
+
     // --- textures (textures.cpp) ----------------------------------------------------------
     TexInput spectrum_input(const Entity& e, const TextureScope& scope, const std::string& name,
                             Rgb def);

@@ -359,17 +359,18 @@ void Builder::integrator() {
     // times ("all", its default) or one light chosen per point ("one": here each light
     // once, the same expectation).
     const bool direct = e.type == "directlighting";
-    // pbrt-v3's path integrator; its other global-illumination integrators compute the same
-    // light transport (without media, which cmam does not render), so they are path traced too.
+    // pbrt-v3's path integrator, and volpath, which adds participating media (media()); its
+    // other global-illumination integrators compute the same light transport (bdpt and mlt with
+    // media, sppm without), so they are path traced too.
     const bool path = e.type == "path" || e.type == "volpath" || e.type == "bdpt" ||
                       e.type == "mlt" || e.type == "sppm";
     if (path) {
         m_scene->path_tracing = true;
         m_scene->rr_threshold = static_cast<float>(finite_float(e, "rrthreshold", 1));
-        if (e.type != "path")
-            warn(e.loc, "Integrator " + in_quotes(e.type) +
-                            " is rendered as \"path\" (the same light transport, sampled by a "
-                            "path tracer)");
+        if (e.type != "path" && e.type != "volpath")
+            warn(e.loc, "Integrator " + in_quotes(e.type) + " is rendered as " +
+                            (e.type == "sppm" ? "\"path\"" : "\"volpath\"") +
+                            " (the same light transport, sampled by a path tracer)");
     } else if (direct) {
         const std::string strategy = e.params.get_string("strategy", "all");
         if (strategy != "all" && strategy != "one")
@@ -387,7 +388,7 @@ void Builder::integrator() {
                              std::to_string(kMaxDepthLimit) + ", which is used instead");
     }
     e.params.check_unused("Integrator " + in_quotes(e.type), m_warn,
-                          e.type == "whitted" || direct || e.type == "path"
+                          e.type == "whitted" || direct || e.type == "path" || e.type == "volpath"
                               ? std::vector<std::string>{"pixelbounds", "lightsamplestrategy"}
                               : names_of(e));
 }

@@ -328,6 +328,8 @@ void Builder::shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primit
     const Entity& e = s.entity;
     auto prim = std::make_unique<Primitive>();
     prim->material = s.material;
+    prim->medium_inside = medium(s.medium_inside);
+    prim->medium_outside = medium(s.medium_outside);
     finite_transform(s.world_from_object, e.loc, "shape");
     prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
     if (e.type == "curve") {

@@ -1,0 +1,166 @@
+// render — participating media, as pbrt-v3's volpath integrator renders them: a homogeneous
+// medium and a grid of densities (pbrt-v3's "heterogeneous"), each scattering by the
+// Henyey–Greenstein phase function. Distances are sampled and transmittances estimated along a
+// ray with unit direction, in world units (docs/algorithms.md §19).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "render/math.h"
+
+namespace cmam::render {
+
+/// pbrt-v3's Henyey–Greenstein phase function for directions wo and wi that both point away
+/// from the scattering point (so forward scattering, g > 0, favours wi = -wo): its value, which
+/// is also the density hg_sample draws wi with. |g| < 1.
+inline float hg_phase(float cos_wo_wi, float g) {
+    const float denom = 1 + g * g + 2 * g * cos_wo_wi;
+    return (1 - g * g) / (4 * kPi * denom * std::sqrt(std::max(denom, 1e-30f)));
+}
+
+/// A direction wi drawn from hg_phase(dot(wo, wi), g) for uniform u1, u2; returns its density.
+float hg_sample(const Vec3& wo, float g, float u1, float u2, Vec3& wi);
+
+/// A participating medium. Its coefficients are per unit of world distance, "scale" applied.
+struct Medium {
+    enum class Type { Homogeneous, Grid };
+    Type type = Type::Homogeneous;
+    Rgb sigma_a, sigma_s, sigma_t;  // absorption, scattering, their sum
+    float g = 0;                    // Henyey–Greenstein asymmetry
+
+    // Grid: nx * ny * nz densities, x fastest, over the unit cube of grid space, which
+    // grid_from_world maps the world into; the density at a point is their trilinear
+    // interpolation (a sample at each cell's centre, 0 beyond the grid). Its attenuation is
+    // sigma_t's first channel times the density (pbrt-v3 requires it equal in every channel).
+    int nx = 1, ny = 1, nz = 1;
+    std::vector<float> density;
+    float grid_sigma_t = 0, inv_max_density = 0;
+    std::array<double, 12> grid_from_world{};
+
+    /// The grid's density at p in grid space.
+    float density_at(const Vec3& p) const;
+};
+
+/// Where a ray scatters in a medium, if it does before tmax, and the weight that sampling gives
+/// what lies beyond (pbrt-v3's Medium::Sample: transmittance over its density, times sigma_s
+/// at a scattering point).
+struct MediumSample {
+    Rgb weight{1, 1, 1};
+    float t = 0;
+    bool scattered = false;
+};
+
+namespace media_detail {
+
+// The part [t0, t1] of [0, tmax] in which the ray o + t d (grid space) lies in the unit cube;
+// false when there is none.
+inline bool unit_cube_span(const Vec3& o, const Vec3& d, float tmax, float& t0, float& t1) {
+    t0 = 0;
+    t1 = tmax;
+    for (int a = 0; a < 3; ++a) {
+        const float inv = 1 / d[a];
+        float n = (0 - o[a]) * inv, f = (1 - o[a]) * inv;
+        if (n > f) std::swap(n, f);
+        if (std::isnan(n) || std::isnan(f)) {  // parallel to the slab: inside it or never
+            if (o[a] < 0 || o[a] > 1) return false;
+            continue;
+        }
+        t0 = std::max(t0, n);
+        t1 = std::min(t1, f);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+inline Vec3 to_grid_point(const std::array<double, 12>& m, const Vec3& p) {
+    return Vec3(float(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]),
+                float(m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7]),
+                float(m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]));
+}
+inline Vec3 to_grid_vector(const std::array<double, 12>& m, const Vec3& v) {
+    return Vec3(float(m[0] * v.x + m[1] * v.y + m[2] * v.z),
+                float(m[4] * v.x + m[5] * v.y + m[6] * v.z),
+                float(m[8] * v.x + m[9] * v.y + m[10] * v.z));
+}
+
+}  // namespace media_detail
+
+/// Samples where the ray o + t d (d a unit vector) scatters in m before tmax (which may be
+/// infinite), drawing uniform numbers from u(): a homogeneous medium picks a channel and an
+/// exponential distance in it (the density is the channels' mean), a grid tracks by its
+/// largest density (delta tracking).
+template <class Uniform>
+MediumSample sample_medium(const Medium& m, const Vec3& o, const Vec3& d, float tmax, Uniform&& u) {
+    MediumSample s;
+    if (m.type == Medium::Type::Homogeneous) {
+        const float u0 = u(), u1 = u();
+        const int c = std::min(int(u0 * 3), 2);
+        const float st = c == 0 ? m.sigma_t.r : c == 1 ? m.sigma_t.g : m.sigma_t.b;
+        const float dist = st > 0 ? -std::log(1 - u1) / st : std::numeric_limits<float>::infinity();
+        const float t = std::min(dist, tmax);
+        s.scattered = t < tmax;
+        // (t at most the largest float: an infinite distance gives 0 where sigma_t > 0, and 1,
+        // not NaN, where it is 0.)
+        const float tt = std::min(t, std::numeric_limits<float>::max());
+        const Rgb tr(std::exp(-m.sigma_t.r * tt), std::exp(-m.sigma_t.g * tt),
+                     std::exp(-m.sigma_t.b * tt));
+        const Rgb dens = s.scattered ? m.sigma_t * tr : tr;
+        float pdf = (dens.r + dens.g + dens.b) / 3;
+        if (pdf == 0) pdf = 1;
+        s.weight = s.scattered ? tr * m.sigma_s / pdf : tr / pdf;
+        s.t = t;
+        return s;
+    }
+    if (!(m.grid_sigma_t > 0 && m.inv_max_density > 0)) return s;
+    const Vec3 og = media_detail::to_grid_point(m.grid_from_world, o),
+               dg = media_detail::to_grid_vector(m.grid_from_world, d);
+    float t0, t1;
+    if (!media_detail::unit_cube_span(og, dg, tmax, t0, t1)) return s;
+    const float step = m.inv_max_density / m.grid_sigma_t;
+    for (float t = t0;;) {
+        t -= std::log(1 - u()) * step;
+        if (!(t < t1)) break;
+        if (m.density_at(og + t * dg) * m.inv_max_density > u()) {
+            s.scattered = true;
+            s.t = t;
+            s.weight = m.sigma_s / m.grid_sigma_t;
+            return s;
+        }
+    }
+    return s;
+}
+
+/// The transmittance of m along o + t d, 0 <= t < tmax (d a unit vector): exact in a
+/// homogeneous medium, estimated without bias in a grid (ratio tracking, with Russian roulette
+/// once it falls below 0.1, as pbrt-v3).
+template <class Uniform>
+Rgb medium_transmittance(const Medium& m, const Vec3& o, const Vec3& d, float tmax, Uniform&& u) {
+    if (m.type == Medium::Type::Homogeneous) {
+        const float tt = std::min(tmax, std::numeric_limits<float>::max());
+        return Rgb(std::exp(-m.sigma_t.r * tt), std::exp(-m.sigma_t.g * tt),
+                   std::exp(-m.sigma_t.b * tt));
+    }
+    if (!(m.grid_sigma_t > 0 && m.inv_max_density > 0)) return Rgb(1);
+    const Vec3 og = media_detail::to_grid_point(m.grid_from_world, o),
+               dg = media_detail::to_grid_vector(m.grid_from_world, d);
+    float t0, t1;
+    if (!media_detail::unit_cube_span(og, dg, tmax, t0, t1)) return Rgb(1);
+    const float step = m.inv_max_density / m.grid_sigma_t;
+    float tr = 1;
+    for (float t = t0;;) {
+        t -= std::log(1 - u()) * step;
+        if (!(t < t1)) break;
+        tr *= 1 - std::max(0.0f, m.density_at(og + t * dg) * m.inv_max_density);
+        if (tr < 0.1f) {
+            const float q = std::max(0.05f, 1 - tr);
+            if (u() < q) return Rgb();
+            tr /= 1 - q;
+        }
+    }
+    return Rgb(tr);
+}
+
+}  // namespace cmam::render
