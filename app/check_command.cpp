@@ -42,12 +42,17 @@ int run_check(const CheckArgs& a) {
         instances = " (" + std::to_string(scene->instances.size()) + " instances of " +
                     std::to_string(scene->objects.size()) +
                     (scene->objects.size() == 1 ? " object)" : " objects)");
+    // (Media only where there are some, so that other scenes' line stays as it was.)
+    std::string media;
+    if (!scene->media.empty())
+        media = ", " + std::to_string(scene->media.size()) +
+                (scene->media.size() == 1 ? " medium" : " media");
     std::printf(
         "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics%s, %zu lights, %zu materials, "
-        "%zu textures\n",
+        "%zu textures%s\n",
         a.scene.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris,
         quadrics, instances.c_str(), scene->lights.size(), scene->materials.size(),
-        scene->textures.size());
+        scene->textures.size(), media.c_str());
     return 0;
 }
 
