@@ -370,6 +370,10 @@ void Scene::commit() {
         rtcReleaseGeometry(g);
     }
     rtcCommitScene(m_scene);
+    RTCBounds b;
+    rtcGetSceneBounds(m_scene, &b);
+    const Vec3 lo(b.lower_x, b.lower_y, b.lower_z), hi(b.upper_x, b.upper_y, b.upper_z);
+    world_radius = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z ? 0.5f * length(hi - lo) : 0.0f;
 }
 
 bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const {

@@ -326,7 +326,8 @@ struct Tracer {
             }
             // Through media: the light arrives attenuated (and only through surfaces of
             // material "none").
-            const Rgb tr = transmittance(r.org, r.dir, r.tmax, medium_toward(h, r.dir));
+            const Rgb tr =
+                transmittance(r.org, r.dir, shadow_tmax(r.light, r.tmax), medium_toward(h, r.dir));
             r.contribution = r.contribution * tr;
             r.clear = !tr.is_black();
         }
@@ -388,6 +389,16 @@ struct Tracer {
     // The medium of the ray being traced (li), -1 for vacuum; a child ray's is set around its li.
     int medium = -1;
     float uniform() { return rng.next_float(); }
+
+    // How far a shadow ray towards light l goes through media: a distant or infinite light's
+    // (infinitely long) 2 world_radius, to the point pbrt-v3 gives such a light's sample (within
+    // the world's bounds nothing is further away; beyond them, in a medium, pbrt-v3 stops there).
+    float shadow_tmax(int l, float tmax) const {
+        const Light::Type type = scene.lights[static_cast<std::size_t>(l)].type;
+        return type == Light::Type::Distant || type == Light::Type::Infinite
+                   ? std::min(tmax, 2 * scene.world_radius)
+                   : tmax;
+    }
 
     // The medium a ray leaving h along w is in: the side of h's boundary it leaves by, or where
     // h is no boundary, the medium of the ray that found h (pbrt-v3).
@@ -477,7 +488,7 @@ struct Tracer {
                 const float f = hg_phase(dot(wo, ls->wi), m.g);
                 if (f == 0) continue;
                 if (counts) ++counts->shadow;
-                float tmax = ls->dist * (1 - 1e-4f);
+                float tmax = shadow_tmax(static_cast<int>(l), ls->dist * (1 - 1e-4f));
                 Vec3 wi = ls->wi;
                 if (light.type == Light::Type::Area) {
                     const Vec3 d = ls->target - p;

@@ -408,6 +408,10 @@ class Scene {
     std::vector<Medium> media;
     int camera_medium = -1;  // the medium the camera is in (-1: vacuum)
     bool volumetric = false;
+    // The radius of the sphere about the world's bounding box (pbrt-v3's worldRadius), set by
+    // commit(): a distant or infinite light's shadow ray through media ends 2 world_radius away,
+    // where pbrt-v3 puts the light's point.
+    float world_radius = 0;
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;

@@ -397,3 +397,34 @@ TEST(Media, ANonAbsorbingMediumKeepsAUniformLightFieldUniform) {
         EXPECT_NEAR(mean, 1.0, 0.01) << medium;
     }
 }
+
+TEST(Media, DistantLightIsAttenuatedOverTwoWorldRadiiAsInPbrt) {
+    // The camera and a matte floor (Kd 0.5, 18 x 18, so the world's bounding sphere has radius
+    // R = 9 sqrt 2) in one absorbing medium, lit from straight above by a distant light of
+    // radiance 1. pbrt-v3 puts a distant or infinite light's point 2R away, so the light reaches
+    // the floor through 2R of medium, not through an infinite length (which would leave it
+    // black); the camera ray's own transmittance is its length's, here 5.004.
+    const float sigma = 0.02f;
+    auto s = test::scene_from(
+        "LookAt 0 0.2 -5  0 0 0  0 1 0\nCamera \"perspective\"\n"
+        "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+        "MediumInterface \"fog\" \"fog\"\n"
+        "WorldBegin\n"
+        "LightSource \"distant\" \"point from\" [0 1 0] \"point to\" [0 0 0] \"rgb L\" [1 1 1]\n"
+        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.02 0.02 0.02] "
+        "\"rgb sigma_s\" [0 0 0]\n"
+        "Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]\n"
+        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-9 0 -9 9 0 -9 9 0 "
+        "9 -9 0 9]\nWorldEnd\n");
+    ASSERT_TRUE(s->volumetric);
+    EXPECT_EQ(s->camera_medium, 0);
+    EXPECT_NEAR(s->world_radius, 9 * std::sqrt(2.0f), 1e-3f);
+    const int n = 40000;
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+        sum +=
+            trace_radiance(*s, Vec3(0, 0.2f, -5), normalized(Vec3(0, -0.2f, 5)), 7 + i, nullptr).r;
+    const double expected =
+        0.5 / kPi * std::exp(-sigma * std::sqrt(25.04)) * std::exp(-sigma * 18 * std::sqrt(2.0));
+    EXPECT_NEAR(sum / n, expected, 0.03 * expected);
+}
