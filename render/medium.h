@@ -55,6 +55,11 @@ struct MediumSample {
 
 namespace media_detail {
 
+// At most this many tentative collisions per tracking call: a grid whose sigma_t times its
+// largest density, times the length a ray crosses, is beyond any real scene's (a hostile file)
+// would otherwise take that many steps. A ray that reaches the bound is taken as absorbed.
+constexpr int kMaxTrackingSteps = 1 << 20;
+
 // The part [t0, t1] of [0, tmax] in which the ray o + t d (grid space) lies in the unit cube;
 // false when there is none.
 inline bool unit_cube_span(const Vec3& o, const Vec3& d, float tmax, float& t0, float& t1) {
@@ -120,7 +125,12 @@ MediumSample sample_medium(const Medium& m, const Vec3& o, const Vec3& d, float 
     float t0, t1;
     if (!media_detail::unit_cube_span(og, dg, tmax, t0, t1)) return s;
     const float step = m.inv_max_density / m.grid_sigma_t;
-    for (float t = t0;;) {
+    float t = t0;
+    for (int k = 0;; ++k) {
+        if (k == media_detail::kMaxTrackingSteps) {
+            s.weight = Rgb();
+            return s;
+        }
         t -= std::log(1 - u()) * step;
         if (!(t < t1)) break;
         if (m.density_at(og + t * dg) * m.inv_max_density > u()) {
@@ -149,8 +159,9 @@ Rgb medium_transmittance(const Medium& m, const Vec3& o, const Vec3& d, float tm
     float t0, t1;
     if (!media_detail::unit_cube_span(og, dg, tmax, t0, t1)) return Rgb(1);
     const float step = m.inv_max_density / m.grid_sigma_t;
-    float tr = 1;
-    for (float t = t0;;) {
+    float tr = 1, t = t0;
+    for (int k = 0;; ++k) {
+        if (k == media_detail::kMaxTrackingSteps) return Rgb();
         t -= std::log(1 - u()) * step;
         if (!(t < t1)) break;
         tr *= 1 - std::max(0.0f, m.density_at(og + t * dg) * m.inv_max_density);

@@ -173,6 +173,13 @@ TEST(Media, GridsInterpolateTheirDensityAndTrackIt) {
     const SampleMeans s = sample_means(m, o, dir, 4, n);
     EXPECT_NEAR(s.passed.r, tr, 0.01 * tr);
     EXPECT_NEAR(s.scattered.r, (1 - tr) * 0.3 / 0.4, 0.01);
+    // A grid too dense to track in any time (a hostile file) ends its rays at the step bound:
+    // absorbed, not hung.
+    Medium dense = m;
+    dense.grid_sigma_t = 1e30f;
+    EXPECT_EQ(medium_transmittance(dense, o, dir, 4, [&] { return rng.next_float(); }).r, 0.0f);
+    EXPECT_TRUE(
+        sample_medium(dense, o, dir, 4, [&] { return rng.next_float(); }).weight.is_black());
     // A ray that misses the grid passes whole.
     EXPECT_EQ(medium_transmittance(m, Vec3(0, 2, 0.5f), dir, 4, [&] { return rng.next_float(); }).r,
               1.0f);
