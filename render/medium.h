@@ -95,24 +95,37 @@ inline Vec3 to_grid_vector(const std::array<double, 12>& m, const Vec3& v) {
 
 /// Samples where the ray o + t d (d a unit vector) scatters in m before tmax (which may be
 /// infinite), drawing uniform numbers from u(): a homogeneous medium picks a channel and an
-/// exponential distance in it (the density is the channels' mean), a grid tracks by its
-/// largest density (delta tracking).
+/// exponential distance in it (the density is the channels' mean), by sigma_t as pbrt-v3 or, in
+/// a medium that absorbs more than it scatters, by sigma_s; a grid tracks by its largest
+/// density (delta tracking).
 template <class Uniform>
 MediumSample sample_medium(const Medium& m, const Vec3& o, const Vec3& d, float tmax, Uniform&& u) {
     MediumSample s;
     if (m.type == Medium::Type::Homogeneous) {
+        // pbrt-v3 draws the distance by sigma_t, so a ray ends (weight 0) where it samples
+        // absorption. Where absorption dominates (coloured liquids and glass), drawing it by
+        // sigma_s lets the ray pass weighted by its transmittance instead: the same
+        // expectation, without the noise of absorption, and exact where nothing scatters
+        // (docs/algorithms.md §19). Where scattering dominates, pbrt-v3's is the less noisy.
+        const Rgb& k =
+            m.sigma_s.r + m.sigma_s.g + m.sigma_s.b < m.sigma_a.r + m.sigma_a.g + m.sigma_a.b
+                ? m.sigma_s
+                : m.sigma_t;
         const float u0 = u(), u1 = u();
         const int c = std::min(int(u0 * 3), 2);
-        const float st = c == 0 ? m.sigma_t.r : c == 1 ? m.sigma_t.g : m.sigma_t.b;
-        const float dist = st > 0 ? -std::log(1 - u1) / st : std::numeric_limits<float>::infinity();
+        const float kc = c == 0 ? k.r : c == 1 ? k.g : k.b;
+        const float dist = kc > 0 ? -std::log(1 - u1) / kc : std::numeric_limits<float>::infinity();
         const float t = std::min(dist, tmax);
         s.scattered = t < tmax;
-        // (t at most the largest float: an infinite distance gives 0 where sigma_t > 0, and 1,
-        // not NaN, where it is 0.)
+        // (t at most the largest float: an infinite distance gives 0 where a coefficient is
+        // positive, and 1, not NaN, where it is 0.)
         const float tt = std::min(t, std::numeric_limits<float>::max());
-        const Rgb tr(std::exp(-m.sigma_t.r * tt), std::exp(-m.sigma_t.g * tt),
-                     std::exp(-m.sigma_t.b * tt));
-        const Rgb dens = s.scattered ? m.sigma_t * tr : tr;
+        auto decay = [tt](const Rgb& k) {
+            return Rgb(std::exp(-k.r * tt), std::exp(-k.g * tt), std::exp(-k.b * tt));
+        };
+        const Rgb tr = decay(m.sigma_t), e = decay(k);
+        // The density of t (scattered) or the probability of passing, over the channels.
+        const Rgb dens = s.scattered ? k * e : e;
         float pdf = (dens.r + dens.g + dens.b) / 3;
         if (pdf == 0) pdf = 1;
         s.weight = s.scattered ? tr * m.sigma_s / pdf : tr / pdf;

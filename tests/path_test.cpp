@@ -375,8 +375,10 @@ TEST(PathTracing, SceneIntegratorsChooseIt) {
     EXPECT_EQ(none, 0);
     // volpath is path tracing with media; the others are rendered as the one of the two that
     // computes their light transport, with a warning.
-    for (const auto& [other, as] :
+    for (const auto& pair :
          {std::pair{"volpath", ""}, {"bdpt", "volpath"}, {"mlt", "volpath"}, {"sppm", "path"}}) {
+        // (Plain copies, not a structured binding: Clang before 16 cannot capture those.)
+        const char *other = pair.first, *as = pair.second;
         warnings.clear();
         EXPECT_TRUE(integrator(std::string("Integrator \"") + other + "\"", &warnings).first);
         EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
