@@ -41,4 +41,37 @@ float Medium::density_at(const Vec3& p) const {
     return lerp(dz, lerp(dy, d00, d10), lerp(dy, d01, d11));
 }
 
+void Medium::build_majorants() {
+    const int n[3] = {nx, ny, nz};
+    int res[3];
+    for (int a = 0; a < 3; ++a) res[a] = std::min(n[a], 16);
+    mx = res[0];
+    my = res[1];
+    mz = res[2];
+    majorant.assign(static_cast<std::size_t>(mx) * my * mz, 0.0f);
+    // The samples density_at may read in a cell [c/res, (c+1)/res] along an axis: those whose
+    // indices are floor(x n - 1/2) and one more for x in it, with one more on each side for
+    // rounding at the cell's faces.
+    auto span = [&](int a, int c, int& lo, int& hi) {
+        lo = std::max(0, int(std::floor(float(c) / float(res[a]) * float(n[a]) - 0.5f)) - 1);
+        hi = std::min(n[a] - 1,
+                      int(std::floor(float(c + 1) / float(res[a]) * float(n[a]) - 0.5f)) + 2);
+    };
+    for (int k = 0; k < mz; ++k)
+        for (int j = 0; j < my; ++j)
+            for (int i = 0; i < mx; ++i) {
+                int x0, x1, y0, y1, z0, z1;
+                span(0, i, x0, x1);
+                span(1, j, y0, y1);
+                span(2, k, z0, z1);
+                float mx_d = 0;
+                for (int z = z0; z <= z1; ++z)
+                    for (int y = y0; y <= y1; ++y)
+                        for (int x = x0; x <= x1; ++x)
+                            mx_d = std::max(
+                                mx_d, density[(static_cast<std::size_t>(z) * ny + y) * nx + x]);
+                majorant[(static_cast<std::size_t>(k) * my + j) * mx + i] = mx_d;
+            }
+}
+
 }  // namespace cmam::render

@@ -39,9 +39,16 @@ struct Medium {
     std::vector<float> density;
     float grid_sigma_t = 0, inv_max_density = 0;
     std::array<double, 12> grid_from_world{};
+    // Majorants: a coarse grid (mx * my * mz cells over the unit cube, x fastest) of the largest
+    // density_at within each cell, which tracking steps through (build_majorants; without
+    // them, one cell of the largest density).
+    int mx = 0, my = 0, mz = 0;
+    std::vector<float> majorant;
 
     /// The grid's density at p in grid space.
     float density_at(const Vec3& p) const;
+    /// Makes the majorant grid (at most 16 cells a side) from the densities.
+    void build_majorants();
 };
 
 /// Where a ray scatters in a medium, if it does before tmax, and the weight that sampling gives
@@ -59,6 +66,66 @@ namespace media_detail {
 // largest density, times the length a ray crosses, is beyond any real scene's (a hostile file)
 // would otherwise take that many steps. A ray that reaches the bound is taken as absorbed.
 constexpr int kMaxTrackingSteps = 1 << 20;
+
+enum class Tracked { Passed, Stopped, Bound };
+
+// Tentative collisions along og + t dg (grid space; t in world units), t0 <= t < t1, cell by
+// cell of m's majorant grid (Amanatides and Woo's traversal): in a cell of majorant rho_max, the
+// steps are exponential at the rate sigma_t rho_max, and a step that leaves the cell starts again
+// at its boundary at the next cell's rate (the exponential forgets), so cells of no density cost
+// nothing. visit(t, rho / rho_max) is called at each and returns true to stop there.
+template <class Uniform, class Visit>
+Tracked track(const Medium& m, const Vec3& og, const Vec3& dg, float t0, float t1, Uniform& u,
+              Visit&& visit) {
+    const bool coarse = !m.majorant.empty();
+    const int res[3] = {coarse ? m.mx : 1, coarse ? m.my : 1, coarse ? m.mz : 1};
+    const Vec3 p0 = og + t0 * dg;
+    int cell[3], step[3];
+    float next[3], delta[3];
+    for (int a = 0; a < 3; ++a) {
+        const float x = p0[a] * float(res[a]);
+        cell[a] = std::clamp(int(std::floor(std::isfinite(x) ? x : 0.0f)), 0, res[a] - 1);
+        if (dg[a] > 0) {
+            step[a] = 1;
+            next[a] = (float(cell[a] + 1) / float(res[a]) - og[a]) / dg[a];
+            delta[a] = 1 / (float(res[a]) * dg[a]);
+        } else if (dg[a] < 0) {
+            step[a] = -1;
+            next[a] = (float(cell[a]) / float(res[a]) - og[a]) / dg[a];
+            delta[a] = -1 / (float(res[a]) * dg[a]);
+        } else {
+            step[a] = 0;
+            next[a] = delta[a] = std::numeric_limits<float>::infinity();
+        }
+    }
+    float t = t0;
+    int steps = 0;
+    while (t < t1) {
+        const int a = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
+        const float exit = std::min(next[a], t1);
+        const float maj =
+            coarse ? m.majorant[(static_cast<std::size_t>(cell[2]) * res[1] + cell[1]) * res[0] +
+                                cell[0]]
+                   : 1 / m.inv_max_density;
+        if (maj > 0) {
+            const float rate = maj * m.grid_sigma_t;
+            for (;;) {
+                if (++steps > kMaxTrackingSteps) return Tracked::Bound;
+                const float dt = -std::log(1 - u()) / rate;
+                if (!(t + dt < exit)) break;
+                t += dt;
+                if (visit(t, m.density_at(og + t * dg) / maj)) return Tracked::Stopped;
+            }
+        }
+        t = exit;
+        if (!(t < t1)) break;
+        cell[a] += step[a];
+        if (cell[a] < 0 || cell[a] >= res[a]) break;
+        next[a] += delta[a];
+        if (++steps > kMaxTrackingSteps) return Tracked::Bound;
+    }
+    return Tracked::Passed;
+}
 
 // The part [t0, t1] of [0, tmax] in which the ray o + t d (grid space) lies in the unit cube;
 // false when there is none.
@@ -137,21 +204,17 @@ MediumSample sample_medium(const Medium& m, const Vec3& o, const Vec3& d, float 
                dg = media_detail::to_grid_vector(m.grid_from_world, d);
     float t0, t1;
     if (!media_detail::unit_cube_span(og, dg, tmax, t0, t1)) return s;
-    const float step = m.inv_max_density / m.grid_sigma_t;
-    float t = t0;
-    for (int k = 0;; ++k) {
-        if (k == media_detail::kMaxTrackingSteps) {
-            s.weight = Rgb();
-            return s;
-        }
-        t -= std::log(1 - u()) * step;
-        if (!(t < t1)) break;
-        if (m.density_at(og + t * dg) * m.inv_max_density > u()) {
-            s.scattered = true;
+    const media_detail::Tracked r =
+        media_detail::track(m, og, dg, t0, t1, u, [&](float t, float ratio) {
+            if (!(ratio > u())) return false;  // a null collision
             s.t = t;
-            s.weight = m.sigma_s / m.grid_sigma_t;
-            return s;
-        }
+            return true;
+        });
+    if (r == media_detail::Tracked::Bound) {
+        s.weight = Rgb();
+    } else if (r == media_detail::Tracked::Stopped) {
+        s.scattered = true;
+        s.weight = m.sigma_s / m.grid_sigma_t;
     }
     return s;
 }
@@ -171,19 +234,22 @@ Rgb medium_transmittance(const Medium& m, const Vec3& o, const Vec3& d, float tm
                dg = media_detail::to_grid_vector(m.grid_from_world, d);
     float t0, t1;
     if (!media_detail::unit_cube_span(og, dg, tmax, t0, t1)) return Rgb(1);
-    const float step = m.inv_max_density / m.grid_sigma_t;
-    float tr = 1, t = t0;
-    for (int k = 0;; ++k) {
-        if (k == media_detail::kMaxTrackingSteps) return Rgb();
-        t -= std::log(1 - u()) * step;
-        if (!(t < t1)) break;
-        tr *= 1 - std::max(0.0f, m.density_at(og + t * dg) * m.inv_max_density);
-        if (tr < 0.1f) {
-            const float q = std::max(0.05f, 1 - tr);
-            if (u() < q) return Rgb();
-            tr /= 1 - q;
-        }
-    }
+    float tr = 1;
+    bool zero = false;
+    const media_detail::Tracked r =
+        media_detail::track(m, og, dg, t0, t1, u, [&](float, float ratio) {
+            tr *= 1 - std::clamp(ratio, 0.0f, 1.0f);
+            if (tr < 0.1f) {
+                const float q = std::max(0.05f, 1 - tr);
+                if (u() < q) {
+                    zero = true;
+                    return true;
+                }
+                tr /= 1 - q;
+            }
+            return false;
+        });
+    if (r == media_detail::Tracked::Bound || zero) return Rgb();
     return Rgb(tr);
 }
 

@@ -182,6 +182,19 @@ TEST(Media, GridsInterpolateTheirDensityAndTrackIt) {
     const SampleMeans s = sample_means(m, o, dir, 4, n);
     EXPECT_NEAR(s.passed.r, tr, 0.01 * tr);
     EXPECT_NEAR(s.scattered.r, (1 - tr) * 0.3 / 0.4, 0.01);
+    // The same through the grid of majorants (one cell a sample here): the same expectations.
+    m.build_majorants();
+    ASSERT_EQ(m.majorant.size(), 4u);
+    // (cell 0, x in [0, 1/4], reads samples 0 and 1; with one more each side for rounding: 2)
+    EXPECT_EQ(m.majorant[0], 2.0f);
+    EXPECT_EQ(m.majorant[3], 3.0f);
+    mean = 0;
+    for (int i = 0; i < n; ++i)
+        mean += medium_transmittance(m, o, dir, 4, [&] { return rng.next_float(); }).r;
+    EXPECT_NEAR(mean / n, tr, 0.01 * tr);
+    const SampleMeans sm = sample_means(m, o, dir, 4, n);
+    EXPECT_NEAR(sm.passed.r, tr, 0.01 * tr);
+    EXPECT_NEAR(sm.scattered.r, (1 - tr) * 0.3 / 0.4, 0.01);
     // A grid too dense to track in any time (a hostile file) ends its rays at the step bound:
     // absorbed, not hung.
     Medium dense = m;
@@ -439,4 +452,69 @@ TEST(Media, DistantLightIsAttenuatedOverTwoWorldRadiiAsInPbrt) {
     const double expected =
         0.5 / kPi * std::exp(-sigma * std::sqrt(25.04)) * std::exp(-sigma * 18 * std::sqrt(2.0));
     EXPECT_NEAR(sum / n, expected, 0.03 * expected);
+}
+
+TEST(Media, MajorantsSkipEmptySpaceAndKeepTheTransmittance) {
+    // A 32^3 grid, empty but for a ball of density 4 (radius 0.15 about the centre), over the
+    // unit cube: rays that cross only empty cells draw no number and pass whole; rays through
+    // the ball keep exp(-sigma_t * optical depth), measured along the ray by a fine sum.
+    Medium m;
+    m.type = Medium::Type::Grid;
+    m.nx = m.ny = m.nz = 32;
+    m.density.assign(32 * 32 * 32, 0.0f);
+    for (int k = 0; k < 32; ++k)
+        for (int j = 0; j < 32; ++j)
+            for (int i = 0; i < 32; ++i) {
+                const Vec3 c((i + 0.5f) / 32 - 0.5f, (j + 0.5f) / 32 - 0.5f,
+                             (k + 0.5f) / 32 - 0.5f);
+                if (dot(c, c) < 0.15f * 0.15f) m.density[(k * 32 + j) * 32 + i] = 4;
+            }
+    m.inv_max_density = 0.25f;
+    m.sigma_a = Rgb(1);
+    m.sigma_s = Rgb(2);
+    m.sigma_t = m.sigma_a + m.sigma_s;
+    m.grid_sigma_t = 3;
+    m.grid_from_world = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    m.build_majorants();
+    ASSERT_EQ(m.majorant.size(), 16u * 16u * 16u);
+    // Each cell's majorant bounds the density everywhere in it (what tracking needs to be
+    // unbiased), on its faces too.
+    Rng pick(11);
+    for (int c = 0; c < 16 * 16 * 16; ++c)
+        for (int s = 0; s < 24; ++s) {
+            const int i = c % 16, j = (c / 16) % 16, k = c / 256;
+            const float fx = s < 8 ? float(s & 1) : pick.next_float(),
+                        fy = s < 8 ? float((s >> 1) & 1) : pick.next_float(),
+                        fz = s < 8 ? float((s >> 2) & 1) : pick.next_float();
+            const Vec3 p((i + fx) / 16, (j + fy) / 16, (k + fz) / 16);
+            ASSERT_LE(m.density_at(p), m.majorant[c]) << i << " " << j << " " << k;
+        }
+    int draws = 0;
+    Rng rng(3);
+    auto u = [&] {
+        ++draws;
+        return rng.next_float();
+    };
+    const Vec3 corner_dir = normalized(Vec3(1, 0.2f, 0.1f));
+    EXPECT_EQ(medium_transmittance(m, Vec3(-1, 0.05f, 0.05f), corner_dir, 10, u).r, 1.0f);
+    EXPECT_FALSE(sample_medium(m, Vec3(-1, 0.05f, 0.05f), corner_dir, 10, u).scattered);
+    EXPECT_EQ(draws, 0);
+    const Vec3 o(-1, 0.52f, 0.47f), dir = normalized(Vec3(1, 0.05f, -0.02f));
+    double depth = 0;
+    const int steps = 20000;
+    for (int k = 0; k < steps; ++k) {
+        const float t = 3.0f * (k + 0.5f) / steps;
+        depth += m.density_at(o + t * dir) * 3.0 / steps;
+    }
+    const double tr = std::exp(-3 * depth);
+    ASSERT_LT(tr, 0.6);
+    ASSERT_GT(tr, 0.05);
+    const int n = 200000;
+    double mean = 0, passed = 0;
+    for (int i = 0; i < n; ++i) {
+        mean += medium_transmittance(m, o, dir, 3, u).r;
+        passed += sample_medium(m, o, dir, 3, u).scattered ? 0 : 1;
+    }
+    EXPECT_NEAR(mean / n, tr, 0.015 * tr);
+    EXPECT_NEAR(passed / n, tr, 0.015 * tr);
 }

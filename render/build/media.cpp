@@ -75,6 +75,7 @@ void Builder::media() {
             const float max_density = *std::max_element(m.density.begin(), m.density.end());
             m.inv_max_density = max_density > 0 ? 1 / max_density : 0;
             m.grid_sigma_t = m.sigma_t.r;
+            m.build_majorants();
             if (m.sigma_t.g != m.sigma_t.r || m.sigma_t.b != m.sigma_t.r)
                 warn(e.loc, "medium " + in_quotes(d.name) +
                                 ": a heterogeneous medium needs sigma_a + sigma_s equal in every "
