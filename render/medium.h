@@ -102,7 +102,7 @@ Tracked track(const Medium& m, const Vec3& og, const Vec3& dg, float t0, float t
     int steps = 0;
     while (t < t1) {
         const int a = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
-        const float exit = std::min(next[a], t1);
+        const float exit = std::max(t, std::min(next[a], t1));  // (rounding at a face: not back)
         const float maj =
             coarse ? m.majorant[(static_cast<std::size_t>(cell[2]) * res[1] + cell[1]) * res[0] +
                                 cell[0]]
