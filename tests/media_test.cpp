@@ -306,6 +306,28 @@ TEST(Media, TheBuilderChecksTheirParameters) {
     EXPECT_EQ(w[0],
               "b.pbrt:3:1: warning: the scene has participating media, which the \"path\" "
               "integrator does not render (as in pbrt-v3; \"volpath\" renders them)");
+    // Which integrators render media: pbrt-v3's volpath, bdpt and mlt (the last two rendered as
+    // volpath), not sppm, path (the default), whitted or directlighting; and only where a
+    // MediumInterface puts a defined medium somewhere.
+    for (const auto& pair : {std::pair{"\"volpath\"", true},
+                             {"\"bdpt\"", true},
+                             {"\"mlt\"", true},
+                             {"\"sppm\"", false},
+                             {"\"path\"", false},
+                             {"\"whitted\"", false},
+                             {"\"directlighting\"", false}}) {
+        const std::string integrator = pair.first;
+        const auto with =
+            test::scene_from("Integrator " + integrator +
+                             " WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n"
+                             "MediumInterface \"m\" \"\"\nWorldEnd\n");
+        EXPECT_EQ(with->volumetric, pair.second) << integrator;
+        EXPECT_EQ(with->media.size(), 1u) << integrator;
+        const auto unused = test::scene_from(
+            "Integrator " + integrator +
+            " WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\"\nWorldEnd\n");
+        EXPECT_FALSE(unused->volumetric) << integrator;
+    }
 }
 
 namespace {
