@@ -362,10 +362,11 @@ struct Tracer {
             if (counts) ++counts->shadow;
             Rgb tr(1);
             const std::optional<SurfaceHit> y =
-                scene.volumetric
-                    ? intersect_tr(offset_origin(h, s.wi), s.wi, medium_toward(h, s.wi), tr)
-                    : scene.intersect(offset_origin(h, s.wi), s.wi, 0,
-                                      std::numeric_limits<float>::infinity(), false);
+                scene.volumetric ? intersect_tr(offset_origin(h, s.wi), s.wi,
+                                                std::numeric_limits<float>::infinity(),
+                                                medium_toward(h, s.wi), tr)
+                                 : scene.intersect(offset_origin(h, s.wi), s.wi, 0,
+                                                   std::numeric_limits<float>::infinity(), false);
             if (tr.is_black()) continue;
             Rgb le;
             float p_light;
@@ -403,54 +404,39 @@ struct Tracer {
     // The medium a ray leaving h along w is in: the side of h's boundary it leaves by, or where
     // h is no boundary, the medium of the ray that found h (pbrt-v3).
     int medium_toward(const SurfaceHit& h, const Vec3& w) const {
-        if (!h.prim || !h.prim->medium_boundary()) return medium;
-        return dot(w, h.ng) > 0 ? h.prim->medium_outside : h.prim->medium_inside;
+        return h.prim ? h.prim->medium_after(medium, h.ng, w) : medium;
     }
-    static bool passes_light(const Scene& sc, const SurfaceHit& y) {
-        const Material& m =
-            y.prim->material >= 0 ? sc.materials[y.prim->material] : sc.default_material;
-        return m.type == Material::Type::None;
+    const Material& material_of(const Primitive& p) const {
+        return p.material >= 0 ? scene.materials[static_cast<std::size_t>(p.material)]
+                               : scene.default_material;
     }
 
-    // The transmittance from org along dir over (0, tmax), starting in medium `med`: the media's
-    // along the way, through surfaces of material "none" (which change the medium where they
-    // bound one); 0 when any other surface is in the way (pbrt-v3's VisibilityTester::Tr).
-    Rgb transmittance(Vec3 org, const Vec3& dir, float tmax, int med) {
-        Rgb tr(1);
+    // The first surface along org + t dir, 0 < t < tmax, that is not of material "none",
+    // starting in medium `med`, with the transmittance up to it (or to tmax) multiplied into tr:
+    // the media's along the way, through the surfaces of material "none", which change the
+    // medium where they bound one (pbrt-v3's Scene::IntersectTr).
+    std::optional<SurfaceHit> intersect_tr(Vec3 org, const Vec3& dir, float tmax, int med,
+                                           Rgb& tr) {
         for (int guard = 0; guard < 256; ++guard) {
-            const std::optional<SurfaceHit> y = scene.intersect(org, dir, 0, tmax, false);
+            std::optional<SurfaceHit> y = scene.intersect(org, dir, 0, tmax, false);
             if (med >= 0)
                 tr = tr * medium_transmittance(scene.media[static_cast<std::size_t>(med)], org, dir,
                                                y ? y->t : tmax, [this] { return uniform(); });
-            if (!y || tr.is_black()) return tr;
-            if (!passes_light(scene, *y)) return Rgb();
-            if (y->prim->medium_boundary())
-                med = dot(dir, y->ng) > 0 ? y->prim->medium_outside : y->prim->medium_inside;
+            if (!y || tr.is_black() || material_of(*y->prim).type != Material::Type::None) return y;
+            med = y->prim->medium_after(med, y->ng, dir);
             const Vec3 next = offset_origin(*y, dir);
             tmax -= dot(next - org, dir);
             org = next;
-            if (!(tmax > 0)) return tr;
-        }
-        return Rgb();
-    }
-
-    // The first surface along org + t dir (t > 0) that is not of material "none", starting in
-    // medium `med`, with the transmittance up to it (or to infinity) multiplied into tr
-    // (pbrt-v3's Scene::IntersectTr).
-    std::optional<SurfaceHit> intersect_tr(Vec3 org, const Vec3& dir, int med, Rgb& tr) {
-        const float inf = std::numeric_limits<float>::infinity();
-        for (int guard = 0; guard < 256; ++guard) {
-            std::optional<SurfaceHit> y = scene.intersect(org, dir, 0, inf, false);
-            if (med >= 0)
-                tr = tr * medium_transmittance(scene.media[static_cast<std::size_t>(med)], org, dir,
-                                               y ? y->t : inf, [this] { return uniform(); });
-            if (!y || tr.is_black() || !passes_light(scene, *y)) return y;
-            if (y->prim->medium_boundary())
-                med = dot(dir, y->ng) > 0 ? y->prim->medium_outside : y->prim->medium_inside;
-            org = offset_origin(*y, dir);
+            if (!(tmax > 0)) return std::nullopt;
         }
         tr = Rgb();
         return std::nullopt;
+    }
+    // The light a shadow ray passes over (0, tmax): 0 when a surface not of material "none" is in
+    // the way (pbrt-v3's VisibilityTester::Tr).
+    Rgb transmittance(const Vec3& org, const Vec3& dir, float tmax, int med) {
+        Rgb tr(1);
+        return intersect_tr(org, dir, tmax, med, tr) ? Rgb() : tr;
     }
 
     // A light sample at a point p in a medium (no surface, so an infinite light without a map
@@ -513,7 +499,8 @@ struct Tracer {
             if (!(pf > 0) || !finite(wi)) continue;
             if (counts) ++counts->shadow;
             Rgb tr(1);
-            const std::optional<SurfaceHit> y = intersect_tr(p, wi, medium, tr);
+            const std::optional<SurfaceHit> y =
+                intersect_tr(p, wi, std::numeric_limits<float>::infinity(), medium, tr);
             if (tr.is_black()) continue;
             Rgb le;
             float p_light;
@@ -685,8 +672,7 @@ struct Tracer {
             }
             if (!hit) return after_diffuse ? Rgb() : through_media * escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
-            const Material& m =
-                h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
+            const Material& m = material_of(*h.prim);
             // A hit whose shading reads no texture needs no (u,v) (nor footprints in it below);
             // the footprint AOV records it wherever it is.
             const bool uv = aov || m.reads_textures();
@@ -925,8 +911,7 @@ const TextureNode* first_image(const Scene& scene, const TexInput& in, int budge
 
 void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& bsdf) {
     if (aov->recorded) return;
-    const Material& m =
-        h.prim->material >= 0 ? scene.materials[h.prim->material] : scene.default_material;
+    const Material& m = material_of(*h.prim);
     // (Glass with a roughness has no specular chain: its own hit is the first non-specular one.)
     const bool specular = (m.type == Material::Type::Mirror || m.type == Material::Type::Glass) &&
                           !bsdf.has_nonspecular();

@@ -257,6 +257,12 @@ struct Primitive {
     // crossing any other surface stays in its medium (pbrt-v3).
     int medium_inside = -1, medium_outside = -1;
     bool medium_boundary() const { return medium_inside != medium_outside; }
+    /// The medium of a ray leaving this surface along w (ng: the hit's geometric normal), the
+    /// ray that reached it having been in `current`.
+    int medium_after(int current, const Vec3& ng, const Vec3& w) const {
+        if (!medium_boundary()) return current;
+        return dot(w, ng) > 0 ? medium_outside : medium_inside;
+    }
     std::vector<double> area_cdf;
 
     // Triangles: pbrt-v3's cut-out masks, float inputs; where one is 0 the surface is not there

@@ -172,29 +172,26 @@ TEST(Media, GridsInterpolateTheirDensityAndTrackIt) {
         depth += m.density_at(Vec3((k + 0.5f) / 4000, 0.5f, 0.5f)) * 2.0 / 4000;
     const double tr = std::exp(-m.grid_sigma_t * depth);
     Rng rng(9);
-    double mean = 0;
-    const int n = 200000;
-    for (int i = 0; i < n; ++i)
-        mean += medium_transmittance(m, o, dir, 4, [&] { return rng.next_float(); }).r;
-    EXPECT_NEAR(mean / n, tr, 0.01 * tr);
-    // Delta tracking: scattered with probability 1 - tr, weighted sigma_s / sigma_t; what passes
-    // has weight 1.
-    const SampleMeans s = sample_means(m, o, dir, 4, n);
-    EXPECT_NEAR(s.passed.r, tr, 0.01 * tr);
-    EXPECT_NEAR(s.scattered.r, (1 - tr) * 0.3 / 0.4, 0.01);
+    // Ratio tracking's mean; delta tracking scatters with probability 1 - tr, weighted
+    // sigma_s / sigma_t, and what passes has weight 1.
+    auto expect_tracking = [&](const char* what) {
+        const int n = 200000;
+        double mean = 0;
+        for (int i = 0; i < n; ++i)
+            mean += medium_transmittance(m, o, dir, 4, [&] { return rng.next_float(); }).r;
+        EXPECT_NEAR(mean / n, tr, 0.01 * tr) << what;
+        const SampleMeans s = sample_means(m, o, dir, 4, n);
+        EXPECT_NEAR(s.passed.r, tr, 0.01 * tr) << what;
+        EXPECT_NEAR(s.scattered.r, (1 - tr) * 0.3 / 0.4, 0.01) << what;
+    };
+    expect_tracking("one majorant");
     // The same through the grid of majorants (one cell a sample here): the same expectations.
     m.build_majorants();
     ASSERT_EQ(m.majorant.size(), 4u);
     // (cell 0, x in [0, 1/4], reads samples 0 and 1; with one more each side for rounding: 2)
     EXPECT_EQ(m.majorant[0], 2.0f);
     EXPECT_EQ(m.majorant[3], 3.0f);
-    mean = 0;
-    for (int i = 0; i < n; ++i)
-        mean += medium_transmittance(m, o, dir, 4, [&] { return rng.next_float(); }).r;
-    EXPECT_NEAR(mean / n, tr, 0.01 * tr);
-    const SampleMeans sm = sample_means(m, o, dir, 4, n);
-    EXPECT_NEAR(sm.passed.r, tr, 0.01 * tr);
-    EXPECT_NEAR(sm.scattered.r, (1 - tr) * 0.3 / 0.4, 0.01);
+    expect_tracking("majorant grid");
     // A grid too dense to track in any time (a hostile file) ends its rays at the step bound:
     // absorbed, not hung.
     Medium dense = m;
