@@ -289,19 +289,23 @@ Rgb eval_texture_node(const Scene& scene, int node, const TexContext& ctx) {
     return {};
 }
 
+// pbrt-v3's FrDielectric with its two ratios' terms multiplied by eta_t (then eta_t cos_t is
+// sqrt(eta_t^2 - eta_i^2 sin_i^2)) and their squares summed over one denominator: one division
+// (algorithms.md §18).
 float fresnel_dielectric(float cos_i, float eta_i, float eta_t) {
     cos_i = std::clamp(cos_i, -1.0f, 1.0f);
     if (cos_i <= 0) {
         std::swap(eta_i, eta_t);
         cos_i = -cos_i;
     }
-    float sin_i = std::sqrt(std::max(0.0f, 1 - cos_i * cos_i));
-    float sin_t = eta_i / eta_t * sin_i;
-    if (sin_t >= 1) return 1;
-    float cos_t = std::sqrt(std::max(0.0f, 1 - sin_t * sin_t));
-    float r_parl = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-    float r_perp = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-    return (r_parl * r_parl + r_perp * r_perp) / 2;
+    const float sin2_i = std::max(0.0f, 1 - cos_i * cos_i);
+    const float t2 = eta_t * eta_t - eta_i * eta_i * sin2_i;  // (eta_t cos_t)^2
+    if (t2 <= 0) return 1;                                    // total internal reflection
+    const float tc = std::sqrt(t2);
+    const float a = eta_t * eta_t * cos_i, b = eta_i * tc;  // r_parl = (a - b) / (a + b)
+    const float c = eta_i * eta_t * cos_i, d = eta_t * tc;  // r_perp = (c - d) / (c + d)
+    const float ab = (a - b) * (c + d), cd = (c - d) * (a + b), den = (a + b) * (c + d);
+    return (ab * ab + cd * cd) / (2 * den * den);
 }
 
 // The Fresnel equations of a conductor (complex index eta + i k, from air) for unpolarised
@@ -344,34 +348,28 @@ Rgb clamp0(const Rgb& c) {
     return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
 }
 
-// Trowbridge-Reitz (GGX) microfacet distribution, isotropic, local frame (pbrt-v3).
-float tr_d(const Vec3& wh, float alpha) {
-    float cos2 = wh.z * wh.z;
-    float sin2 = std::max(0.0f, 1 - cos2);
-    if (cos2 == 0) return 0;
-    float tan2 = sin2 / cos2;
-    float e = tan2 / (alpha * alpha);
-    return 1 / (kPi * alpha * alpha * cos2 * cos2 * (1 + e) * (1 + e));
+// The Trowbridge-Reitz (GGX) microfacet distribution in the local frame, pbrt-v3's
+// D = 1 / (pi ax ay cos^4 (1 + e)^2), e = tan^2 (cos^2 phi / ax^2 + sin^2 phi / ay^2), of the
+// direction of h, which need not be a unit vector (l2 = |h|^2): cos^4 (1 + e)^2 is
+// (hz^2 + hx^2 / ax^2 + hy^2 / ay^2)^2 / l2^2 (algorithms.md §18). 0 where h lies in the plane.
+float tr_d(const Vec3& h, float l2, float alpha) {
+    if (h.z == 0) return 0;
+    const float a2 = alpha * alpha, q = a2 * (h.z * h.z) + (h.x * h.x + h.y * h.y);
+    return a2 * (l2 * l2) / (kPi * (q * q));
 }
-float tr_lambda(const Vec3& w, float alpha) {
-    float cos2 = w.z * w.z;
-    if (cos2 == 0) return 0;
-    float tan2 = std::max(0.0f, 1 - cos2) / cos2;
-    return (-1 + std::sqrt(1 + alpha * alpha * tan2)) / 2;
+float tr_d(const Vec3& h, float l2, float ax, float ay) {
+    if (h.z == 0) return 0;
+    const float q = h.z * h.z + h.x * h.x / (ax * ax) + h.y * h.y / (ay * ay);
+    return l2 * l2 / (kPi * ax * ay * (q * q));
 }
-// The anisotropic form, alpha_x along the local x and alpha_y along y (pbrt-v3's, with
-// cos^2 phi tan^2 theta written as x^2 / z^2 and sin^2 phi tan^2 theta as y^2 / z^2).
-float tr_d(const Vec3& wh, float ax, float ay) {
-    const float cos2 = wh.z * wh.z;
-    if (cos2 == 0) return 0;
-    const float e = (wh.x * wh.x / (ax * ax) + wh.y * wh.y / (ay * ay)) / cos2;
-    return 1 / (kPi * ax * ay * cos2 * cos2 * (1 + e) * (1 + e));
+// Smith's Lambda(w) = (sqrt(1 + alpha^2 tan^2) - 1) / 2 is (r / |cos| - 1) / 2 with r =
+// sqrt(cos^2 + alpha^2 sin^2) (ax^2 x^2 + ay^2 y^2 for alpha^2 sin^2 when anisotropic), of a
+// unit w; so G = 1 / (1 + Lambda(wo) + Lambda(wi)) = 2 |cos_o cos_i| / (r_o |cos_i| + r_i |cos_o|).
+float smith_r(const Vec3& w, float alpha) {
+    return std::sqrt(w.z * w.z + alpha * alpha * (w.x * w.x + w.y * w.y));
 }
-float tr_lambda(const Vec3& w, float ax, float ay) {
-    const float cos2 = w.z * w.z;
-    if (cos2 == 0) return 0;
-    const float a2tan2 = (w.x * w.x * ax * ax + w.y * w.y * ay * ay) / cos2;
-    return (-1 + std::sqrt(1 + a2tan2)) / 2;
+float smith_r(const Vec3& w, float ax, float ay) {
+    return std::sqrt(w.z * w.z + (ax * ax * (w.x * w.x) + ay * ay * (w.y * w.y)));
 }
 
 // pbrt-v3's remapping of a roughness to the microfacet alpha. A material's roughness is mostly a
@@ -394,9 +392,9 @@ Bsdf::Outgoing Bsdf::outgoing(const Vec3& wo_w) const {
     Outgoing o;
     o.local = frame.to_local(wo_w);
     o.w_ng = dot(wo_w, ng);
-    o.lambda = !has_glossy() && !has_transmission() ? 0
-               : anisotropic                        ? tr_lambda(o.local, alpha, alpha_y)
-                                                    : tr_lambda(o.local, alpha);
+    o.smith_r = !has_glossy() && !has_transmission() ? 0
+                : anisotropic                        ? smith_r(o.local, alpha, alpha_y)
+                                                     : smith_r(o.local, alpha);
     return o;
 }
 
@@ -578,16 +576,15 @@ Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
         }
     }
     if (has_glossy()) {
-        float cos_o = std::abs(wo.z), cos_i = std::abs(wi.z);
-        Vec3 wh = wi + wo;
-        if (cos_i != 0 && cos_o != 0 && (wh.x != 0 || wh.y != 0 || wh.z != 0)) {
-            wh = normalize(wh);
-            const float c = dot(wi, faceforward(wh, Vec3(0, 0, 1)));
-            const float lambda_i =
-                anisotropic ? tr_lambda(wi, alpha, alpha_y) : tr_lambda(wi, alpha);
-            const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
-            float g = 1 / (1 + o.lambda + lambda_i);
-            const float common = d * g / (4 * cos_i * cos_o);
+        const float cos_o = std::abs(wo.z), cos_i = std::abs(wi.z);
+        const Vec3 h = wi + wo;
+        const float l2 = dot(h, h);
+        if (cos_i != 0 && cos_o != 0 && l2 != 0) {
+            const float c = dot(wi, faceforward(h, Vec3(0, 0, 1))) / std::sqrt(l2);
+            const float r_i = anisotropic ? smith_r(wi, alpha, alpha_y) : smith_r(wi, alpha);
+            const float d = anisotropic ? tr_d(h, l2, alpha, alpha_y) : tr_d(h, l2, alpha);
+            // D G / (4 cos_i cos_o), G as at smith_r.
+            const float common = d / (2 * (o.smith_r * cos_i + r_i * cos_o));
             if (conductor) {
                 out += ks * fresnel_conductor(c, conductor_eta, conductor_k) * common;
             } else {
@@ -624,7 +621,8 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     if (fourier) return fourier_pdf(*fourier, wo, wi);
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
-    const float g1_over_cos = 1 / ((1 + o.lambda) * std::abs(wo.z));
+    // Lambda(wo) = (r_o / |cos_o| - 1) / 2 (smith_r).
+    const float g1_over_cos = 2 / (o.smith_r + std::abs(wo.z));
     const bool diffuse = has_diffuse(), glossy = has_glossy(), transmission = has_transmission(),
                diffuse_t = has_diffuse_transmission();
     const int lobes = int(diffuse) + int(glossy) + int(transmission) + int(diffuse_t);
@@ -635,12 +633,13 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
         const float eta = wo.z > 0 ? lobe_eta_t / lobe_eta_i : lobe_eta_i / lobe_eta_t;
         const Vec3 h = wo + wi * eta;
         if (h.x == 0 && h.y == 0 && h.z == 0) return p_diffuse;
-        const Vec3 wh = normalize(h);
+        const float l2 = dot(h, h);
+        const Vec3 wh = h / std::sqrt(l2);
         const float oh = dot(wo, wh), ih = dot(wi, wh);
         if (oh * ih > 0) return p_diffuse;  // wo, wi on one side of the microfacet: no refraction
         // The visible normal's density times dwh/dwi = eta^2 |wi . h| / denom^2.
         const float denom = oh + eta * ih;
-        const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+        const float d = anisotropic ? tr_d(h, l2, alpha, alpha_y) : tr_d(h, l2, alpha);
         return p_diffuse +
                share * d * g1_over_cos * std::abs(oh) * std::abs(eta * eta * ih / (denom * denom));
     }
@@ -648,13 +647,12 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     float p = 0;
     if (diffuse) p += share * std::abs(wi.z) * kInvPi;
     if (glossy) {
-        Vec3 wh = wi + wo;
-        if (wh.x == 0 && wh.y == 0 && wh.z == 0) return p;
-        wh = normalize(wh);
-        if (wh.z < 0) wh = -wh;
-        const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+        const Vec3 h = wi + wo;
+        const float l2 = dot(h, h);
+        if (l2 == 0) return p;
+        const float d = anisotropic ? tr_d(h, l2, alpha, alpha_y) : tr_d(h, l2, alpha);
         // The visible normal's density over dwi/dwh = 4 |wo . h|, which cancels its |wo . h|.
-        if (dot(wo, wh) != 0) p += share * d * g1_over_cos / 4;
+        if (dot(wo, h) != 0) p += share * d * g1_over_cos / 4;
     }
     return p;
 }
@@ -764,13 +762,13 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
 Rgb Bsdf::blend_f(const Vec3& wo, const Vec3& wi) const {
     auto pow5 = [](float v) { return (v * v) * (v * v) * v; };
     const float ci = std::abs(wi.z), co = std::abs(wo.z);
-    Vec3 wh = wi + wo;
-    if (wh.x == 0 && wh.y == 0 && wh.z == 0) return {};
+    const Vec3 h = wi + wo;
+    const float l2 = dot(h, h);
+    if (l2 == 0) return {};
     const Rgb diffuse = kd * (Rgb(1) - ks) *
                         (28 / (23 * kPi) * (1 - pow5(1 - 0.5f * ci)) * (1 - pow5(1 - 0.5f * co)));
-    wh = normalize(wh);
-    const float ih = dot(wi, wh);
-    const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
+    const float ih = dot(wi, h) / std::sqrt(l2);
+    const float d = anisotropic ? tr_d(h, l2, alpha, alpha_y) : tr_d(h, l2, alpha);
     const Rgb schlick = ks + (Rgb(1) - ks) * pow5(1 - ih);
     const Rgb specular = schlick * (d / (4 * std::abs(ih) * std::max(ci, co)));
     return (diffuse + specular) * blend_scale;
@@ -786,16 +784,18 @@ Rgb Bsdf::transmission_f(const Outgoing& o, const Vec3& wi) const {
     const float eta = wo.z > 0 ? lobe_eta_t / lobe_eta_i : lobe_eta_i / lobe_eta_t;
     const Vec3 h = wo + wi * eta;
     if (h.x == 0 && h.y == 0 && h.z == 0) return {};
-    Vec3 wh = normalize(h);
+    const float l2 = dot(h, h);
+    Vec3 wh = h / std::sqrt(l2);
     if (wh.z < 0) wh = -wh;
     const float oh = dot(wo, wh), ih = dot(wi, wh);
     if (oh * ih > 0) return {};
     const float fresnel = fresnel_dielectric(oh, lobe_eta_i, lobe_eta_t);
     const float denom = oh + eta * ih;
-    const float lambda_i = anisotropic ? tr_lambda(wi, alpha, alpha_y) : tr_lambda(wi, alpha);
-    const float d = anisotropic ? tr_d(wh, alpha, alpha_y) : tr_d(wh, alpha);
-    const float g = 1 / (1 + o.lambda + lambda_i);
-    return kt_rough * ((1 - fresnel) * std::abs(d * g * ih * oh / (wi.z * wo.z * denom * denom)));
+    const float r_i = anisotropic ? smith_r(wi, alpha, alpha_y) : smith_r(wi, alpha);
+    const float d = anisotropic ? tr_d(h, l2, alpha, alpha_y) : tr_d(h, l2, alpha);
+    // G / |cos_i cos_o| = 2 / (r_o |cos_i| + r_i |cos_o|) (smith_r).
+    const float g_over_cos = 2 / (o.smith_r * std::abs(wi.z) + r_i * std::abs(wo.z));
+    return kt_rough * ((1 - fresnel) * std::abs(d * g_over_cos * ih * oh / (denom * denom)));
 }
 
 Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit,

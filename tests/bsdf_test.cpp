@@ -571,3 +571,87 @@ TEST(Materials, RoughGlassIsMicrofacetReflectionAndTransmission) {
     const Bsdf zero = bsdf_of("Material \"glass\" \"float uroughness\" 0 \"float vroughness\" 0");
     EXPECT_FALSE(zero.has_nonspecular());
 }
+
+// The microfacet lobes' values and density at random directions against pbrt-v3's formulas,
+// written in its tan^2 form in double: D = 1 / (pi ax ay cos^4 (1 + tan^2 (cos^2 phi / ax^2 +
+// sin^2 phi / ay^2))^2), Lambda = (sqrt(1 + tan^2 (ax^2 cos^2 phi + ay^2 sin^2 phi)) - 1) / 2,
+// G = 1 / (1 + Lambda(wo) + Lambda(wi)); reflection F D G / (4 cos_i cos_o) (plastic's Fresnel
+// from 1.5 to 1) with density D G1(wo) / (4 cos_o), and transmission as at
+// RoughGlassIsMicrofacetReflectionAndTransmission. Isotropic and anisotropic.
+TEST(Bsdf, MicrofacetValuesAndDensitiesArePbrtV3sFormulasEverywhere) {
+    using V = std::array<double, 3>;
+    auto d_of = [](V h, double ax, double ay) {
+        const double l = std::sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+        for (double& c : h) c /= l;
+        const double cos2 = h[2] * h[2], sin2 = 1 - cos2, tan2 = sin2 / cos2;
+        const double cos2phi = sin2 > 0 ? h[0] * h[0] / sin2 : 1, sin2phi = 1 - cos2phi;
+        const double e = tan2 * (cos2phi / (ax * ax) + sin2phi / (ay * ay));
+        return 1 / (3.14159265358979 * ax * ay * cos2 * cos2 * (1 + e) * (1 + e));
+    };
+    auto lambda_of = [](const V& w, double ax, double ay) {
+        const double cos2 = w[2] * w[2], sin2 = 1 - cos2, tan2 = sin2 / cos2;
+        const double cos2phi = sin2 > 0 ? w[0] * w[0] / sin2 : 1, sin2phi = 1 - cos2phi;
+        return (std::sqrt(1 + tan2 * (ax * ax * cos2phi + ay * ay * sin2phi)) - 1) / 2;
+    };
+    auto fr = [](double c, double ei, double et) {
+        if (c < 0) {
+            std::swap(ei, et);
+            c = -c;
+        }
+        const double st = ei / et * std::sqrt(std::max(0.0, 1 - c * c));
+        if (st >= 1) return 1.0;
+        const double ct = std::sqrt(1 - st * st);
+        const double a = (et * c - ei * ct) / (et * c + ei * ct),
+                     b = (ei * c - et * ct) / (ei * c + et * ct);
+        return (a * a + b * b) / 2;
+    };
+    uint32_t state = 12345;
+    auto uniform = [&] {
+        state = state * 1664525u + 1013904223u;
+        return (state >> 8) * (1.0 / 16777216.0);
+    };
+    auto direction = [&](double sign) {  // on the side of `sign`, not within 3 degrees of the plane
+        const double z = 0.05 + 0.95 * uniform(), phi = 2 * 3.14159265358979 * uniform();
+        const double r = std::sqrt(1 - z * z);
+        return V{r * std::cos(phi), r * std::sin(phi), sign * z};
+    };
+    auto vec = [](const V& v) { return Vec3(float(v[0]), float(v[1]), float(v[2])); };
+    for (const auto& [ax, ay] : {std::pair{0.3, 0.3}, std::pair{0.05, 0.05}, std::pair{0.4, 0.1}}) {
+        Bsdf b;
+        b.frame = Frame{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+        b.ng = Vec3(0, 0, 1);
+        b.ks = Rgb(1);
+        b.alpha = float(ax);
+        b.alpha_y = float(ay);
+        b.anisotropic = ax != ay;
+        Bsdf t = b;  // rough transmission alone, from 1 into 1.33
+        t.ks = Rgb();
+        t.kt_rough = Rgb(1);
+        t.lobe_eta_i = 1;
+        t.lobe_eta_t = 1.33f;
+        for (int k = 0; k < 200; ++k) {
+            const V wo = direction(1), wi = direction(1), wt = direction(-1);
+            const V h{wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]};
+            const double hl = std::sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+            const double ih = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / hl;
+            const double d = d_of(h, ax, ay), lo = lambda_of(wo, ax, ay);
+            const double g = 1 / (1 + lo + lambda_of(wi, ax, ay));
+            const double f = fr(ih, 1.5, 1) * d * g / (4 * wi[2] * wo[2]);
+            const double p = d / (1 + lo) / (4 * wo[2]);
+            EXPECT_NEAR(b.f(vec(wo), vec(wi)).r, f, 2e-4 * f + 1e-6) << ax << " " << ay << " " << k;
+            EXPECT_NEAR(b.pdf(b.outgoing(vec(wo)), vec(wi)), p, 2e-4 * p + 1e-6) << k;
+            // Into the glass (eta = 1.33 on wt's side): h = normalize(wo + eta wt), facing up.
+            const double eta = 1.33;
+            V ht{wo[0] + eta * wt[0], wo[1] + eta * wt[1], wo[2] + eta * wt[2]};
+            const double tl = std::sqrt(ht[0] * ht[0] + ht[1] * ht[1] + ht[2] * ht[2]);
+            for (double& c : ht) c *= (ht[2] < 0 ? -1 : 1) / tl;
+            const double oh = wo[0] * ht[0] + wo[1] * ht[1] + wo[2] * ht[2],
+                         th = wt[0] * ht[0] + wt[1] * ht[1] + wt[2] * ht[2];
+            if (oh * th > 0) continue;  // no refraction between them
+            const double gt = 1 / (1 + lo + lambda_of(wt, ax, ay)), den = oh + eta * th;
+            const double ft = (1 - fr(oh, 1, 1.33)) * d_of(ht, ax, ay) * gt *
+                              std::abs(th * oh / (wt[2] * wo[2] * den * den));
+            EXPECT_NEAR(t.f(vec(wo), vec(wt)).r, ft, 2e-4 * ft + 1e-6) << ax << " " << k;
+        }
+    }
+}
