@@ -19,12 +19,14 @@ struct CheckArgs {
     std::string scene;
 };
 
-// Triangles and quadrics as rendered: an object's count once per instance.
+// Triangles, quadrics and curve segments as rendered: an object's count once per instance.
 void count_primitives(const std::vector<std::unique_ptr<render::Primitive>>& prims,
-                      std::size_t* tris, std::size_t* quadrics) {
+                      std::size_t* tris, std::size_t* quadrics, std::size_t* curves) {
     for (const auto& p : prims) {
         if (p->kind == render::Primitive::Kind::Triangles)
             *tris += p->indices.size() / 3;
+        else if (p->kind == render::Primitive::Kind::Curves)
+            *curves += p->curve_first.size();
         else
             ++*quadrics;
     }
@@ -33,10 +35,15 @@ void count_primitives(const std::vector<std::unique_ptr<render::Primitive>>& pri
 int run_check(const CheckArgs& a) {
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
     auto scene = render::build_scene(desc, {}, print_warning);
-    std::size_t tris = 0, quadrics = 0;
-    count_primitives(scene->primitives, &tris, &quadrics);
+    std::size_t tris = 0, quadrics = 0, curves = 0;
+    count_primitives(scene->primitives, &tris, &quadrics, &curves);
     for (const auto& in : scene->instances)
-        count_primitives(scene->objects[in.object].primitives, &tris, &quadrics);
+        count_primitives(scene->objects[in.object].primitives, &tris, &quadrics, &curves);
+    // (Curves, as media, only where there are some.)
+    const std::string curve_text =
+        curves == 0
+            ? ""
+            : ", " + std::to_string(curves) + (curves == 1 ? " curve segment" : " curve segments");
     std::string instances;
     if (!scene->instances.empty())
         instances = " (" + std::to_string(scene->instances.size()) + " instances of " +
@@ -48,11 +55,11 @@ int run_check(const CheckArgs& a) {
         media = ", " + std::to_string(scene->media.size()) +
                 (scene->media.size() == 1 ? " medium" : " media");
     std::printf(
-        "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics%s, %zu lights, %zu materials, "
+        "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics%s%s, %zu lights, %zu materials, "
         "%zu textures%s\n",
         a.scene.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris,
-        quadrics, instances.c_str(), scene->lights.size(), scene->materials.size(),
-        scene->textures.size(), media.c_str());
+        quadrics, curve_text.c_str(), instances.c_str(), scene->lights.size(),
+        scene->materials.size(), scene->textures.size(), media.c_str());
     return 0;
 }
 

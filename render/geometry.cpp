@@ -156,6 +156,55 @@ void alpha_filter(const RTCFilterFunctionNArguments* args, bool shadow) {
             args->valid[i] = 0;  // not there: Embree goes on to the next hit
     }
 }
+// Where a ribbon curve is: pbrt-v3 intersects it as the flat curve facing the ray, its width
+// scaled by |n(u) . d| (n the ends' normals interpolated spherically, not renormalised: seen
+// along its normal a ribbon is as wide as its width, edge-on it is not there). Embree's flat
+// curve is as wide as the width; this keeps the hits within the scaled width.
+struct CurvePoint {
+    Vec3 centre, dpdu;
+    float width;
+};
+CurvePoint curve_point(const Primitive& prim, uint32_t seg, float u) {
+    const std::array<float, 4>* q = &prim.curve_points[prim.curve_first[seg]];
+    const Vec3 c0(q[0][0], q[0][1], q[0][2]), c1(q[1][0], q[1][1], q[1][2]),
+        c2(q[2][0], q[2][1], q[2][2]), c3(q[3][0], q[3][1], q[3][2]);
+    auto lerp = [u](const Vec3& a, const Vec3& b) { return (1 - u) * a + u * b; };
+    const Vec3 a0 = lerp(c0, c1), a1 = lerp(c1, c2), a2 = lerp(c2, c3);
+    const Vec3 b0 = lerp(a0, a1), b1 = lerp(a1, a2);
+    const Vec3 db = b1 - b0;
+    const std::array<float, 2>& ws = prim.curve_widths[seg];
+    return {lerp(b0, b1), dot(db, db) > 0 ? 3 * db : c3 - c0,  // (pbrt-v3's fallback at a cusp)
+            (1 - u) * ws[0] + u * ws[1]};
+}
+// The hit's distance from the curve across the ray (in the plane facing it), signed by pbrt-v3's
+// edge function: (dP/du x (p - c)) . d, which is (p - c) . (d x dP/du).
+float across_ray(const Vec3& off, const Vec3& dir, const Vec3& dpdu) {
+    const Vec3 side = cross(dir, dpdu);
+    const float len = length(side);
+    return len > 0 ? dot(off, side) / len : 0.0f;
+}
+float ribbon_scale(const Primitive& prim, uint32_t seg, float u, const Vec3& dir) {
+    const auto& n = prim.curve_end_normals[seg];
+    return std::abs(dot(curve_normal(n[0], n[1], u), dir)) / length(dir);
+}
+void ribbon_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* prim = static_cast<const Primitive*>(args->geometryUserPtr);
+    RTCRayN* ray = args->ray;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const uint32_t seg = RTCHitN_primID(args->hit, args->N, i);
+        const float u = std::clamp(RTCHitN_u(args->hit, args->N, i), 0.0f, 1.0f);
+        const Vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                     RTCRayN_org_z(ray, args->N, i)),
+            d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+              RTCRayN_dir_z(ray, args->N, i));
+        const CurvePoint c = curve_point(*prim, seg, u);
+        const Vec3 off = o + d * RTCRayN_tfar(ray, args->N, i) - c.centre;
+        if (!(2 * std::abs(across_ray(off, d, c.dpdu)) <= c.width * ribbon_scale(*prim, seg, u, d)))
+            args->valid[i] = 0;  // beyond the ribbon's width as seen along the ray
+    }
+}
+
 void alpha_intersect_filter(const RTCFilterFunctionNArguments* args) {
     alpha_filter(args, false);
 }
@@ -168,10 +217,56 @@ void embree_error(void*, RTCError code, const char* str) {
                       (str ? str : ""));
 }
 
+// A hit on a curve segment (algorithms.md §20): Embree gives the curve parameter u and the
+// distance; the rest is pbrt-v3's. dP/du is the Bezier curve's tangent; dP/dv spans the width
+// (w = the width at u) across it: for flat and cylinder curves in the plane facing the ray,
+// pbrt-v3's (-dp/du.y, dp/du.x, 0) in the ray's frame, which is normalize(d x dP/du), for a
+// ribbon normalize(n(u) x dP/du); a cylinder's turned about dP/du by -(v - 1/2) 180 degrees so
+// that its normal rounds across the width. v is where the hit lies across the width, 1/2 on
+// the curve (pbrt-v3's side of it by the edge function, the same sign as (dP/du x (p - c)) . d).
+void curve_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit& h) {
+    const Primitive& prim = *h.prim;
+    const uint32_t seg = hit.primID;
+    const float u = std::clamp(hit.u, 0.0f, 1.0f);
+    CurvePoint c = curve_point(prim, seg, u);
+    if (!(dot(c.dpdu, c.dpdu) > 0)) c.dpdu = Frame::from_z(normalize(dir)).s;  // no length
+    const bool ribbon = prim.curve_type == Primitive::CurveType::Ribbon;
+    const float width = ribbon ? c.width * ribbon_scale(prim, seg, u, dir) : c.width;
+    h.p = org + dir * h.t;
+    const float across = across_ray(h.p - c.centre, dir, c.dpdu);
+    const float v = width > 0 ? std::clamp(0.5f + across / width, 0.0f, 1.0f) : 0.5f;
+    Vec3 dpdv;
+    if (ribbon) {
+        const auto& n = prim.curve_end_normals[seg];
+        dpdv = normalize(cross(curve_normal(n[0], n[1], u), c.dpdu)) * width;
+    } else {
+        dpdv = normalize(cross(dir, c.dpdu)) * width;
+        if (prim.curve_type == Primitive::CurveType::Cylinder) {
+            const float theta = (v - 0.5f) * kPi;
+            dpdv = std::cos(theta) * dpdv - std::sin(theta) * cross(normalize(c.dpdu), dpdv);
+        }
+    }
+    Vec3 n = normalize(cross(c.dpdu, dpdv));
+    if (prim.flip) n = -n;
+    h.u = u;
+    h.v = v;
+    h.ng = n;
+    h.ns = n;
+    h.triangle = seg;
+    h.curve_partials = {c.dpdu, dpdv};
+    h.offset = 2 * width * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+    h.uv_pending = false;
+}
+
 // The hit on h.prim in the primitive's own space (the world, or an instance's object space).
 void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, bool uv, SurfaceHit* out) {
     const Primitive& prim = *out->prim;
     SurfaceHit& h = *out;
+    h.offset = 0;
+    if (prim.kind == Primitive::Kind::Curves) {
+        curve_hit(org, dir, hit, h);
+        return;
+    }
     if (prim.kind == Primitive::Kind::Triangles) {
         uint32_t i0 = prim.indices[3 * hit.primID], i1 = prim.indices[3 * hit.primID + 1],
                  i2 = prim.indices[3 * hit.primID + 2];
@@ -296,6 +391,23 @@ void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id, cons
             rtcSetGeometryIntersectFilterFunction(g, alpha_intersect_filter);
             rtcSetGeometryOccludedFilterFunction(g, alpha_occluded_filter);
         }
+    } else if (prim.kind == Primitive::Kind::Curves) {
+        // Embree's flat (ray-facing) Bezier curves, as pbrt-v3 intersects all three types; a
+        // ribbon's hits are kept within its width as the ray sees it (ribbon_filter). Embree
+        // reads the primitive's own buffers.
+        g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                   prim.curve_points.data(), 0, 4 * sizeof(float),
+                                   prim.curve_points.size());
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT,
+                                   prim.curve_first.data(), 0, sizeof(uint32_t),
+                                   prim.curve_first.size());
+        rtcSetGeometryTessellationRate(g, prim.curve_tessellation);
+        if (prim.curve_type == Primitive::CurveType::Ribbon) {
+            rtcSetGeometryUserData(g, &prim);
+            rtcSetGeometryIntersectFilterFunction(g, ribbon_filter);
+            rtcSetGeometryOccludedFilterFunction(g, ribbon_filter);
+        }
     } else {
         g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(g, lone ? 2 : 1);  // kBoxOnly when lone
@@ -311,8 +423,9 @@ void attach(RTCDevice device, RTCScene scene, Primitive& prim, unsigned id, cons
 
 // True when exactly one of `prims` is a quadric.
 bool one_quadric(const std::vector<std::unique_ptr<Primitive>>& prims) {
-    return std::count_if(prims.begin(), prims.end(),
-                         [](const auto& p) { return p->kind != Primitive::Kind::Triangles; }) == 1;
+    return std::count_if(prims.begin(), prims.end(), [](const auto& p) {
+               return p->kind == Primitive::Kind::Sphere || p->kind == Primitive::Kind::Disk;
+           }) == 1;
 }
 }  // namespace
 
@@ -503,6 +616,7 @@ void Scene::surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit&
     h.object_id = in.first_id + hit.geomID;
     local_hit(in.to_object_point(org), in.to_object_vector(dir), hit, uv, &h);
     h.p = in.to_world_point(h.p);
+    h.offset *= in.curvature_scale;  // (a curve's: its width, scaled as the instance scales)
     h.ns_object = h.ns;
     h.ng = normalize(in.to_world_normal(h.ng));
     h.ns = normalize(in.to_world_normal(h.ns));

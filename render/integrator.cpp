@@ -15,8 +15,9 @@ float ray_epsilon(const Vec3& p) {
     return 1e-4f * (1 + max_abs(p));
 }
 
+// (A curve's hit has its own offset: SurfaceHit::offset.)
 Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
-    return h.p + faceforward(h.ng, w) * ray_epsilon(h.p);
+    return h.p + faceforward(h.ng, w) * (ray_epsilon(h.p) + h.offset);
 }
 
 struct Tracer {

@@ -222,9 +222,18 @@ struct UvDelta {
     float du = 0, dv = 0;
 };
 
+/// A ribbon curve's normal at u between the unit normals n0 and n1 at its segment's ends,
+/// interpolated as pbrt-v3 interpolates them: spherically over the angle acos(clamp(n0 . n1, 0,
+/// 1)) (linearly where that angle is 0).
+inline Vec3 curve_normal(const Vec3& n0, const Vec3& n1, float u) {
+    const float angle = std::acos(std::clamp(dot(n0, n1), 0.0f, 1.0f)), s = std::sin(angle);
+    if (!(s > 1e-6f)) return (1 - u) * n0 + u * n1;
+    return (std::sin((1 - u) * angle) / s) * n0 + (std::sin(u * angle) / s) * n1;
+}
+
 /// Everything the shading code needs about a geometry (indexed by Embree geomID).
 struct Primitive {
-    enum class Kind { Triangles, Sphere, Disk };
+    enum class Kind { Triangles, Sphere, Disk, Curves };
     Kind kind = Kind::Triangles;
     uint32_t id = 0;    // index in Scene::primitives (the textured object for the CMAM)
     int material = -1;  // -1 is the default matte
@@ -242,6 +251,19 @@ struct Primitive {
     /// basis divided through and combined with the vertices' (u,v), which local_uv_offsets
     /// otherwise does per hit (in float, for triangles without gradients).
     void make_uv_gradients();
+    // Curves (pbrt-v3's "curve" shape, algorithms.md §20): cubic Bezier segments, four control
+    // points each (x, y, z and the radius, half the width, in the primitive's space: Embree's
+    // vertex buffer, read where it is), the segment's widths at u = 0 and 1, and for ribbons the
+    // normals at its ends (interpolated spherically, as pbrt-v3 does).
+    enum class CurveType { Flat, Cylinder, Ribbon };
+    CurveType curve_type = CurveType::Flat;
+    std::vector<std::array<float, 4>> curve_points;
+    std::vector<uint32_t> curve_first;  // each segment's first control point
+    std::vector<std::array<float, 2>> curve_widths;
+    std::vector<std::array<Vec3, 2>> curve_end_normals;
+    // Embree's flat curves are ray-facing quads, this many per segment: as many as pbrt-v3's
+    // refinement would split the most bent segment into (within a twentieth of its width).
+    float curve_tessellation = 4;
     // Quadrics: object_from_world / world_from_object as 3x4, double precision
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
@@ -335,7 +357,12 @@ struct SurfaceHit {
     uint32_t triangle = 0;               // triangles: the triangle index
     float b1 = 0, b2 = 0;                // triangles: barycentrics of vertices 1 and 2
     std::array<double, 3> p_object{};    // quadrics: the hit in object space
-    bool uv_pending = false;             // quadrics: u, v not computed yet (ensure_uv)
+    Partials curve_partials;             // curves: dP/du and dP/dv in the primitive's space
+    // How far a ray leaving the hit starts from it along the normal, beyond the usual epsilon:
+    // a curve's twice its width, as pbrt-v3's error bound (a ray-facing ribbon turns to face
+    // each new ray, and would be met again by rays leaving it).
+    float offset = 0;
+    bool uv_pending = false;  // quadrics: u, v not computed yet (ensure_uv)
 
     /// Computes u and v when the hit was found without them (a quadric's cost an atan2 and an
     /// acos, which a hit whose shading reads no texture does without).

@@ -43,6 +43,7 @@ std::optional<SphereCone> sphere_cone(const Vec3& centre, float R, const Vec3& r
 
 SurfaceSample Primitive::sample_area(float u1, float u2) const {
     SurfaceSample out;
+    if (kind == Kind::Curves) return out;  // (curves do not emit: Builder::emit_area_light)
     if (kind == Kind::Triangles) {
         // A triangle by area (area_cdf), then a point uniform in it; u1 is reused within the
         // chosen triangle's span.
@@ -116,6 +117,7 @@ bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
 }
 
 float Primitive::area_pdf(const Vec3& p) const {
+    if (kind == Kind::Curves) return 0;
     if (kind == Kind::Triangles) {
         const double total = area_cdf.empty() ? 0 : area_cdf.back();
         return total > 0 ? float(1 / total) : 0.0f;
@@ -162,6 +164,7 @@ std::optional<SurfaceSample> Primitive::sample_cone(const Vec3& ref, float u1, f
 
 Partials SurfaceHit::local_partials() const {
     const Primitive& pr = *prim;
+    if (pr.kind == Primitive::Kind::Curves) return curve_partials;
     if (pr.kind == Primitive::Kind::Triangles) {
         uint32_t i0 = pr.indices[3 * triangle], i1 = pr.indices[3 * triangle + 1],
                  i2 = pr.indices[3 * triangle + 2];
@@ -329,7 +332,8 @@ std::array<Vec3, N> SurfaceHit::local_normal_offsets(const std::array<Vec3, N>& 
         }
         return out;
     }
-    if (pr.kind == Primitive::Kind::Disk) return out;
+    // A disk's normal is constant, and pbrt-v3 gives a curve's none (its dn/du, dn/dv are 0).
+    if (pr.kind == Primitive::Kind::Disk || pr.kind == Primitive::Kind::Curves) return out;
     // Sphere: n_obj = p_obj, so dn_obj = dp_obj; normals map with (object_from_world)^T.
     Vec3 n = to_vec(xform_normal(pr.object_from_world, p_object));
     for (std::size_t k = 0; k < N; ++k) {

@@ -176,6 +176,160 @@ bool Builder::ply_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     return place_mesh(s, mesh->positions, mesh->normals, uvs, mesh->indices, prim);
 }
 
+// pbrt-v3's "curve" (algorithms.md §20): control points "P" of a degree 2 or 3 curve with a
+// Bezier or uniform B-spline basis, each segment made a cubic Bezier curve as pbrt-v3 makes it;
+// "width" (or "width0" and "width1", from the curve's start to its end) across it; "type" flat
+// (facing each ray), cylinder (flat, shaded as a cylinder) or ribbon (oriented by the normals
+// "N" at the segments' ends). The errors pbrt-v3 reports and skips the curve for are errors here.
+bool Builder::curve(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    prim.kind = Primitive::Kind::Curves;
+    const double width = finite_float(e, "width", 1);
+    const double width0 = finite_float(e, "width0", width),
+                 width1 = finite_float(e, "width1", width);
+    if (width0 < 0 || width1 < 0) throw SceneError(e.loc, "curve widths must not be negative");
+    const int degree = e.params.get_int("degree", 3);
+    if (degree != 2 && degree != 3)
+        throw SceneError(loc_of(e, "degree"),
+                         "curve degree must be 2 or 3, got " + std::to_string(degree));
+    const std::string basis = e.params.get_string("basis", "bezier");
+    if (basis != "bezier" && basis != "bspline")
+        throw SceneError(loc_of(e, "basis"),
+                         "curve basis must be \"bezier\" or \"bspline\", got " + in_quotes(basis));
+    const auto p = e.params.get_point3s("P");
+    if (!p) throw SceneError(e.loc, "\"curve\" needs a \"point3 P\" parameter");
+    const auto& pv = finite_values(e, "P", *p);
+    const int ncp = static_cast<int>(pv.size() / 3);
+    int segments;
+    if (basis == "bezier") {
+        if (ncp < degree + 1 || (ncp - 1 - degree) % degree != 0)
+            throw SceneError(loc_of(e, "P"), std::to_string(ncp) + " control points: a degree " +
+                                                 std::to_string(degree) + " Bezier curve takes " +
+                                                 std::to_string(degree + 1) + " + n * " +
+                                                 std::to_string(degree) + " of them");
+        segments = (ncp - 1) / degree;
+    } else {
+        if (ncp < degree + 1)
+            throw SceneError(loc_of(e, "P"), std::to_string(ncp) + " control points: a degree " +
+                                                 std::to_string(degree) +
+                                                 " B-spline curve takes at least " +
+                                                 std::to_string(degree + 1));
+        segments = ncp - degree;
+    }
+    const std::string type = e.params.get_string("type", "flat");
+    if (type == "flat") {
+        prim.curve_type = Primitive::CurveType::Flat;
+    } else if (type == "ribbon") {
+        prim.curve_type = Primitive::CurveType::Ribbon;
+    } else if (type == "cylinder") {
+        prim.curve_type = Primitive::CurveType::Cylinder;
+    } else {
+        warn(loc_of(e, "type"), "unknown curve type " + in_quotes(type) +
+                                    " (pbrt-v3 has \"flat\", \"ribbon\" and \"cylinder\"): "
+                                    "\"cylinder\" is used, as pbrt-v3 uses it");
+        prim.curve_type = Primitive::CurveType::Cylinder;
+    }
+    const bool ribbon = prim.curve_type == Primitive::CurveType::Ribbon;
+    std::vector<Vec3> normals;
+    if (const auto n = e.params.get_point3s("N")) {
+        if (!ribbon) {
+            warn(loc_of(e, "N"),
+                 "curve normals are used by \"ribbon\" curves only, as in "
+                 "pbrt-v3; they are ignored");
+        } else {
+            const auto& nv = finite_values(e, "N", *n);
+            if (nv.size() / 3 != static_cast<std::size_t>(segments) + 1)
+                throw SceneError(loc_of(e, "N"),
+                                 std::to_string(nv.size() / 3) + " normals: a ribbon curve of " +
+                                     std::to_string(segments) + " segments takes " +
+                                     std::to_string(segments + 1) + ", one at each segment's ends");
+            const Mat4 inv_t =
+                inverse_or_error(s.world_from_object, e.loc, "the shape's transform is singular")
+                    .transposed();
+            for (std::size_t i = 0; i + 2 < nv.size(); i += 3) {
+                const auto w = inv_t.apply_vector({nv[i], nv[i + 1], nv[i + 2]});
+                const Vec3 v = to_vec(w);
+                if (!(length(v) > 0))
+                    throw SceneError(loc_of(e, "N"), "a ribbon curve's normal has no length");
+                normals.push_back(normalize(v));
+            }
+        }
+    } else if (ribbon) {
+        throw SceneError(e.loc, "a \"ribbon\" curve needs normals \"N\" at its segments' ends");
+    }
+    // Widths are in the object's space: scaled by the transform's mean scale (exact for a
+    // uniform one).
+    const Mat4& m = s.world_from_object;
+    const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
+                       m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
+                       m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
+    const double scale = std::cbrt(std::abs(det));
+    auto cp = [&](int i) {
+        return Vec3(float(pv[3 * i]), float(pv[3 * i + 1]), float(pv[3 * i + 2]));
+    };
+    auto lerp = [](float t, const Vec3& a, const Vec3& b) { return (1 - t) * a + t * b; };
+    for (int seg = 0; seg < segments; ++seg) {
+        Vec3 b[4];  // the segment's cubic Bezier control points, as pbrt-v3 computes them
+        if (basis == "bezier") {
+            const int i = seg * degree;
+            if (degree == 2) {
+                b[0] = cp(i);
+                b[1] = lerp(2.f / 3.f, cp(i), cp(i + 1));
+                b[2] = lerp(1.f / 3.f, cp(i + 1), cp(i + 2));
+                b[3] = cp(i + 2);
+            } else {
+                for (int k = 0; k < 4; ++k) b[k] = cp(i + k);
+            }
+        } else if (degree == 2) {  // a uniform B-spline's segment, by blossoming
+            const Vec3 p11 = lerp(0.5f, cp(seg), cp(seg + 1)), p12 = cp(seg + 1),
+                       p22 = lerp(0.5f, cp(seg + 1), cp(seg + 2));
+            b[0] = p11;
+            b[1] = lerp(2.f / 3.f, p11, p12);
+            b[2] = lerp(1.f / 3.f, p12, p22);
+            b[3] = p22;
+        } else {
+            const Vec3 p122 = lerp(2.f / 3.f, cp(seg), cp(seg + 1)),
+                       p223 = lerp(1.f / 3.f, cp(seg + 1), cp(seg + 2)),
+                       p233 = lerp(2.f / 3.f, cp(seg + 1), cp(seg + 2)),
+                       p334 = lerp(1.f / 3.f, cp(seg + 2), cp(seg + 3));
+            b[0] = lerp(0.5f, p122, p223);
+            b[1] = p223;
+            b[2] = p233;
+            b[3] = lerp(0.5f, p233, p334);
+        }
+        const float w0 = float(scale * (width0 + (width1 - width0) * seg / segments)),
+                    w1 = float(scale * (width0 + (width1 - width0) * (seg + 1) / segments));
+        prim.curve_first.push_back(static_cast<uint32_t>(prim.curve_points.size()));
+        prim.curve_widths.push_back({w0, w1});
+        Vec3 wp[4];
+        for (int k = 0; k < 4; ++k) {
+            wp[k] = to_vec(m.apply_point({b[k].x, b[k].y, b[k].z}));
+            // A linear width along the segment: its Bezier control values are evenly spaced.
+            prim.curve_points.push_back(
+                {wp[k].x, wp[k].y, wp[k].z, 0.5f * (w0 + (w1 - w0) * k / 3.0f)});
+        }
+        // pbrt-v3's refinement: 2^r pieces, r = log4(sqrt(2) 6 L0 / (8 eps)), L0 the largest
+        // second difference of the control points, eps a twentieth of the width.
+        float l0 = 0;
+        for (int i = 0; i < 2; ++i) {
+            const Vec3 d = wp[i] - 2 * wp[i + 1] + wp[i + 2];
+            l0 = std::max({l0, std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+        }
+        const float eps = 0.05f * std::max(w0, w1);
+        if (eps > 0)
+            prim.curve_tessellation = std::clamp(std::sqrt(1.41421356f * 6 * l0 / (8 * eps)),
+                                                 prim.curve_tessellation, 64.0f);
+        if (ribbon) {
+            prim.curve_end_normals.push_back({normals[seg], normals[seg + 1]});
+        }
+    }
+    // pbrt-v3's "splitdepth" splits a segment before it refines each piece to a twentieth of
+    // the width; the pieces above are refined to that bound from the start: read, unneeded.
+    if (const pbrt::Param* sd = e.params.find("splitdepth")) sd->used = true;
+    e.params.check_unused("shape \"curve\"", m_warn);
+    return !prim.curve_first.empty();
+}
+
 // pbrt-v3's "trianglemesh", and "loopsubdiv": its control mesh subdivided at load
 // (algorithms.md §16).
 bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
@@ -295,6 +449,12 @@ bool Builder::place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
 // pbrt-v3 makes every shape in an AreaLightSource's scope emit; one light per shape
 // here, sampled uniformly by area over all its triangles.
 void Builder::emit_area_light(const pbrt::ShapeDesc& s, Primitive& prim) {
+    if (prim.kind == Primitive::Kind::Curves) {
+        warn(s.entity.loc,
+             "a curve in an AreaLightSource's scope does not emit (pbrt-v3 cannot sample a "
+             "curve's area, and stops); it is rendered as a surface that does not emit");
+        return;
+    }
     Light l = m_area_lights[static_cast<std::size_t>(s.area_light)];
     l.prim = static_cast<int>(prim.id);
     if (prim.kind == Primitive::Kind::Triangles) {
@@ -324,7 +484,8 @@ void Builder::shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primit
         {"hyperboloid", &Builder::tessellated_quadric},
         {"trianglemesh", &Builder::triangle_mesh},
         {"plymesh", &Builder::ply_mesh},
-        {"loopsubdiv", &Builder::triangle_mesh}};
+        {"loopsubdiv", &Builder::triangle_mesh},
+        {"curve", &Builder::curve}};
     const Entity& e = s.entity;
     auto prim = std::make_unique<Primitive>();
     prim->material = s.material;
@@ -332,10 +493,6 @@ void Builder::shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primit
     prim->medium_outside = medium(s.medium_outside);
     finite_transform(s.world_from_object, e.loc, "shape");
     prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
-    if (e.type == "curve") {
-        warn(e.loc, "shape \"curve\" is not rendered (cmam has no curves); it is skipped");
-        return;
-    }
     if (!(this->*builder_for(kShapes, e, "shape"))(s, *prim)) return;
     prim->id = static_cast<uint32_t>(out.size());
     if (s.area_light >= 0 && &out == &m_scene->primitives) emit_area_light(s, *prim);
