@@ -254,7 +254,7 @@ void curve_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, SurfaceHit& 
     h.ns = n;
     h.triangle = seg;
     h.curve_partials = {c.dpdu, dpdv};
-    h.offset = 2 * width * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+    h.offset = 2 * width;
     h.uv_pending = false;
 }
 

@@ -15,9 +15,11 @@ float ray_epsilon(const Vec3& p) {
     return 1e-4f * (1 + max_abs(p));
 }
 
-// (A curve's hit has its own offset: SurfaceHit::offset.)
+// (A curve's hit is left by more: SurfaceHit::offset.)
 Vec3 offset_origin(const SurfaceHit& h, const Vec3& w) {
-    return h.p + faceforward(h.ng, w) * (ray_epsilon(h.p) + h.offset);
+    const Vec3 n = faceforward(h.ng, w);
+    return h.p +
+           n * (ray_epsilon(h.p) + h.offset * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z)));
 }
 
 struct Tracer {

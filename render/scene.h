@@ -358,9 +358,10 @@ struct SurfaceHit {
     float b1 = 0, b2 = 0;                // triangles: barycentrics of vertices 1 and 2
     std::array<double, 3> p_object{};    // quadrics: the hit in object space
     Partials curve_partials;             // curves: dP/du and dP/dv in the primitive's space
-    // How far a ray leaving the hit starts from it along the normal, beyond the usual epsilon:
-    // a curve's twice its width, as pbrt-v3's error bound (a ray-facing ribbon turns to face
-    // each new ray, and would be met again by rays leaving it).
+    // A curve's error bound, pbrt-v3's: twice its width along each axis (world space). Rays
+    // leave the hit that much further along the normal n, offset (|n_x| + |n_y| + |n_z|), as
+    // pbrt-v3 offsets them: a curve's ray-facing pieces turn to face each new ray, and would be
+    // met again by rays leaving it. 0 for other shapes.
     float offset = 0;
     bool uv_pending = false;  // quadrics: u, v not computed yet (ensure_uv)
 
