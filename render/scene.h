@@ -157,6 +157,7 @@ struct Material {
         Substrate,
         Translucent,
         Fourier,
+        Hair,
         None,
         Mix
     };
@@ -174,6 +175,13 @@ struct Material {
     // Fourier: pbrt-v3's tabulated BSDF (shared by the materials that name one file).
     std::shared_ptr<const FourierTable> fourier;
     bool remap_roughness = true;
+    // Hair (pbrt-v3's): its absorption from sigma_a, from the colour it should have, or from its
+    // melanin concentrations (eumelanin, pheomelanin), the first given; its roughnesses beta_m
+    // and beta_n and the scales' tilt alpha in degrees (its index is `eta`).
+    enum class HairAbsorption { SigmaA, Colour, Concentration };
+    HairAbsorption hair_absorption = HairAbsorption::Concentration;
+    TexInput hair_sigma_a, hair_colour, eumelanin{-1, Rgb(1.3f)}, pheomelanin;
+    TexInput beta_m{-1, Rgb(0.3f)}, beta_n{-1, Rgb(0.3f)}, hair_alpha{-1, Rgb(2)};
     // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
     // node -1 and a constant: none (a constant displacement leaves the normal as it is here).
     TexInput bump;
@@ -181,9 +189,10 @@ struct Material {
     /// Whether shading it evaluates a texture node (a mix evaluates its amount and one of two
     /// materials): only then does a hit need its footprints in (u,v).
     bool reads_textures() const {
-        if (type == Type::Mix) return true;
+        if (type == Type::Mix || type == Type::Hair) return true;  // (hair reads v, too)
         for (const TexInput* in :
-             {&kd, &ks, &kr, &kt, &sigma, &roughness, &vroughness, &eta, &k, &amount, &bump})
+             {&kd, &ks, &kr, &kt, &sigma, &roughness, &vroughness, &eta, &k, &amount, &bump,
+              &hair_sigma_a, &hair_colour, &eumelanin, &pheomelanin, &beta_m, &beta_n, &hair_alpha})
             if (in->node >= 0) return true;
         return false;
     }

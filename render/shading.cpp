@@ -410,6 +410,7 @@ void Bsdf::scale(const Rgb& w) {
     kt_rough = kt_rough * w;
     kt_diffuse = kt_diffuse * w;
     fourier_scale = fourier_scale * w;
+    hair_scale = hair_scale * w;
     if (layer) layer->scale(w);
 }
 
@@ -446,6 +447,7 @@ bool Bsdf::fits(const Bsdf& o) const {
     if (!same_frame && anisotropic && o.anisotropic) return false;
     // A Fourier BSDF takes no other non-specular lobe beside it.
     if ((fourier && o.own_lobes() > 0) || (o.fourier && own_lobes() > 0)) return false;
+    if ((hair && o.own_lobes() > 0) || (o.hair && own_lobes() > 0)) return false;  // the same
     if (microfacet(*this) && microfacet(o) &&
         (alpha != o.alpha || alpha_y != o.alpha_y || anisotropic != o.anisotropic ||
          lobe_eta_i != o.lobe_eta_i || lobe_eta_t != o.lobe_eta_t || conductor != o.conductor ||
@@ -496,6 +498,11 @@ void Bsdf::add(const Bsdf& o, std::forward_list<Bsdf>& layers) {
         }
         kt_rough += o.kt_rough;
         kt_diffuse += o.kt_diffuse;
+        if (o.hair) {
+            hair = true;
+            hair_params = o.hair_params;
+            hair_scale = o.hair_scale;
+        }
         if (o.fourier) {
             fourier = o.fourier;
             fourier_scale = o.fourier_scale;
@@ -523,7 +530,7 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
 
 int Bsdf::own_lobes() const {
     return int(has_glossy()) + int(has_diffuse()) + int(has_transmission()) +
-           int(has_diffuse_transmission()) + int(fourier != nullptr);
+           int(has_diffuse_transmission()) + int(fourier != nullptr) + int(hair);
 }
 
 // The layers' lobes are evaluated in their own frames, from wo in the world.
@@ -539,6 +546,7 @@ Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
     if (fourier) return fourier_f(*fourier, wo, frame.to_local(wi_w)) * fourier_scale;
+    if (hair) return hair_f(hair_params, wo, frame.to_local(wi_w)) * hair_scale;
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
     if (!reflect) {
         Rgb out = has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
@@ -619,6 +627,7 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return 0;
     if (fourier) return fourier_pdf(*fourier, wo, wi);
+    if (hair) return hair_pdf(hair_params, wo, wi);
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
     // Lambda(wo) = (r_o / |cos_o| - 1) / 2 (smith_r).
@@ -713,6 +722,18 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
         out.wi = frame.to_world(s.wi);
         out.pdf = s.pdf;
         out.f = s.f * fourier_scale;
+        return out;
+    }
+    if (hair) {
+        const std::optional<Vec3> wi = hair_sample(hair_params, wo, u0, u1, u2);
+        if (!wi) return out;
+        out.wi = frame.to_world(*wi);
+        out.pdf = hair_pdf(hair_params, wo, *wi);
+        if (!(out.pdf > 0)) {
+            out.pdf = 0;
+            return out;
+        }
+        out.f = hair_f(hair_params, wo, *wi) * hair_scale;
         return out;
     }
     // The lobe: glossy (0), diffuse (1), transmission (2), diffuse transmission (3), evenly
@@ -948,12 +969,37 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
         case Material::Type::Fourier:
             b.fourier = m.fourier.get();
             break;
+        case Material::Type::Hair: {
+            // pbrt-v3's hair: h = -1 + 2v across the fibre (a curve's v), roughnesses in [0, 1].
+            b.hair = true;
+            HairParams& p = b.hair_params;
+            p.h = std::clamp(-1 + 2 * ctx.v, -1.0f, 1.0f);
+            p.eta = eval_texture(scene, m.eta, ctx).r;
+            p.beta_m = std::clamp(eval_texture(scene, m.beta_m, ctx).r, 0.0f, 1.0f);
+            p.beta_n = std::clamp(eval_texture(scene, m.beta_n, ctx).r, 0.0f, 1.0f);
+            p.alpha = eval_texture(scene, m.hair_alpha, ctx).r;
+            switch (m.hair_absorption) {
+                case Material::HairAbsorption::SigmaA:
+                    p.sigma_a = clamp0(eval_texture(scene, m.hair_sigma_a, ctx));
+                    break;
+                case Material::HairAbsorption::Colour:
+                    p.sigma_a = hair_sigma_a_from_reflectance(
+                        clamp0(eval_texture(scene, m.hair_colour, ctx)), p.beta_n);
+                    break;
+                case Material::HairAbsorption::Concentration:
+                    p.sigma_a = hair_sigma_a_from_concentration(
+                        std::max(0.0f, eval_texture(scene, m.eumelanin, ctx).r),
+                        std::max(0.0f, eval_texture(scene, m.pheomelanin, ctx).r));
+                    break;
+            }
+            break;
+        }
         case Material::Type::None:
         case Material::Type::Mix:  // the integrator resolves its materials (material_bsdf)
             made.reset();
             return made;
     }
-    if (b.anisotropic) {
+    if (b.anisotropic || b.hair) {
         // pbrt-v3's shading frame: s along dp/du in the shading plane (its sign, which pbrt-v3's
         // triangles with normals turn, does not change the distribution), t = n x s. Where dp/du
         // has no direction in that plane the frame stays an arbitrary one.

@@ -8,6 +8,7 @@
 #include "render/footprint/cmam_caches.h"
 #include "render/footprint/footprint.h"
 #include "render/fourier.h"
+#include "render/hair.h"
 #include "render/scene.h"
 
 namespace cmam::render {
@@ -100,6 +101,11 @@ struct Bsdf {
     // times fourier_scale (a mix's weight).
     const FourierTable* fourier = nullptr;
     Rgb fourier_scale{1, 1, 1};
+    // pbrt-v3's hair BSDF in place of the other non-specular lobes (hair.h; the frame's s along
+    // the fibre, dp/du), its value times hair_scale (a mix's weight).
+    bool hair = false;
+    HairParams hair_params;
+    Rgb hair_scale{1, 1, 1};
     // Non-specular lobes of a mix's other material that do not fit this Bsdf (add), each Bsdf of
     // the chain in its own frame about the same shading normal: f, pdf and sample take the whole
     // chain, as pbrt-v3's BSDF takes all its components. Null for a single material.
@@ -111,7 +117,7 @@ struct Bsdf {
     bool has_diffuse_transmission() const { return !kt_diffuse.is_black(); }
     bool has_nonspecular() const {
         return has_diffuse() || has_glossy() || has_transmission() || has_diffuse_transmission() ||
-               fourier || (layer && layer->has_nonspecular());
+               fourier || hair || (layer && layer->has_nonspecular());
     }
 
     /// Every lobe times w, the layers' too (a mix material's weight for one of its materials).

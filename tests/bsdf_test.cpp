@@ -351,7 +351,7 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
     EXPECT_EQ(
         count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
               "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-              "translucent, fourier and mix)"),
+              "translucent, fourier, hair and mix)"),
         1);
     EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
     warnings.clear();

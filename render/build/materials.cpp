@@ -179,8 +179,41 @@ void Builder::fourier_material(const pbrt::MaterialDesc& d, Material& m) {
     m.fourier = table;
 }
 
+// pbrt-v3's "hair": its absorption from "sigma_a", else from "color" (the colour after multiple
+// scattering), else from the melanin concentrations "eumelanin" and "pheomelanin" (1.3 and 0 when
+// none is given); "eta" 1.55, "beta_m" and "beta_n" 0.3, "alpha" 2 degrees.
+void Builder::hair_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Hair;
+    const bool sigma_a = e.params.find("sigma_a"), colour = e.params.find("color");
+    if (sigma_a) {
+        m.hair_absorption = Material::HairAbsorption::SigmaA;
+        m.hair_sigma_a = spectrum_input(e, s, "sigma_a", Rgb(0));
+        if (colour) {
+            warn(loc_of(e, "color"),
+                 "material \"hair\": \"color\" is ignored since \"sigma_a\" "
+                 "is given, as pbrt-v3 ignores it");
+            (void)spectrum_input(e, s, "color", Rgb(0));
+        }
+    } else if (colour) {
+        m.hair_absorption = Material::HairAbsorption::Colour;
+        m.hair_colour = spectrum_input(e, s, "color", Rgb(0));
+    } else {
+        m.hair_absorption = Material::HairAbsorption::Concentration;
+        if (e.params.find("eumelanin") || e.params.find("pheomelanin")) {
+            m.eumelanin = float_input(e, s, "eumelanin", 0);
+            m.pheomelanin = float_input(e, s, "pheomelanin", 0);
+        }
+    }
+    m.eta = float_input(e, s, "eta", 1.55f, true);
+    m.beta_m = float_input(e, s, "beta_m", 0.3f);
+    m.beta_n = float_input(e, s, "beta_n", 0.3f);
+    m.hair_alpha = float_input(e, s, "alpha", 2);
+}
+
 // pbrt-v3 renders a material it does not know as matte, with a warning; so does
-// cmam with the ones it does not render (subsurface scattering, hair).
+// cmam with the one it does not render (subsurface scattering).
 Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     const Entity& e = d.entity;
     Material m;
@@ -189,7 +222,7 @@ Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
                     (e.params.find("Kd") ? " with its Kd" : "") +
                     " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-                    "translucent, fourier and mix)");
+                    "translucent, fourier, hair and mix)");
     return m;  // its other parameters are not read: no warning for each
 }
 
@@ -204,6 +237,7 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
         {"translucent", &Builder::translucent_material},
         {"metal", &Builder::metal_material},
         {"fourier", &Builder::fourier_material},
+        {"hair", &Builder::hair_material},
         {"none", &Builder::no_material},
         {"", &Builder::no_material},
         {"mix", &Builder::mix_material}};

@@ -1,0 +1,247 @@
+#include "render/hair.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "render/shading.h"
+
+namespace cmam::render {
+
+namespace {
+
+constexpr int kPMax = 3;  // lobes R, TT, TRT, and one for all the longer paths
+
+float sqr(float x) {
+    return x * x;
+}
+float safe_sqrt(float x) {
+    return std::sqrt(std::max(0.0f, x));
+}
+float safe_asin(float x) {
+    return std::asin(std::clamp(x, -1.0f, 1.0f));
+}
+
+// The modified Bessel function I0 by its series (ten terms), and its logarithm (asymptotically
+// for large arguments, where the series overflows).
+float bessel_i0(float x) {
+    float val = 0, x2i = 1;
+    double ifact = 1;
+    float i4 = 1;
+    for (int i = 0; i < 10; ++i) {
+        if (i > 1) ifact *= i;
+        val += x2i / (i4 * float(ifact * ifact));
+        x2i *= x * x;
+        i4 *= 4;
+    }
+    return val;
+}
+float log_bessel_i0(float x) {
+    if (x > 12) return x + 0.5f * (-std::log(2 * kPi) + std::log(1 / x) + 1 / (8 * x));
+    return std::log(bessel_i0(x));
+}
+
+// The longitudinal scattering function with variance v (d'Eon et al.), in its log form for small
+// variances.
+float mp(float cos_i, float cos_o, float sin_i, float sin_o, float v) {
+    const float a = cos_i * cos_o / v, b = sin_i * sin_o / v;
+    return v <= 0.1f ? std::exp(log_bessel_i0(a) - b - 1 / v + 0.6931f + std::log(1 / (2 * v)))
+                     : std::exp(-b) * bessel_i0(a) / (std::sinh(1 / v) * 2 * v);
+}
+
+// The attenuations of the lobes: Fresnel reflection at the entry (R), transmission in and out
+// through the fibre (TT), one internal reflection more (TRT), and the geometric sum of the rest.
+std::array<Rgb, kPMax + 1> ap(float cos_o, float eta, float h, const Rgb& t) {
+    std::array<Rgb, kPMax + 1> a;
+    const float cos_gamma_o = safe_sqrt(1 - h * h);
+    const float f = fresnel_dielectric(cos_o * cos_gamma_o, 1, eta);
+    a[0] = Rgb(f);
+    a[1] = sqr(1 - f) * t;
+    a[2] = a[1] * t * f;
+    const Rgb tf = t * f;
+    a[3] = a[2] * tf * Rgb(1 / (1 - tf.r), 1 / (1 - tf.g), 1 / (1 - tf.b));
+    return a;
+}
+
+float phi_of(int p, float gamma_o, float gamma_t) {
+    return 2 * p * gamma_t - 2 * gamma_o + p * kPi;
+}
+float logistic(float x, float s) {
+    x = std::abs(x);
+    return std::exp(-x / s) / (s * sqr(1 + std::exp(-x / s)));
+}
+float logistic_cdf(float x, float s) {
+    return 1 / (1 + std::exp(-x / s));
+}
+float trimmed_logistic(float x, float s, float a, float b) {
+    return logistic(x, s) / (logistic_cdf(b, s) - logistic_cdf(a, s));
+}
+// The azimuthal term: the trimmed logistic about the lobe's exit angle.
+float np(float phi, int p, float s, float gamma_o, float gamma_t) {
+    float dphi = phi - phi_of(p, gamma_o, gamma_t);
+    while (dphi > kPi) dphi -= 2 * kPi;
+    while (dphi < -kPi) dphi += 2 * kPi;
+    return trimmed_logistic(dphi, s, -kPi, kPi);
+}
+float sample_trimmed_logistic(float u, float s, float a, float b) {
+    const float k = logistic_cdf(b, s) - logistic_cdf(a, s);
+    const float x = -s * std::log(1 / (u * k + logistic_cdf(a, s)) - 1);
+    return std::clamp(x, a, b);
+}
+
+// What the parameters give every evaluation: the lobes' longitudinal variances, the azimuthal
+// logistic's scale, and sin and cos of 2^k alpha (the scales' tilt, doubled per bounce).
+struct Derived {
+    float v[kPMax + 1], s, sin2k[3], cos2k[3], gamma_o;
+    explicit Derived(const HairParams& p) {
+        const float bm = p.beta_m, bn = p.beta_n;
+        v[0] = sqr(0.726f * bm + 0.812f * sqr(bm) + 3.7f * std::pow(bm, 20.0f));
+        v[1] = 0.25f * v[0];
+        v[2] = 4 * v[0];
+        v[3] = v[2];
+        s = std::sqrt(kPi / 8) * (0.265f * bn + 1.194f * sqr(bn) + 5.372f * std::pow(bn, 22.0f));
+        sin2k[0] = std::sin(p.alpha * kPi / 180);
+        cos2k[0] = safe_sqrt(1 - sqr(sin2k[0]));
+        for (int i = 1; i < 3; ++i) {
+            sin2k[i] = 2 * cos2k[i - 1] * sin2k[i - 1];
+            cos2k[i] = sqr(cos2k[i - 1]) - sqr(sin2k[i - 1]);
+        }
+        gamma_o = safe_asin(p.h);
+    }
+    // sin and cos of theta_o turned by lobe p's tilt (R by -2 alpha, TT by alpha, TRT by 4
+    // alpha; the rest not at all), the cosine's sign dropped.
+    void tilt(int p, float sin_o, float cos_o, float& sin_op, float& cos_op) const {
+        if (p == 0) {
+            sin_op = sin_o * cos2k[1] - cos_o * sin2k[1];
+            cos_op = cos_o * cos2k[1] + sin_o * sin2k[1];
+        } else if (p == 1) {
+            sin_op = sin_o * cos2k[0] + cos_o * sin2k[0];
+            cos_op = cos_o * cos2k[0] - sin_o * sin2k[0];
+        } else if (p == 2) {
+            sin_op = sin_o * cos2k[2] + cos_o * sin2k[2];
+            cos_op = cos_o * cos2k[2] - sin_o * sin2k[2];
+        } else {
+            sin_op = sin_o;
+            cos_op = cos_o;
+        }
+        cos_op = std::abs(cos_op);
+    }
+};
+
+// gamma_t, the refracted ray's angle in the fibre's cross-section.
+float gamma_t_of(const HairParams& p, float sin_o, float cos_o) {
+    const float etap = std::sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
+    return safe_asin(p.h / etap);
+}
+
+// The lobes' shares of the sampling, by their attenuations' luminance.
+std::array<float, kPMax + 1> ap_pdf(const HairParams& p, float sin_o, float cos_o) {
+    const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
+    const float etap = std::sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
+    const float sin_gt = p.h / etap, cos_gt = safe_sqrt(1 - sqr(sin_gt));
+    const float len = 2 * cos_gt / cos_t;
+    const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
+                std::exp(-p.sigma_a.b * len));
+    const std::array<Rgb, kPMax + 1> a = ap(cos_o, p.eta, p.h, t);
+    std::array<float, kPMax + 1> pdf;
+    float sum = 0;
+    for (const Rgb& c : a) sum += c.luminance();
+    for (int i = 0; i <= kPMax; ++i) pdf[i] = a[i].luminance() / sum;
+    return pdf;
+}
+
+float pdf_of(const HairParams& p, const Derived& d, float sin_o, float cos_o, float phi_o,
+             const Vec3& wi) {
+    const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i));
+    const float phi = std::atan2(wi.z, wi.y) - phi_o;
+    const float gamma_t = gamma_t_of(p, sin_o, cos_o);
+    const std::array<float, kPMax + 1> share = ap_pdf(p, sin_o, cos_o);
+    float pdf = 0;
+    for (int k = 0; k < kPMax; ++k) {
+        float sin_op, cos_op;
+        d.tilt(k, sin_o, cos_o, sin_op, cos_op);
+        pdf += mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * share[k] *
+               np(phi, k, d.s, d.gamma_o, gamma_t);
+    }
+    pdf += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) * share[kPMax] / (2 * kPi);
+    return pdf;
+}
+
+}  // namespace
+
+Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi) {
+    const Derived d(p);
+    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
+    const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i)), phi_i = std::atan2(wi.z, wi.y);
+    // The refracted ray: its longitudinal angle and its path through the fibre's cross-section.
+    const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
+    const float etap = std::sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
+    const float sin_gt = p.h / etap, cos_gt = safe_sqrt(1 - sqr(sin_gt));
+    const float gamma_t = safe_asin(sin_gt);
+    const float len = 2 * cos_gt / cos_t;
+    const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
+                std::exp(-p.sigma_a.b * len));
+    const float phi = phi_i - phi_o;
+    const std::array<Rgb, kPMax + 1> a = ap(cos_o, p.eta, p.h, t);
+    Rgb sum{};
+    for (int k = 0; k < kPMax; ++k) {
+        float sin_op, cos_op;
+        d.tilt(k, sin_o, cos_o, sin_op, cos_op);
+        sum +=
+            mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * np(phi, k, d.s, d.gamma_o, gamma_t) * a[k];
+    }
+    sum += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) / (2 * kPi) * a[kPMax];
+    if (std::abs(wi.z) > 0) sum = sum / std::abs(wi.z);
+    return sum;
+}
+
+float hair_pdf(const HairParams& p, const Vec3& wo, const Vec3& wi) {
+    const Derived d(p);
+    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o));
+    return pdf_of(p, d, sin_o, cos_o, std::atan2(wo.z, wo.y), wi);
+}
+
+std::optional<Vec3> hair_sample(const HairParams& p, const Vec3& wo, float u0, float u1, float u2) {
+    const Derived d(p);
+    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
+    if (!(cos_o > 0)) return std::nullopt;
+    // The lobe by its share; what is left of u0 within it draws the azimuth.
+    const std::array<float, kPMax + 1> share = ap_pdf(p, sin_o, cos_o);
+    int k = 0;
+    for (; k < kPMax; ++k) {
+        if (u0 < share[k]) break;
+        u0 -= share[k];
+    }
+    const float u_phi = share[k] > 0 ? std::clamp(u0 / share[k], 0.0f, 0x1.fffffep-1f) : 0.5f;
+    float sin_op, cos_op;
+    d.tilt(k, sin_o, cos_o, sin_op, cos_op);
+    // The longitudinal angle from M_p's sampling (d'Eon et al.).
+    u1 = std::max(u1, 1e-5f);
+    const float cos_theta = 1 + d.v[k] * std::log(u1 + (1 - u1) * std::exp(-2 / d.v[k]));
+    const float sin_theta = safe_sqrt(1 - sqr(cos_theta));
+    const float cos_phi = std::cos(2 * kPi * u2);
+    const float sin_i = -cos_theta * sin_op + sin_theta * cos_phi * cos_op;
+    const float cos_i = safe_sqrt(1 - sqr(sin_i));
+    const float gamma_t = gamma_t_of(p, sin_o, cos_o);
+    const float dphi =
+        k < kPMax ? phi_of(k, d.gamma_o, gamma_t) + sample_trimmed_logistic(u_phi, d.s, -kPi, kPi)
+                  : 2 * kPi * u_phi;
+    const float phi_i = phi_o + dphi;
+    const Vec3 wi(sin_i, cos_i * std::cos(phi_i), cos_i * std::sin(phi_i));
+    if (!finite(wi)) return std::nullopt;
+    return wi;
+}
+
+Rgb hair_sigma_a_from_concentration(float eumelanin, float pheomelanin) {
+    const Rgb eu(0.419f, 0.697f, 1.37f), pheo(0.187f, 0.4f, 1.05f);
+    return eumelanin * eu + pheomelanin * pheo;
+}
+
+Rgb hair_sigma_a_from_reflectance(const Rgb& c, float bn) {
+    const float k = 5.969f - 0.215f * bn + 2.532f * sqr(bn) - 10.73f * std::pow(bn, 3.0f) +
+                    5.574f * std::pow(bn, 4.0f) + 0.245f * std::pow(bn, 5.0f);
+    auto one = [k](float x) { return sqr(std::log(x) / k); };
+    return {one(c.r), one(c.g), one(c.b)};
+}
+
+}  // namespace cmam::render
