@@ -270,8 +270,8 @@ struct Primitive {
     std::vector<uint32_t> curve_first;  // each segment's first control point
     std::vector<std::array<float, 2>> curve_widths;
     std::vector<std::array<Vec3, 2>> curve_end_normals;
-    // Embree's flat curves are ray-facing quads, this many per segment: as many as pbrt-v3's
-    // refinement would split the most bent segment into (within a twentieth of its width).
+    // Embree's flat curves are ray-facing quads, this many per segment: four times as many as
+    // pbrt-v3's refinement splits the most bent segment into (Builder::curve).
     float curve_tessellation = 4;
     // Quadrics: object_from_world / world_from_object as 3x4, double precision
     std::array<double, 12> object_from_world{}, world_from_object{};

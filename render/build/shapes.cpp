@@ -308,8 +308,10 @@ bool Builder::curve(const pbrt::ShapeDesc& s, Primitive& prim) {
             prim.curve_points.push_back(
                 {wp[k].x, wp[k].y, wp[k].z, 0.5f * (w0 + (w1 - w0) * k / 3.0f)});
         }
-        // pbrt-v3's refinement: 2^r pieces, r = log4(sqrt(2) 6 L0 / (8 eps)), L0 the largest
-        // second difference of the control points, eps a twentieth of the width.
+        // pbrt-v3's refinement makes 2^r pieces, r = log4(sqrt(2) 6 L0 / (8 eps)), L0 the
+        // largest second difference of the control points, eps a twentieth of the width; four
+        // times as many quads here: Embree's are chords of the curve, where pbrt-v3 measures
+        // the distance to the curve itself at the chord's parameter.
         float l0 = 0;
         for (int i = 0; i < 2; ++i) {
             const Vec3 d = wp[i] - 2 * wp[i + 1] + wp[i + 2];
@@ -317,7 +319,7 @@ bool Builder::curve(const pbrt::ShapeDesc& s, Primitive& prim) {
         }
         const float eps = 0.05f * std::max(w0, w1);
         if (eps > 0)
-            prim.curve_tessellation = std::clamp(std::sqrt(1.41421356f * 6 * l0 / (8 * eps)),
+            prim.curve_tessellation = std::clamp(4 * std::sqrt(1.41421356f * 6 * l0 / (8 * eps)),
                                                  prim.curve_tessellation, 64.0f);
         if (ribbon) {
             prim.curve_end_normals.push_back({normals[seg], normals[seg + 1]});
