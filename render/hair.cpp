@@ -59,7 +59,8 @@ std::array<Rgb, kPMax + 1> ap(float cos_o, float eta, float h, const Rgb& t) {
     a[1] = sqr(1 - f) * t;
     a[2] = a[1] * t * f;
     const Rgb tf = t * f;
-    a[3] = a[2] * tf * Rgb(1 / (1 - tf.r), 1 / (1 - tf.g), 1 / (1 - tf.b));
+    auto rest = [](float x) { return x < 1 ? x / (1 - x) : 0.0f; };  // (x = 1: f = 1, none enter)
+    a[3] = a[2] * Rgb(rest(tf.r), rest(tf.g), rest(tf.b));
     return a;
 }
 
@@ -128,18 +129,21 @@ struct Derived {
     }
 };
 
-// gamma_t, the refracted ray's angle in the fibre's cross-section.
+// sin gamma_t, the refracted ray's angle in the fibre's cross-section: h / eta' with Bravais'
+// index eta' = sqrt(eta^2 - sin^2 theta_o) / cos theta_o (kept finite for an index below 1).
+float sin_gamma_t(const HairParams& p, float sin_o, float cos_o) {
+    const float etap = safe_sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
+    return std::clamp(p.h / std::max(etap, 1e-6f), -1.0f, 1.0f);
+}
 float gamma_t_of(const HairParams& p, float sin_o, float cos_o) {
-    const float etap = std::sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
-    return safe_asin(p.h / etap);
+    return std::asin(sin_gamma_t(p, sin_o, cos_o));
 }
 
 // The lobes' shares of the sampling, by their attenuations' luminance.
 std::array<float, kPMax + 1> ap_pdf(const HairParams& p, float sin_o, float cos_o) {
     const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
-    const float etap = std::sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
-    const float sin_gt = p.h / etap, cos_gt = safe_sqrt(1 - sqr(sin_gt));
-    const float len = 2 * cos_gt / cos_t;
+    const float sin_gt = sin_gamma_t(p, sin_o, cos_o), cos_gt = safe_sqrt(1 - sqr(sin_gt));
+    const float len = 2 * cos_gt / std::max(cos_t, 1e-6f);  // (no refraction: an index below 1)
     const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
                 std::exp(-p.sigma_a.b * len));
     const std::array<Rgb, kPMax + 1> a = ap(cos_o, p.eta, p.h, t);
@@ -175,10 +179,9 @@ Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi) {
     const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i)), phi_i = std::atan2(wi.z, wi.y);
     // The refracted ray: its longitudinal angle and its path through the fibre's cross-section.
     const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
-    const float etap = std::sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
-    const float sin_gt = p.h / etap, cos_gt = safe_sqrt(1 - sqr(sin_gt));
+    const float sin_gt = sin_gamma_t(p, sin_o, cos_o), cos_gt = safe_sqrt(1 - sqr(sin_gt));
     const float gamma_t = safe_asin(sin_gt);
-    const float len = 2 * cos_gt / cos_t;
+    const float len = 2 * cos_gt / std::max(cos_t, 1e-6f);  // (no refraction: an index below 1)
     const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
                 std::exp(-p.sigma_a.b * len));
     const float phi = phi_i - phi_o;

@@ -970,13 +970,14 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.fourier = m.fourier.get();
             break;
         case Material::Type::Hair: {
-            // pbrt-v3's hair: h = -1 + 2v across the fibre (a curve's v), roughnesses in [0, 1].
+            // pbrt-v3's hair: h = -1 + 2v across the fibre (a curve's v), roughnesses in [0, 1]
+            // (from 0.001: at 0 its lobes' variances are 0, and its values not finite).
             b.hair = true;
             HairParams& p = b.hair_params;
             p.h = std::clamp(-1 + 2 * ctx.v, -1.0f, 1.0f);
             p.eta = eval_texture(scene, m.eta, ctx).r;
-            p.beta_m = std::clamp(eval_texture(scene, m.beta_m, ctx).r, 0.0f, 1.0f);
-            p.beta_n = std::clamp(eval_texture(scene, m.beta_n, ctx).r, 0.0f, 1.0f);
+            p.beta_m = std::clamp(eval_texture(scene, m.beta_m, ctx).r, 1e-3f, 1.0f);
+            p.beta_n = std::clamp(eval_texture(scene, m.beta_n, ctx).r, 1e-3f, 1.0f);
             p.alpha = eval_texture(scene, m.hair_alpha, ctx).r;
             switch (m.hair_absorption) {
                 case Material::HairAbsorption::SigmaA:

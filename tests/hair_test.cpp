@@ -148,3 +148,26 @@ TEST(Hair, MaterialTakesItsAbsorptionAsPbrtV3Does) {
     EXPECT_NE(w[0].find("\"color\" is ignored since \"sigma_a\" is given"), std::string::npos)
         << w[0];
 }
+
+// Parameters pbrt-v3 does not guard (an index below 1, where nothing refracts at grazing angles;
+// the smallest roughnesses the material passes, 0.001) give finite values and densities.
+TEST(Hair, ExtremeParametersStayFinite) {
+    Uniform u{3};
+    for (const auto& [eta, beta] : {std::pair{0.5f, 0.3f}, std::pair{1.55f, 1e-3f},
+                                    std::pair{0.9f, 1e-3f}, std::pair{1.0f, 1.0f}}) {
+        HairParams p;
+        p.eta = eta;
+        p.beta_m = p.beta_n = beta;
+        for (int i = 0; i < 2000; ++i) {
+            p.h = -1 + 2 * u();
+            p.sigma_a = i % 2 ? Rgb(0) : Rgb(0.3f, 1, 3);
+            const Vec3 wo = uniform_sphere(u(), u()), wi = uniform_sphere(u(), u());
+            const Rgb f = hair_f(p, wo, wi);
+            ASSERT_TRUE(std::isfinite(f.r) && std::isfinite(f.g) && std::isfinite(f.b))
+                << eta << " " << beta << " " << i;
+            ASSERT_TRUE(std::isfinite(hair_pdf(p, wo, wi))) << eta << " " << beta;
+            if (const std::optional<Vec3> s = hair_sample(p, wo, u(), u(), u()))
+                ASSERT_TRUE(std::isfinite(hair_f(p, wo, *s).g)) << eta << " " << beta;
+        }
+    }
+}
