@@ -129,24 +129,27 @@ struct Derived {
     }
 };
 
-// sin gamma_t, the refracted ray's angle in the fibre's cross-section: h / eta' with Bravais'
-// index eta' = sqrt(eta^2 - sin^2 theta_o) / cos theta_o (kept finite for an index below 1).
-float sin_gamma_t(const HairParams& p, float sin_o, float cos_o) {
+// What the refracted path through the fibre gives: gamma_t, its angle in the fibre's
+// cross-section (sin gamma_t = h / eta', Bravais' index eta' = sqrt(eta^2 - sin^2 theta_o) /
+// cos theta_o), and the lobes' attenuations A_p, with T the transmittance along the path, kept
+// finite for an index below 1 (no refraction at grazing angles).
+struct Refracted {
+    float gamma_t;
+    std::array<Rgb, kPMax + 1> a;
+};
+Refracted refracted(const HairParams& p, float sin_o, float cos_o) {
+    const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
     const float etap = safe_sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
-    return std::clamp(p.h / std::max(etap, 1e-6f), -1.0f, 1.0f);
-}
-float gamma_t_of(const HairParams& p, float sin_o, float cos_o) {
-    return std::asin(sin_gamma_t(p, sin_o, cos_o));
+    const float sin_gt = std::clamp(p.h / std::max(etap, 1e-6f), -1.0f, 1.0f);
+    const float cos_gt = safe_sqrt(1 - sqr(sin_gt));
+    const float len = 2 * cos_gt / std::max(cos_t, 1e-6f);
+    const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
+                std::exp(-p.sigma_a.b * len));
+    return {std::asin(sin_gt), ap(cos_o, p.eta, p.h, t)};
 }
 
 // The lobes' shares of the sampling, by their attenuations' luminance.
-std::array<float, kPMax + 1> ap_pdf(const HairParams& p, float sin_o, float cos_o) {
-    const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
-    const float sin_gt = sin_gamma_t(p, sin_o, cos_o), cos_gt = safe_sqrt(1 - sqr(sin_gt));
-    const float len = 2 * cos_gt / std::max(cos_t, 1e-6f);  // (no refraction: an index below 1)
-    const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
-                std::exp(-p.sigma_a.b * len));
-    const std::array<Rgb, kPMax + 1> a = ap(cos_o, p.eta, p.h, t);
+std::array<float, kPMax + 1> shares(const std::array<Rgb, kPMax + 1>& a) {
     std::array<float, kPMax + 1> pdf;
     float sum = 0;
     for (const Rgb& c : a) sum += c.luminance();
@@ -158,14 +161,14 @@ float pdf_of(const HairParams& p, const Derived& d, float sin_o, float cos_o, fl
              const Vec3& wi) {
     const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i));
     const float phi = std::atan2(wi.z, wi.y) - phi_o;
-    const float gamma_t = gamma_t_of(p, sin_o, cos_o);
-    const std::array<float, kPMax + 1> share = ap_pdf(p, sin_o, cos_o);
+    const Refracted r = refracted(p, sin_o, cos_o);
+    const std::array<float, kPMax + 1> share = shares(r.a);
     float pdf = 0;
     for (int k = 0; k < kPMax; ++k) {
         float sin_op, cos_op;
         d.tilt(k, sin_o, cos_o, sin_op, cos_op);
         pdf += mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * share[k] *
-               np(phi, k, d.s, d.gamma_o, gamma_t);
+               np(phi, k, d.s, d.gamma_o, r.gamma_t);
     }
     pdf += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) * share[kPMax] / (2 * kPi);
     return pdf;
@@ -177,23 +180,16 @@ Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi) {
     const Derived d(p);
     const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
     const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i)), phi_i = std::atan2(wi.z, wi.y);
-    // The refracted ray: its longitudinal angle and its path through the fibre's cross-section.
-    const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
-    const float sin_gt = sin_gamma_t(p, sin_o, cos_o), cos_gt = safe_sqrt(1 - sqr(sin_gt));
-    const float gamma_t = safe_asin(sin_gt);
-    const float len = 2 * cos_gt / std::max(cos_t, 1e-6f);  // (no refraction: an index below 1)
-    const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
-                std::exp(-p.sigma_a.b * len));
+    const Refracted r = refracted(p, sin_o, cos_o);
     const float phi = phi_i - phi_o;
-    const std::array<Rgb, kPMax + 1> a = ap(cos_o, p.eta, p.h, t);
     Rgb sum{};
     for (int k = 0; k < kPMax; ++k) {
         float sin_op, cos_op;
         d.tilt(k, sin_o, cos_o, sin_op, cos_op);
-        sum +=
-            mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * np(phi, k, d.s, d.gamma_o, gamma_t) * a[k];
+        sum += mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * np(phi, k, d.s, d.gamma_o, r.gamma_t) *
+               r.a[k];
     }
-    sum += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) / (2 * kPi) * a[kPMax];
+    sum += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) / (2 * kPi) * r.a[kPMax];
     if (std::abs(wi.z) > 0) sum = sum / std::abs(wi.z);
     return sum;
 }
@@ -209,7 +205,8 @@ std::optional<Vec3> hair_sample(const HairParams& p, const Vec3& wo, float u0, f
     const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
     if (!(cos_o > 0)) return std::nullopt;
     // The lobe by its share; what is left of u0 within it draws the azimuth.
-    const std::array<float, kPMax + 1> share = ap_pdf(p, sin_o, cos_o);
+    const Refracted r = refracted(p, sin_o, cos_o);
+    const std::array<float, kPMax + 1> share = shares(r.a);
     int k = 0;
     for (; k < kPMax; ++k) {
         if (u0 < share[k]) break;
@@ -225,9 +222,8 @@ std::optional<Vec3> hair_sample(const HairParams& p, const Vec3& wo, float u0, f
     const float cos_phi = std::cos(2 * kPi * u2);
     const float sin_i = -cos_theta * sin_op + sin_theta * cos_phi * cos_op;
     const float cos_i = safe_sqrt(1 - sqr(sin_i));
-    const float gamma_t = gamma_t_of(p, sin_o, cos_o);
     const float dphi =
-        k < kPMax ? phi_of(k, d.gamma_o, gamma_t) + sample_trimmed_logistic(u_phi, d.s, -kPi, kPi)
+        k < kPMax ? phi_of(k, d.gamma_o, r.gamma_t) + sample_trimmed_logistic(u_phi, d.s, -kPi, kPi)
                   : 2 * kPi * u_phi;
     const float phi_i = phi_o + dphi;
     const Vec3 wi(sin_i, cos_i * std::cos(phi_i), cos_i * std::sin(phi_i));
