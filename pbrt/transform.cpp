@@ -66,11 +66,14 @@ bool Mat4::is_identity() const {
     return true;
 }
 
+double Mat4::linear_determinant() const {
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
 bool Mat4::swaps_handedness() const {
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    return det < 0;
+    return linear_determinant() < 0;
 }
 
 std::array<double, 3> Mat4::apply_point(const std::array<double, 3>& p) const {

@@ -16,6 +16,8 @@ struct Mat4 {
     /// Inverse; throws SceneError (not tied to a location) when singular.
     Mat4 inverse() const;
     bool is_identity() const;
+    /// The determinant of the upper 3x3 (the linear part).
+    double linear_determinant() const;
     /// True when the upper 3x3 has a negative determinant (mirrors handedness).
     bool swaps_handedness() const;
 

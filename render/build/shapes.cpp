@@ -260,10 +260,7 @@ bool Builder::curve(const pbrt::ShapeDesc& s, Primitive& prim) {
     // Widths are in the object's space: scaled by the transform's mean scale (exact for a
     // uniform one).
     const Mat4& m = s.world_from_object;
-    const double det = m.m[0][0] * (m.m[1][1] * m.m[2][2] - m.m[1][2] * m.m[2][1]) -
-                       m.m[0][1] * (m.m[1][0] * m.m[2][2] - m.m[1][2] * m.m[2][0]) +
-                       m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
-    const double scale = std::cbrt(std::abs(det));
+    const double scale = std::cbrt(std::abs(m.linear_determinant()));
     auto cp = [&](int i) {
         return Vec3(float(pv[3 * i]), float(pv[3 * i + 1]), float(pv[3 * i + 2]));
     };
@@ -578,9 +575,8 @@ void Builder::instances() {
             in.world_from_object[k] = static_cast<float>(w[k]);
             in.object_from_world[k] = static_cast<float>(iw[k]);
         }
-        const double det = w[0] * (w[5] * w[10] - w[6] * w[9]) -
-                           w[1] * (w[4] * w[10] - w[6] * w[8]) + w[2] * (w[4] * w[9] - w[5] * w[8]);
-        in.curvature_scale = static_cast<float>(std::cbrt(std::abs(det)));
+        in.curvature_scale =
+            static_cast<float>(std::cbrt(std::abs(d.world_from_instance.linear_determinant())));
         in.uniform = uniform_scale(w) > 0;
         if (next_id + n > std::numeric_limits<uint32_t>::max())
             throw SceneError(d.loc, "more than 2^32 instanced primitives");
