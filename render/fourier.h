@@ -53,11 +53,7 @@ float fourier_pdf(const FourierTable& t, const Vec3& wo, const Vec3& wi);
 /// A direction drawn from the luminance: mu_i by inverting the spline of a0 over mu_i, then phi
 /// by inverting the series' integral. `pdf` is the density it was drawn with (0: none drawn),
 /// `f` the value there.
-struct FourierSample {
-    Vec3 wi;
-    Rgb f;
-    float pdf = 0;
-};
+using FourierSample = DirectionSample;
 FourierSample fourier_sample(const FourierTable& t, const Vec3& wo, float u_phi, float u_mu);
 
 }  // namespace cmam::render

@@ -90,44 +90,44 @@ float sample_trimmed_logistic(float u, float s, float a, float b) {
     return std::clamp(x, a, b);
 }
 
-// What the parameters give every evaluation: the lobes' longitudinal variances, the azimuthal
-// logistic's scale, and sin and cos of 2^k alpha (the scales' tilt, doubled per bounce).
-struct Derived {
-    float v[kPMax + 1], s, sin2k[3], cos2k[3], gamma_o;
-    explicit Derived(const HairParams& p) {
-        const float bm = p.beta_m, bn = p.beta_n;
-        v[0] = sqr(0.726f * bm + 0.812f * sqr(bm) + 3.7f * std::pow(bm, 20.0f));
-        v[1] = 0.25f * v[0];
-        v[2] = 4 * v[0];
-        v[3] = v[2];
-        s = std::sqrt(kPi / 8) * (0.265f * bn + 1.194f * sqr(bn) + 5.372f * std::pow(bn, 22.0f));
-        sin2k[0] = std::sin(p.alpha * kPi / 180);
-        cos2k[0] = safe_sqrt(1 - sqr(sin2k[0]));
-        for (int i = 1; i < 3; ++i) {
-            sin2k[i] = 2 * cos2k[i - 1] * sin2k[i - 1];
-            cos2k[i] = sqr(cos2k[i - 1]) - sqr(sin2k[i - 1]);
-        }
-        gamma_o = safe_asin(p.h);
+}  // namespace
+
+HairModel::HairModel(const HairParams& params) : p(params) {
+    const float bm = p.beta_m, bn = p.beta_n;
+    v[0] = sqr(0.726f * bm + 0.812f * sqr(bm) + 3.7f * std::pow(bm, 20.0f));
+    v[1] = 0.25f * v[0];
+    v[2] = 4 * v[0];
+    v[3] = v[2];
+    s = std::sqrt(kPi / 8) * (0.265f * bn + 1.194f * sqr(bn) + 5.372f * std::pow(bn, 22.0f));
+    sin2k[0] = std::sin(p.alpha * kPi / 180);
+    cos2k[0] = safe_sqrt(1 - sqr(sin2k[0]));
+    for (int i = 1; i < 3; ++i) {
+        sin2k[i] = 2 * cos2k[i - 1] * sin2k[i - 1];
+        cos2k[i] = sqr(cos2k[i - 1]) - sqr(sin2k[i - 1]);
     }
-    // sin and cos of theta_o turned by lobe p's tilt (R by -2 alpha, TT by alpha, TRT by 4
-    // alpha; the rest not at all), the cosine's sign dropped.
-    void tilt(int p, float sin_o, float cos_o, float& sin_op, float& cos_op) const {
-        if (p == 0) {
-            sin_op = sin_o * cos2k[1] - cos_o * sin2k[1];
-            cos_op = cos_o * cos2k[1] + sin_o * sin2k[1];
-        } else if (p == 1) {
-            sin_op = sin_o * cos2k[0] + cos_o * sin2k[0];
-            cos_op = cos_o * cos2k[0] - sin_o * sin2k[0];
-        } else if (p == 2) {
-            sin_op = sin_o * cos2k[2] + cos_o * sin2k[2];
-            cos_op = cos_o * cos2k[2] - sin_o * sin2k[2];
-        } else {
-            sin_op = sin_o;
-            cos_op = cos_o;
-        }
-        cos_op = std::abs(cos_op);
+    gamma_o = safe_asin(p.h);
+}
+
+void HairModel::tilt(int k, float sin_o, float cos_o, float& sin_ok, float& cos_ok) const {
+    if (k == 0) {
+        sin_ok = sin_o * cos2k[1] - cos_o * sin2k[1];
+        cos_ok = cos_o * cos2k[1] + sin_o * sin2k[1];
+    } else if (k == 1) {
+        sin_ok = sin_o * cos2k[0] + cos_o * sin2k[0];
+        cos_ok = cos_o * cos2k[0] - sin_o * sin2k[0];
+    } else if (k == 2) {
+        sin_ok = sin_o * cos2k[2] + cos_o * sin2k[2];
+        cos_ok = cos_o * cos2k[2] - sin_o * sin2k[2];
+    } else {
+        sin_ok = sin_o;
+        cos_ok = cos_o;
     }
-};
+    cos_ok = std::abs(cos_ok);
+}
+
+namespace {
+
+static_assert(HairModel::kLobes == kPMax + 1);
 
 // What the refracted path through the fibre gives: gamma_t, its angle in the fibre's
 // cross-section (sin gamma_t = h / eta', Bravais' index eta' = sqrt(eta^2 - sin^2 theta_o) /
@@ -157,78 +157,99 @@ std::array<float, kPMax + 1> shares(const std::array<Rgb, kPMax + 1>& a) {
     return pdf;
 }
 
-float pdf_of(const HairParams& p, const Derived& d, float sin_o, float cos_o, float phi_o,
-             const Vec3& wi) {
+// The outgoing direction's angles and refracted path, which the value, the density and the
+// sampling all start from.
+struct Outgoing {
+    float sin_o, cos_o, phi_o;
+    Refracted r;
+};
+Outgoing outgoing(const HairModel& m, const Vec3& wo) {
+    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
+    return {sin_o, cos_o, phi_o, refracted(m.p, sin_o, cos_o)};
+}
+
+// The value (without its 1 / |cos theta_i|) and the density at wi: each lobe's M_p N_p weighted
+// by its attenuation and by its share. Either output may be null.
+void lobes_at(const HairModel& m, const Outgoing& o, const Vec3& wi, Rgb* value, float* density) {
     const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i));
-    const float phi = std::atan2(wi.z, wi.y) - phi_o;
-    const Refracted r = refracted(p, sin_o, cos_o);
-    const std::array<float, kPMax + 1> share = shares(r.a);
+    const float phi = std::atan2(wi.z, wi.y) - o.phi_o;
+    std::array<float, kPMax + 1> share{};
+    if (density) share = shares(o.r.a);
+    Rgb sum{};
     float pdf = 0;
     for (int k = 0; k < kPMax; ++k) {
-        float sin_op, cos_op;
-        d.tilt(k, sin_o, cos_o, sin_op, cos_op);
-        pdf += mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * share[k] *
-               np(phi, k, d.s, d.gamma_o, r.gamma_t);
+        float sin_ok, cos_ok;
+        m.tilt(k, o.sin_o, o.cos_o, sin_ok, cos_ok);
+        const float mk = mp(cos_i, cos_ok, sin_i, sin_ok, m.v[k]);
+        const float nk = np(phi, k, m.s, m.gamma_o, o.r.gamma_t);
+        sum += mk * nk * o.r.a[k];
+        pdf += mk * share[k] * nk;
     }
-    pdf += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) * share[kPMax] / (2 * kPi);
-    return pdf;
+    const float rest = mp(cos_i, o.cos_o, sin_i, o.sin_o, m.v[kPMax]);
+    sum += rest / (2 * kPi) * o.r.a[kPMax];
+    pdf += rest * share[kPMax] / (2 * kPi);
+    if (value) *value = std::abs(wi.z) > 0 ? sum / std::abs(wi.z) : sum;
+    if (density) *density = pdf;
 }
 
 }  // namespace
 
-Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi) {
-    const Derived d(p);
-    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
-    const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i)), phi_i = std::atan2(wi.z, wi.y);
-    const Refracted r = refracted(p, sin_o, cos_o);
-    const float phi = phi_i - phi_o;
-    Rgb sum{};
-    for (int k = 0; k < kPMax; ++k) {
-        float sin_op, cos_op;
-        d.tilt(k, sin_o, cos_o, sin_op, cos_op);
-        sum += mp(cos_i, cos_op, sin_i, sin_op, d.v[k]) * np(phi, k, d.s, d.gamma_o, r.gamma_t) *
-               r.a[k];
-    }
-    sum += mp(cos_i, cos_o, sin_i, sin_o, d.v[kPMax]) / (2 * kPi) * r.a[kPMax];
-    if (std::abs(wi.z) > 0) sum = sum / std::abs(wi.z);
-    return sum;
+Rgb hair_f(const HairModel& m, const Vec3& wo, const Vec3& wi) {
+    Rgb f;
+    lobes_at(m, outgoing(m, wo), wi, &f, nullptr);
+    return f;
 }
 
-float hair_pdf(const HairParams& p, const Vec3& wo, const Vec3& wi) {
-    const Derived d(p);
-    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o));
-    return pdf_of(p, d, sin_o, cos_o, std::atan2(wo.z, wo.y), wi);
+float hair_pdf(const HairModel& m, const Vec3& wo, const Vec3& wi) {
+    float pdf;
+    lobes_at(m, outgoing(m, wo), wi, nullptr, &pdf);
+    return pdf;
 }
 
-std::optional<Vec3> hair_sample(const HairParams& p, const Vec3& wo, float u0, float u1, float u2) {
-    const Derived d(p);
-    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
-    if (!(cos_o > 0)) return std::nullopt;
+std::optional<HairSample> hair_sample_f(const HairModel& m, const Vec3& wo, float u0, float u1,
+                                        float u2) {
+    const Outgoing o = outgoing(m, wo);
+    if (!(o.cos_o > 0)) return std::nullopt;
     // The lobe by its share; what is left of u0 within it draws the azimuth.
-    const Refracted r = refracted(p, sin_o, cos_o);
-    const std::array<float, kPMax + 1> share = shares(r.a);
+    const std::array<float, kPMax + 1> share = shares(o.r.a);
     int k = 0;
     for (; k < kPMax; ++k) {
         if (u0 < share[k]) break;
         u0 -= share[k];
     }
     const float u_phi = share[k] > 0 ? std::clamp(u0 / share[k], 0.0f, 0x1.fffffep-1f) : 0.5f;
-    float sin_op, cos_op;
-    d.tilt(k, sin_o, cos_o, sin_op, cos_op);
+    float sin_ok, cos_ok;
+    m.tilt(k, o.sin_o, o.cos_o, sin_ok, cos_ok);
     // The longitudinal angle from M_p's sampling (d'Eon et al.).
     u1 = std::max(u1, 1e-5f);
-    const float cos_theta = 1 + d.v[k] * std::log(u1 + (1 - u1) * std::exp(-2 / d.v[k]));
+    const float cos_theta = 1 + m.v[k] * std::log(u1 + (1 - u1) * std::exp(-2 / m.v[k]));
     const float sin_theta = safe_sqrt(1 - sqr(cos_theta));
     const float cos_phi = std::cos(2 * kPi * u2);
-    const float sin_i = -cos_theta * sin_op + sin_theta * cos_phi * cos_op;
+    const float sin_i = -cos_theta * sin_ok + sin_theta * cos_phi * cos_ok;
     const float cos_i = safe_sqrt(1 - sqr(sin_i));
-    const float dphi =
-        k < kPMax ? phi_of(k, d.gamma_o, r.gamma_t) + sample_trimmed_logistic(u_phi, d.s, -kPi, kPi)
-                  : 2 * kPi * u_phi;
-    const float phi_i = phi_o + dphi;
-    const Vec3 wi(sin_i, cos_i * std::cos(phi_i), cos_i * std::sin(phi_i));
-    if (!finite(wi)) return std::nullopt;
-    return wi;
+    const float dphi = k < kPMax ? phi_of(k, m.gamma_o, o.r.gamma_t) +
+                                       sample_trimmed_logistic(u_phi, m.s, -kPi, kPi)
+                                 : 2 * kPi * u_phi;
+    const float phi_i = o.phi_o + dphi;
+    HairSample out;
+    out.wi = Vec3(sin_i, cos_i * std::cos(phi_i), cos_i * std::sin(phi_i));
+    if (!finite(out.wi)) return std::nullopt;
+    lobes_at(m, o, out.wi, &out.f, &out.pdf);
+    return out;
+}
+
+Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi) {
+    return hair_f(HairModel(p), wo, wi);
+}
+
+float hair_pdf(const HairParams& p, const Vec3& wo, const Vec3& wi) {
+    return hair_pdf(HairModel(p), wo, wi);
+}
+
+std::optional<Vec3> hair_sample(const HairParams& p, const Vec3& wo, float u0, float u1, float u2) {
+    const std::optional<HairSample> s = hair_sample_f(HairModel(p), wo, u0, u1, u2);
+    if (!s) return std::nullopt;
+    return s->wi;
 }
 
 Rgb hair_sigma_a_from_concentration(float eumelanin, float pheomelanin) {

@@ -97,4 +97,12 @@ struct Frame {
     Vec3 to_world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
+/// A direction drawn from a scattering function (a BSDF or one of its lobes): the direction,
+/// the function's value there and the density it was drawn with (0: nothing drawn).
+struct DirectionSample {
+    Vec3 wi;
+    Rgb f;
+    float pdf = 0;
+};
+
 }  // namespace cmam::render

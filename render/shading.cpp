@@ -500,7 +500,7 @@ void Bsdf::add(const Bsdf& o, std::forward_list<Bsdf>& layers) {
         kt_diffuse += o.kt_diffuse;
         if (o.hair) {
             hair = true;
-            hair_params = o.hair_params;
+            hair_model = o.hair_model;
             hair_scale = o.hair_scale;
         }
         if (o.fourier) {
@@ -546,7 +546,7 @@ Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
     if (fourier) return fourier_f(*fourier, wo, frame.to_local(wi_w)) * fourier_scale;
-    if (hair) return hair_f(hair_params, wo, frame.to_local(wi_w)) * hair_scale;
+    if (hair) return hair_f(hair_model, wo, frame.to_local(wi_w)) * hair_scale;
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
     if (!reflect) {
         Rgb out = has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
@@ -627,7 +627,7 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return 0;
     if (fourier) return fourier_pdf(*fourier, wo, wi);
-    if (hair) return hair_pdf(hair_params, wo, wi);
+    if (hair) return hair_pdf(hair_model, wo, wi);
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
     // Lambda(wo) = (r_o / |cos_o| - 1) / 2 (smith_r).
@@ -725,15 +725,11 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
         return out;
     }
     if (hair) {
-        const std::optional<Vec3> wi = hair_sample(hair_params, wo, u0, u1, u2);
-        if (!wi) return out;
-        out.wi = frame.to_world(*wi);
-        out.pdf = hair_pdf(hair_params, wo, *wi);
-        if (!(out.pdf > 0)) {
-            out.pdf = 0;
-            return out;
-        }
-        out.f = hair_f(hair_params, wo, *wi) * hair_scale;
+        const std::optional<HairSample> s = hair_sample_f(hair_model, wo, u0, u1, u2);
+        if (!s || !(s->pdf > 0)) return out;
+        out.wi = frame.to_world(s->wi);
+        out.pdf = s->pdf;
+        out.f = s->f * hair_scale;
         return out;
     }
     // The lobe: glossy (0), diffuse (1), transmission (2), diffuse transmission (3), evenly
@@ -973,7 +969,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             // pbrt-v3's hair: h = -1 + 2v across the fibre (a curve's v), roughnesses in [0, 1]
             // (from 0.001: at 0 its lobes' variances are 0, and its values not finite).
             b.hair = true;
-            HairParams& p = b.hair_params;
+            HairParams p;
             p.h = std::clamp(-1 + 2 * ctx.v, -1.0f, 1.0f);
             p.eta = eval_texture(scene, m.eta, ctx).r;
             p.beta_m = std::clamp(eval_texture(scene, m.beta_m, ctx).r, 1e-3f, 1.0f);
@@ -993,6 +989,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
                         std::max(0.0f, eval_texture(scene, m.pheomelanin, ctx).r));
                     break;
             }
+            b.hair_model = HairModel(p);
             break;
         }
         case Material::Type::None:

@@ -104,7 +104,7 @@ struct Bsdf {
     // pbrt-v3's hair BSDF in place of the other non-specular lobes (hair.h; the frame's s along
     // the fibre, dp/du), its value times hair_scale (a mix's weight).
     bool hair = false;
-    HairParams hair_params;
+    HairModel hair_model;
     Rgb hair_scale{1, 1, 1};
     // Non-specular lobes of a mix's other material that do not fit this Bsdf (add), each Bsdf of
     // the chain in its own frame about the same shading normal: f, pdf and sample take the whole
@@ -156,11 +156,7 @@ struct Bsdf {
     /// reflection or a refraction about a Trowbridge-Reitz microfacet normal.
     /// `pdf` is the density of the whole mixture in solid angle (0: nothing drawn), `f` the BSDF
     /// there.
-    struct Sample {
-        Vec3 wi;
-        Rgb f;
-        float pdf = 0;
-    };
+    using Sample = DirectionSample;
     Sample sample(const Outgoing& o, float u0, float u1, float u2) const;
     /// The density sample() draws wi with (wo, wi in world space).
     float pdf(const Outgoing& o, const Vec3& wi) const;

@@ -89,6 +89,42 @@ TEST(Hair, SamplesWeighWhatTheValueSays) {
     }
 }
 
+// A sample carries the value and the density the two functions give in its direction, bit for
+// bit (the renderer takes them from the sample, computed from one refracted path), and a model
+// made once gives what one made per call does.
+TEST(Hair, SampleCarriesExactlyTheValueAndDensity) {
+    Uniform u{5};
+    int drawn = 0;
+    for (int c = 0; c < 20; ++c) {
+        HairParams p;
+        p.beta_m = 0.05f + 0.9f * u();
+        p.beta_n = 0.05f + 0.9f * u();
+        p.h = -1 + 2 * u();
+        p.eta = 1.2f + u();
+        p.alpha = 4 * u();
+        p.sigma_a = Rgb(3 * u(), 3 * u(), 3 * u());
+        const HairModel m(p);
+        for (int i = 0; i < 200; ++i) {
+            const Vec3 wo = uniform_sphere(u(), u());
+            const float u0 = u(), u1 = u(), u2 = u();
+            const std::optional<HairSample> s = hair_sample_f(m, wo, u0, u1, u2);
+            const std::optional<Vec3> wi = hair_sample(p, wo, u0, u1, u2);
+            ASSERT_EQ(s.has_value(), wi.has_value());
+            if (!s) continue;
+            ++drawn;
+            EXPECT_EQ(s->wi.x, wi->x);
+            EXPECT_EQ(s->wi.z, wi->z);
+            const Rgb f = hair_f(p, wo, s->wi);
+            EXPECT_EQ(s->f.r, f.r) << c << " " << i;
+            EXPECT_EQ(s->f.g, f.g);
+            EXPECT_EQ(s->f.b, f.b);
+            EXPECT_EQ(s->pdf, hair_pdf(p, wo, s->wi)) << c << " " << i;
+            EXPECT_EQ(hair_pdf(m, wo, s->wi), s->pdf);
+        }
+    }
+    EXPECT_GT(drawn, 3500);
+}
+
 // The lobes leave where pbrt-v3's exit angles put them: at h = 0 (through the fibre's axis),
 // perpendicular to the fibre, R is reflected straight back (Phi = -2 gamma_o = 0) and TT passes
 // straight through (Phi = pi), with about (1 - F)^2 = 0.91 of the light against R's F = 0.047.
@@ -128,22 +164,22 @@ TEST(Hair, MaterialTakesItsAbsorptionAsPbrtV3Does) {
     };
     const Bsdf def = bsdf_at("Material \"hair\"", nullptr);
     ASSERT_TRUE(def.hair);
-    EXPECT_NEAR(def.hair_params.sigma_a.b, 1.3f * 1.37f, 1e-5);
-    EXPECT_NEAR(def.hair_params.h, -1 + 2 * (0.5f - 0.1f / 0.4f), 1e-3);  // v = 1/4
-    EXPECT_NEAR(std::abs(def.frame.s.x), 1, 1e-5);                        // along the fibre
-    EXPECT_FLOAT_EQ(def.hair_params.eta, 1.55f);
+    EXPECT_NEAR(def.hair_model.p.sigma_a.b, 1.3f * 1.37f, 1e-5);
+    EXPECT_NEAR(def.hair_model.p.h, -1 + 2 * (0.5f - 0.1f / 0.4f), 1e-3);  // v = 1/4
+    EXPECT_NEAR(std::abs(def.frame.s.x), 1, 1e-5);                         // along the fibre
+    EXPECT_FLOAT_EQ(def.hair_model.p.eta, 1.55f);
     const Bsdf mel =
         bsdf_at("Material \"hair\" \"float eumelanin\" 0.5 \"float pheomelanin\" 2", nullptr);
-    EXPECT_NEAR(mel.hair_params.sigma_a.g, 0.5f * 0.697f + 2 * 0.4f, 1e-5);
+    EXPECT_NEAR(mel.hair_model.p.sigma_a.g, 0.5f * 0.697f + 2 * 0.4f, 1e-5);
     const Bsdf col =
         bsdf_at("Material \"hair\" \"rgb color\" [0.3 0.2 0.1] \"float beta_n\" 0.5", nullptr);
     const float k = 5.969f - 0.215f * 0.5f + 2.532f * 0.25f - 10.73f * 0.125f + 5.574f * 0.0625f +
                     0.245f * 0.03125f;
-    EXPECT_NEAR(col.hair_params.sigma_a.r, std::pow(std::log(0.3f) / k, 2.0f), 1e-5);
+    EXPECT_NEAR(col.hair_model.p.sigma_a.r, std::pow(std::log(0.3f) / k, 2.0f), 1e-5);
     std::vector<std::string> w;
     const Bsdf sig =
         bsdf_at("Material \"hair\" \"rgb sigma_a\" [0.1 0.2 0.3] \"rgb color\" [0.3 0.2 0.1]", &w);
-    EXPECT_FLOAT_EQ(sig.hair_params.sigma_a.b, 0.3f);
+    EXPECT_FLOAT_EQ(sig.hair_model.p.sigma_a.b, 0.3f);
     ASSERT_EQ(w.size(), 1u);
     EXPECT_NE(w[0].find("\"color\" is ignored since \"sigma_a\" is given"), std::string::npos)
         << w[0];
@@ -166,8 +202,9 @@ TEST(Hair, ExtremeParametersStayFinite) {
             ASSERT_TRUE(std::isfinite(f.r) && std::isfinite(f.g) && std::isfinite(f.b))
                 << eta << " " << beta << " " << i;
             ASSERT_TRUE(std::isfinite(hair_pdf(p, wo, wi))) << eta << " " << beta;
-            if (const std::optional<Vec3> s = hair_sample(p, wo, u(), u(), u()))
+            if (const std::optional<Vec3> s = hair_sample(p, wo, u(), u(), u())) {
                 ASSERT_TRUE(std::isfinite(hair_f(p, wo, *s).g)) << eta << " " << beta;
+            }
         }
     }
 }
