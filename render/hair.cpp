@@ -92,23 +92,24 @@ float sample_trimmed_logistic(float u, float s, float a, float b) {
 
 }  // namespace
 
-HairModel::HairModel(const HairParams& params) : p(params) {
+HairModel::HairModel(const HairParams& p) : h(p.h), eta(p.eta), sigma_a(p.sigma_a) {
     const float bm = p.beta_m, bn = p.beta_n;
-    v[0] = sqr(0.726f * bm + 0.812f * sqr(bm) + 3.7f * std::pow(bm, 20.0f));
-    v[1] = 0.25f * v[0];
-    v[2] = 4 * v[0];
-    v[3] = v[2];
+    v0 = sqr(0.726f * bm + 0.812f * sqr(bm) + 3.7f * std::pow(bm, 20.0f));
     s = std::sqrt(kPi / 8) * (0.265f * bn + 1.194f * sqr(bn) + 5.372f * std::pow(bn, 22.0f));
-    sin2k[0] = std::sin(p.alpha * kPi / 180);
-    cos2k[0] = safe_sqrt(1 - sqr(sin2k[0]));
-    for (int i = 1; i < 3; ++i) {
-        sin2k[i] = 2 * cos2k[i - 1] * sin2k[i - 1];
-        cos2k[i] = sqr(cos2k[i - 1]) - sqr(sin2k[i - 1]);
-    }
+    sin_alpha = std::sin(p.alpha * kPi / 180);
+    cos_alpha = safe_sqrt(1 - sqr(sin_alpha));
     gamma_o = safe_asin(p.h);
 }
 
 void HairModel::tilt(int k, float sin_o, float cos_o, float& sin_ok, float& cos_ok) const {
+    // sin and cos of 2^i alpha, doubled from alpha's.
+    float sin2k[3], cos2k[3];
+    sin2k[0] = sin_alpha;
+    cos2k[0] = cos_alpha;
+    for (int i = 1; i < 3; ++i) {
+        sin2k[i] = 2 * cos2k[i - 1] * sin2k[i - 1];
+        cos2k[i] = sqr(cos2k[i - 1]) - sqr(sin2k[i - 1]);
+    }
     if (k == 0) {
         sin_ok = sin_o * cos2k[1] - cos_o * sin2k[1];
         cos_ok = cos_o * cos2k[1] + sin_o * sin2k[1];
@@ -137,7 +138,7 @@ struct Refracted {
     float gamma_t;
     std::array<Rgb, kPMax + 1> a;
 };
-Refracted refracted(const HairParams& p, float sin_o, float cos_o) {
+Refracted refracted(const HairModel& p, float sin_o, float cos_o) {
     const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
     const float etap = safe_sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
     const float sin_gt = std::clamp(p.h / std::max(etap, 1e-6f), -1.0f, 1.0f);
@@ -165,7 +166,7 @@ struct Outgoing {
 };
 Outgoing outgoing(const HairModel& m, const Vec3& wo) {
     const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
-    return {sin_o, cos_o, phi_o, refracted(m.p, sin_o, cos_o)};
+    return {sin_o, cos_o, phi_o, refracted(m, sin_o, cos_o)};
 }
 
 // The value (without its 1 / |cos theta_i|) and the density at wi: each lobe's M_p N_p weighted
@@ -180,12 +181,12 @@ void lobes_at(const HairModel& m, const Outgoing& o, const Vec3& wi, Rgb* value,
     for (int k = 0; k < kPMax; ++k) {
         float sin_ok, cos_ok;
         m.tilt(k, o.sin_o, o.cos_o, sin_ok, cos_ok);
-        const float mk = mp(cos_i, cos_ok, sin_i, sin_ok, m.v[k]);
+        const float mk = mp(cos_i, cos_ok, sin_i, sin_ok, m.v(k));
         const float nk = np(phi, k, m.s, m.gamma_o, o.r.gamma_t);
         sum += mk * nk * o.r.a[k];
         pdf += mk * share[k] * nk;
     }
-    const float rest = mp(cos_i, o.cos_o, sin_i, o.sin_o, m.v[kPMax]);
+    const float rest = mp(cos_i, o.cos_o, sin_i, o.sin_o, m.v(kPMax));
     sum += rest / (2 * kPi) * o.r.a[kPMax];
     pdf += rest * share[kPMax] / (2 * kPi);
     if (value) *value = std::abs(wi.z) > 0 ? sum / std::abs(wi.z) : sum;
@@ -222,7 +223,7 @@ std::optional<HairSample> hair_sample_f(const HairModel& m, const Vec3& wo, floa
     m.tilt(k, o.sin_o, o.cos_o, sin_ok, cos_ok);
     // The longitudinal angle from M_p's sampling (d'Eon et al.).
     u1 = std::max(u1, 1e-5f);
-    const float cos_theta = 1 + m.v[k] * std::log(u1 + (1 - u1) * std::exp(-2 / m.v[k]));
+    const float cos_theta = 1 + m.v(k) * std::log(u1 + (1 - u1) * std::exp(-2 / m.v(k)));
     const float sin_theta = safe_sqrt(1 - sqr(cos_theta));
     const float cos_phi = std::cos(2 * kPi * u2);
     const float sin_i = -cos_theta * sin_ok + sin_theta * cos_phi * cos_ok;

@@ -19,17 +19,21 @@ struct HairParams {
     float beta_m = 0.3f, beta_n = 0.3f, alpha = 2;
 };
 
-/// The hair BSDF at a shading point: its parameters and what they alone give every evaluation,
-/// made once where the point is shaded (two powers, a sine and an arcsine, which the value, the
-/// density and the sampling each took anew): the lobes' longitudinal variances v, the azimuthal
-/// logistic's scale s, sin and cos of 2^k alpha (the scales' tilt, doubled per bounce) and
-/// gamma_o = asin h.
+/// The hair BSDF at a shading point: what its parameters give every evaluation, made once where
+/// the point is shaded (two powers, a sine and an arcsine, which the value, the density and the
+/// sampling each took anew): h, the index and the absorption as given, R's longitudinal variance
+/// v0 (the other lobes' are v0 / 4, 4 v0 and 4 v0), the azimuthal logistic's scale s, sin and
+/// cos of alpha (the scales' tilt) and gamma_o = asin h. (It is part of every Bsdf, so it keeps
+/// no more than these.)
 struct HairModel {
     static constexpr int kLobes = 4;  // R, TT, TRT, and one for all the longer paths
-    HairParams p;
-    float v[kLobes] = {}, s = 0, sin2k[3] = {}, cos2k[3] = {}, gamma_o = 0;
+    float h = 0, eta = 1.55f;
+    Rgb sigma_a{};
+    float v0 = 0, s = 0, gamma_o = 0, sin_alpha = 0, cos_alpha = 1;
     HairModel() = default;
-    explicit HairModel(const HairParams& params);
+    explicit HairModel(const HairParams& p);
+    /// Lobe k's longitudinal variance.
+    float v(int k) const { return k == 0 ? v0 : k == 1 ? 0.25f * v0 : 4 * v0; }
     /// sin and cos of theta_o turned by lobe k's tilt (R by -2 alpha, TT by alpha, TRT by
     /// 4 alpha; the rest not at all), the cosine's sign dropped.
     void tilt(int k, float sin_o, float cos_o, float& sin_ok, float& cos_ok) const;

@@ -164,22 +164,22 @@ TEST(Hair, MaterialTakesItsAbsorptionAsPbrtV3Does) {
     };
     const Bsdf def = bsdf_at("Material \"hair\"", nullptr);
     ASSERT_TRUE(def.hair);
-    EXPECT_NEAR(def.hair_model.p.sigma_a.b, 1.3f * 1.37f, 1e-5);
-    EXPECT_NEAR(def.hair_model.p.h, -1 + 2 * (0.5f - 0.1f / 0.4f), 1e-3);  // v = 1/4
-    EXPECT_NEAR(std::abs(def.frame.s.x), 1, 1e-5);                         // along the fibre
-    EXPECT_FLOAT_EQ(def.hair_model.p.eta, 1.55f);
+    EXPECT_NEAR(def.hair_model.sigma_a.b, 1.3f * 1.37f, 1e-5);
+    EXPECT_NEAR(def.hair_model.h, -1 + 2 * (0.5f - 0.1f / 0.4f), 1e-3);  // v = 1/4
+    EXPECT_NEAR(std::abs(def.frame.s.x), 1, 1e-5);                       // along the fibre
+    EXPECT_FLOAT_EQ(def.hair_model.eta, 1.55f);
     const Bsdf mel =
         bsdf_at("Material \"hair\" \"float eumelanin\" 0.5 \"float pheomelanin\" 2", nullptr);
-    EXPECT_NEAR(mel.hair_model.p.sigma_a.g, 0.5f * 0.697f + 2 * 0.4f, 1e-5);
+    EXPECT_NEAR(mel.hair_model.sigma_a.g, 0.5f * 0.697f + 2 * 0.4f, 1e-5);
     const Bsdf col =
         bsdf_at("Material \"hair\" \"rgb color\" [0.3 0.2 0.1] \"float beta_n\" 0.5", nullptr);
     const float k = 5.969f - 0.215f * 0.5f + 2.532f * 0.25f - 10.73f * 0.125f + 5.574f * 0.0625f +
                     0.245f * 0.03125f;
-    EXPECT_NEAR(col.hair_model.p.sigma_a.r, std::pow(std::log(0.3f) / k, 2.0f), 1e-5);
+    EXPECT_NEAR(col.hair_model.sigma_a.r, std::pow(std::log(0.3f) / k, 2.0f), 1e-5);
     std::vector<std::string> w;
     const Bsdf sig =
         bsdf_at("Material \"hair\" \"rgb sigma_a\" [0.1 0.2 0.3] \"rgb color\" [0.3 0.2 0.1]", &w);
-    EXPECT_FLOAT_EQ(sig.hair_model.p.sigma_a.b, 0.3f);
+    EXPECT_FLOAT_EQ(sig.hair_model.sigma_a.b, 0.3f);
     ASSERT_EQ(w.size(), 1u);
     EXPECT_NE(w[0].find("\"color\" is ignored since \"sigma_a\" is given"), std::string::npos)
         << w[0];
