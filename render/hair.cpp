@@ -130,15 +130,12 @@ namespace {
 
 static_assert(HairModel::kLobes == kPMax + 1);
 
-// What the refracted path through the fibre gives: gamma_t, its angle in the fibre's
+// The refracted path through the fibre into `o`: gamma_t, its angle in the fibre's
 // cross-section (sin gamma_t = h / eta', Bravais' index eta' = sqrt(eta^2 - sin^2 theta_o) /
 // cos theta_o), and the lobes' attenuations A_p, with T the transmittance along the path, kept
 // finite for an index below 1 (no refraction at grazing angles).
-struct Refracted {
-    float gamma_t;
-    std::array<Rgb, kPMax + 1> a;
-};
-Refracted refracted(const HairModel& p, float sin_o, float cos_o) {
+void refract(const HairModel& p, HairOutgoing& o) {
+    const float sin_o = o.sin_o, cos_o = o.cos_o;
     const float sin_t = sin_o / p.eta, cos_t = safe_sqrt(1 - sqr(sin_t));
     const float etap = safe_sqrt(p.eta * p.eta - sqr(sin_o)) / cos_o;
     const float sin_gt = std::clamp(p.h / std::max(etap, 1e-6f), -1.0f, 1.0f);
@@ -146,7 +143,8 @@ Refracted refracted(const HairModel& p, float sin_o, float cos_o) {
     const float len = 2 * cos_gt / std::max(cos_t, 1e-6f);
     const Rgb t(std::exp(-p.sigma_a.r * len), std::exp(-p.sigma_a.g * len),
                 std::exp(-p.sigma_a.b * len));
-    return {std::asin(sin_gt), ap(cos_o, p.eta, p.h, t)};
+    o.gamma_t = std::asin(sin_gt);
+    o.a = ap(cos_o, p.eta, p.h, t);
 }
 
 // The lobes' shares of the sampling, by their attenuations' luminance.
@@ -158,36 +156,26 @@ std::array<float, kPMax + 1> shares(const std::array<Rgb, kPMax + 1>& a) {
     return pdf;
 }
 
-// The outgoing direction's angles and refracted path, which the value, the density and the
-// sampling all start from.
-struct Outgoing {
-    float sin_o, cos_o, phi_o;
-    Refracted r;
-};
-Outgoing outgoing(const HairModel& m, const Vec3& wo) {
-    const float sin_o = wo.x, cos_o = safe_sqrt(1 - sqr(sin_o)), phi_o = std::atan2(wo.z, wo.y);
-    return {sin_o, cos_o, phi_o, refracted(m, sin_o, cos_o)};
-}
-
 // The value (without its 1 / |cos theta_i|) and the density at wi: each lobe's M_p N_p weighted
 // by its attenuation and by its share. Either output may be null.
-void lobes_at(const HairModel& m, const Outgoing& o, const Vec3& wi, Rgb* value, float* density) {
+void lobes_at(const HairModel& m, const HairOutgoing& o, const Vec3& wi, Rgb* value,
+              float* density) {
     const float sin_i = wi.x, cos_i = safe_sqrt(1 - sqr(sin_i));
     const float phi = std::atan2(wi.z, wi.y) - o.phi_o;
     std::array<float, kPMax + 1> share{};
-    if (density) share = shares(o.r.a);
+    if (density) share = shares(o.a);
     Rgb sum{};
     float pdf = 0;
     for (int k = 0; k < kPMax; ++k) {
         float sin_ok, cos_ok;
         m.tilt(k, o.sin_o, o.cos_o, sin_ok, cos_ok);
         const float mk = mp(cos_i, cos_ok, sin_i, sin_ok, m.v(k));
-        const float nk = np(phi, k, m.s, m.gamma_o, o.r.gamma_t);
-        sum += mk * nk * o.r.a[k];
+        const float nk = np(phi, k, m.s, m.gamma_o, o.gamma_t);
+        sum += mk * nk * o.a[k];
         pdf += mk * share[k] * nk;
     }
     const float rest = mp(cos_i, o.cos_o, sin_i, o.sin_o, m.v(kPMax));
-    sum += rest / (2 * kPi) * o.r.a[kPMax];
+    sum += rest / (2 * kPi) * o.a[kPMax];
     pdf += rest * share[kPMax] / (2 * kPi);
     if (value) *value = std::abs(wi.z) > 0 ? sum / std::abs(wi.z) : sum;
     if (density) *density = pdf;
@@ -195,24 +183,32 @@ void lobes_at(const HairModel& m, const Outgoing& o, const Vec3& wi, Rgb* value,
 
 }  // namespace
 
-Rgb hair_f(const HairModel& m, const Vec3& wo, const Vec3& wi) {
+HairOutgoing hair_outgoing(const HairModel& m, const Vec3& wo) {
+    HairOutgoing o;
+    o.sin_o = wo.x;
+    o.cos_o = safe_sqrt(1 - sqr(o.sin_o));
+    o.phi_o = std::atan2(wo.z, wo.y);
+    refract(m, o);
+    return o;
+}
+
+Rgb hair_f(const HairModel& m, const HairOutgoing& o, const Vec3& wi) {
     Rgb f;
-    lobes_at(m, outgoing(m, wo), wi, &f, nullptr);
+    lobes_at(m, o, wi, &f, nullptr);
     return f;
 }
 
-float hair_pdf(const HairModel& m, const Vec3& wo, const Vec3& wi) {
+float hair_pdf(const HairModel& m, const HairOutgoing& o, const Vec3& wi) {
     float pdf;
-    lobes_at(m, outgoing(m, wo), wi, nullptr, &pdf);
+    lobes_at(m, o, wi, nullptr, &pdf);
     return pdf;
 }
 
-std::optional<HairSample> hair_sample_f(const HairModel& m, const Vec3& wo, float u0, float u1,
-                                        float u2) {
-    const Outgoing o = outgoing(m, wo);
+std::optional<HairSample> hair_sample_f(const HairModel& m, const HairOutgoing& o, float u0,
+                                        float u1, float u2) {
     if (!(o.cos_o > 0)) return std::nullopt;
     // The lobe by its share; what is left of u0 within it draws the azimuth.
-    const std::array<float, kPMax + 1> share = shares(o.r.a);
+    const std::array<float, kPMax + 1> share = shares(o.a);
     int k = 0;
     for (; k < kPMax; ++k) {
         if (u0 < share[k]) break;
@@ -228,9 +224,9 @@ std::optional<HairSample> hair_sample_f(const HairModel& m, const Vec3& wo, floa
     const float cos_phi = std::cos(2 * kPi * u2);
     const float sin_i = -cos_theta * sin_ok + sin_theta * cos_phi * cos_ok;
     const float cos_i = safe_sqrt(1 - sqr(sin_i));
-    const float dphi = k < kPMax ? phi_of(k, m.gamma_o, o.r.gamma_t) +
-                                       sample_trimmed_logistic(u_phi, m.s, -kPi, kPi)
-                                 : 2 * kPi * u_phi;
+    const float dphi =
+        k < kPMax ? phi_of(k, m.gamma_o, o.gamma_t) + sample_trimmed_logistic(u_phi, m.s, -kPi, kPi)
+                  : 2 * kPi * u_phi;
     const float phi_i = o.phi_o + dphi;
     HairSample out;
     out.wi = Vec3(sin_i, cos_i * std::cos(phi_i), cos_i * std::sin(phi_i));
@@ -240,15 +236,18 @@ std::optional<HairSample> hair_sample_f(const HairModel& m, const Vec3& wo, floa
 }
 
 Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi) {
-    return hair_f(HairModel(p), wo, wi);
+    const HairModel m(p);
+    return hair_f(m, hair_outgoing(m, wo), wi);
 }
 
 float hair_pdf(const HairParams& p, const Vec3& wo, const Vec3& wi) {
-    return hair_pdf(HairModel(p), wo, wi);
+    const HairModel m(p);
+    return hair_pdf(m, hair_outgoing(m, wo), wi);
 }
 
 std::optional<Vec3> hair_sample(const HairParams& p, const Vec3& wo, float u0, float u1, float u2) {
-    const std::optional<HairSample> s = hair_sample_f(HairModel(p), wo, u0, u1, u2);
+    const HairModel m(p);
+    const std::optional<HairSample> s = hair_sample_f(m, hair_outgoing(m, wo), u0, u1, u2);
     if (!s) return std::nullopt;
     return s->wi;
 }

@@ -3,6 +3,7 @@
 // attenuation A_p and an azimuthal term N_p (algorithms.md §21).
 #pragma once
 
+#include <array>
 #include <optional>
 
 #include "render/math.h"
@@ -39,16 +40,26 @@ struct HairModel {
     void tilt(int k, float sin_o, float cos_o, float& sin_ok, float& cos_ok) const;
 };
 
+/// What an outgoing direction wo gives every evaluation: its angles (sin theta_o, cos theta_o,
+/// phi_o) and the refracted path through the fibre (gamma_t, the lobes' attenuations A_p), made
+/// once per direction: a shading point's light samples and its BSDF sample share them.
+struct HairOutgoing {
+    float sin_o = 0, cos_o = 0, phi_o = 0, gamma_t = 0;
+    std::array<Rgb, HairModel::kLobes> a{};
+};
+HairOutgoing hair_outgoing(const HairModel& m, const Vec3& wo);
+
 /// In the hair's local frame: x along the fibre, z the surface normal (the ray's side of the
-/// fibre). f includes pbrt-v3's 1 / |cos theta_i| (wi.z), so f |wi.z| integrates to the albedo.
-Rgb hair_f(const HairModel& m, const Vec3& wo, const Vec3& wi);
-float hair_pdf(const HairModel& m, const Vec3& wo, const Vec3& wi);
+/// fibre), for wo as `o` (hair_outgoing). f includes pbrt-v3's 1 / |cos theta_i| (wi.z), so
+/// f |wi.z| integrates to the albedo.
+Rgb hair_f(const HairModel& m, const HairOutgoing& o, const Vec3& wi);
+float hair_pdf(const HairModel& m, const HairOutgoing& o, const Vec3& wi);
 /// A direction drawn with density hair_pdf from three uniform numbers, with that density and the
-/// value hair_f there: the same numbers as calling the two, from one pass over the lobes and one
-/// refracted path (none where wo is along the fibre).
+/// value hair_f there: the same numbers as calling the two, from one pass over the lobes (none
+/// where wo is along the fibre).
 using HairSample = DirectionSample;
-std::optional<HairSample> hair_sample_f(const HairModel& m, const Vec3& wo, float u0, float u1,
-                                        float u2);
+std::optional<HairSample> hair_sample_f(const HairModel& m, const HairOutgoing& o, float u0,
+                                        float u1, float u2);
 
 /// The same for one call each, the model made from `p` for it.
 Rgb hair_f(const HairParams& p, const Vec3& wo, const Vec3& wi);

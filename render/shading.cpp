@@ -395,6 +395,7 @@ Bsdf::Outgoing Bsdf::outgoing(const Vec3& wo_w) const {
     o.smith_r = !has_glossy() && !has_transmission() ? 0
                 : anisotropic                        ? smith_r(o.local, alpha, alpha_y)
                                                      : smith_r(o.local, alpha);
+    if (hair) o.hair = hair_outgoing(hair_model, o.local);
     return o;
 }
 
@@ -546,7 +547,7 @@ Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return {};
     if (fourier) return fourier_f(*fourier, wo, frame.to_local(wi_w)) * fourier_scale;
-    if (hair) return hair_f(hair_model, wo, frame.to_local(wi_w)) * hair_scale;
+    if (hair) return hair_f(hair_model, o.hair, frame.to_local(wi_w)) * hair_scale;
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
     if (!reflect) {
         Rgb out = has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
@@ -627,7 +628,7 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     const Vec3& wo = o.local;
     if (wo.z == 0) return 0;
     if (fourier) return fourier_pdf(*fourier, wo, wi);
-    if (hair) return hair_pdf(hair_model, wo, wi);
+    if (hair) return hair_pdf(hair_model, o.hair, wi);
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
     // Lambda(wo) = (r_o / |cos_o| - 1) / 2 (smith_r).
@@ -725,7 +726,7 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
         return out;
     }
     if (hair) {
-        const std::optional<HairSample> s = hair_sample_f(hair_model, wo, u0, u1, u2);
+        const std::optional<HairSample> s = hair_sample_f(hair_model, o.hair, u0, u1, u2);
         if (!s || !(s->pdf > 0)) return out;
         out.wi = frame.to_world(s->wi);
         out.pdf = s->pdf;

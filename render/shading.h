@@ -141,10 +141,11 @@ struct Bsdf {
     /// What f computes of the outgoing direction alone, computed once for a shading point's
     /// light samples (f(out, wi) equals f(wo, wi) bit for bit).
     struct Outgoing {
-        Vec3 local;     // in the shading frame
-        float w_ng;     // w . ng
-        float smith_r;  // sqrt(cos^2 + alpha^2 sin^2) of wo: its Smith Lambda is
-                        // (smith_r / |cos| - 1) / 2 (microfacet BSDFs only)
+        Vec3 local;         // in the shading frame
+        float w_ng;         // w . ng
+        float smith_r;      // sqrt(cos^2 + alpha^2 sin^2) of wo: its Smith Lambda is
+                            // (smith_r / |cos| - 1) / 2 (microfacet BSDFs only)
+        HairOutgoing hair;  // wo's angles and refracted path (hair BSDFs only)
     };
     Outgoing outgoing(const Vec3& wo) const;
     Rgb f(const Outgoing& wo, const Vec3& wi) const;

@@ -107,7 +107,7 @@ TEST(Hair, SampleCarriesExactlyTheValueAndDensity) {
         for (int i = 0; i < 200; ++i) {
             const Vec3 wo = uniform_sphere(u(), u());
             const float u0 = u(), u1 = u(), u2 = u();
-            const std::optional<HairSample> s = hair_sample_f(m, wo, u0, u1, u2);
+            const std::optional<HairSample> s = hair_sample_f(m, hair_outgoing(m, wo), u0, u1, u2);
             const std::optional<Vec3> wi = hair_sample(p, wo, u0, u1, u2);
             ASSERT_EQ(s.has_value(), wi.has_value());
             if (!s) continue;
@@ -119,7 +119,7 @@ TEST(Hair, SampleCarriesExactlyTheValueAndDensity) {
             EXPECT_EQ(s->f.g, f.g);
             EXPECT_EQ(s->f.b, f.b);
             EXPECT_EQ(s->pdf, hair_pdf(p, wo, s->wi)) << c << " " << i;
-            EXPECT_EQ(hair_pdf(m, wo, s->wi), s->pdf);
+            EXPECT_EQ(hair_pdf(m, hair_outgoing(m, wo), s->wi), s->pdf);
         }
     }
     EXPECT_GT(drawn, 3500);
@@ -168,6 +168,22 @@ TEST(Hair, MaterialTakesItsAbsorptionAsPbrtV3Does) {
     EXPECT_NEAR(def.hair_model.h, -1 + 2 * (0.5f - 0.1f / 0.4f), 1e-3);  // v = 1/4
     EXPECT_NEAR(std::abs(def.frame.s.x), 1, 1e-5);                       // along the fibre
     EXPECT_FLOAT_EQ(def.hair_model.eta, 1.55f);
+    // The Bsdf's value, density and samples are its model's, wo's angles and refracted path made
+    // once per outgoing direction (Bsdf::outgoing) and shared by them.
+    Uniform u{9};
+    for (int i = 0; i < 50; ++i) {
+        const Vec3 wo = uniform_sphere(u(), u()), wi = uniform_sphere(u(), u());
+        const HairOutgoing ho = hair_outgoing(def.hair_model, def.frame.to_local(wo));
+        const Rgb f = def.f(wo, wi), g = hair_f(def.hair_model, ho, def.frame.to_local(wi));
+        EXPECT_EQ(f.r, g.r) << i;
+        EXPECT_EQ(f.b, g.b) << i;
+        const Bsdf::Outgoing o = def.outgoing(wo);
+        EXPECT_EQ(def.pdf(o, wi), hair_pdf(def.hair_model, ho, def.frame.to_local(wi))) << i;
+        const Bsdf::Sample s = def.sample(o, u(), u(), u());
+        if (s.pdf > 0) {  // (s.wi made world and back: equal up to rounding)
+            EXPECT_NEAR(s.pdf, def.pdf(o, s.wi), 1e-3f * s.pdf) << i;
+        }
+    }
     const Bsdf mel =
         bsdf_at("Material \"hair\" \"float eumelanin\" 0.5 \"float pheomelanin\" 2", nullptr);
     EXPECT_NEAR(mel.hair_model.sigma_a.g, 0.5f * 0.697f + 2 * 0.4f, 1e-5);
