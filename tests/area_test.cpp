@@ -144,6 +144,39 @@ INSTANTIATE_TEST_SUITE_P(Wraps, AreaWrap,
                                            WrapMode::Mirror),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
+TEST(Area, RegionsBeyondTheRepeatMarginMatchTheCellOracle) {
+    // A repeating table of at most RowPrefixTable::kMarginMaxSize texels continues by
+    // periodicity for kMarginKnots knots and kMarginRows rows past (W, H): regions leaving the
+    // base period by less are walked directly, longer edges are cut at x = W and y = H, as are
+    // a larger table's. Long regions around the corner (W, H) of 1- and 3-channel textures, with
+    // and without the margin, take every path.
+    for (const auto& [w, h] : {std::pair{90, 60}, std::pair{150, 130}})
+        for (const int nc : {1, 3}) {
+            Image img(w, h, nc, noise(w, h, nc, 17 + nc), WrapMode::Repeat, WrapMode::Repeat);
+            RowPrefixTable table(img);
+            std::mt19937 rng(41 + nc);
+            std::uniform_real_distribution<double> offset(-15, 15), len(15, 60), angle(0, 6.3),
+                width(0.5, 6);
+            for (int k = 0; k < 120; ++k) {
+                const double cx = w + offset(rng), cy = h + offset(rng), l = len(rng),
+                             th = angle(rng), wd = width(rng);
+                const Vec2d a{l * std::cos(th), l * std::sin(th)},
+                    b{-wd * std::sin(th), wd * std::cos(th)};
+                const Vec2d p[4] = {{cx - 0.5 * (a.u + b.u), cy - 0.5 * (a.v + b.v)},
+                                    {cx + 0.5 * (a.u - b.u), cy + 0.5 * (a.v - b.v)},
+                                    {cx + 0.5 * (a.u + b.u), cy + 0.5 * (a.v + b.v)},
+                                    {cx - 0.5 * (a.u - b.u), cy - 0.5 * (a.v - b.v)}};
+                const Texel got = table.integral(p, 4);
+                const Texel want = polygon_integral_cells(img, to_polygon(p, 4));
+                const double area = std::abs(signed_area(to_polygon(p, 4)));
+                for (int c = 0; c < nc; ++c)
+                    ASSERT_NEAR(got[c], want[c], 1e-5 * std::max(1.0, area))
+                        << w << "x" << h << ", " << nc << " channels, polygon " << k << " channel "
+                        << c;
+            }
+        }
+}
+
 TEST(Area, Tpoly1NumbersThroughTheRowPrefixes) {
     // algorithms.md §12 T-POLY-1 on the 2x2 texture [1 2; 3 4].
     Image img(2, 2, 1, {1, 2, 3, 4}, WrapMode::Repeat, WrapMode::Repeat);
@@ -432,6 +465,9 @@ TEST(Area, TablesAreBuiltLazilyAndCounted) {
     t.lookup(0.5, 0.5, Footprint::axes({0.001, 0}, {0, 0.001}), {FilterKind::Area});
     EXPECT_EQ(t.row_prefix_bytes(), 0u);  // magnified: the Gauss rule reads the texels
     t.lookup(0.5, 0.5, Footprint::axes({0.1, 0}, {0, 0.1}), {FilterKind::Area});
-    EXPECT_EQ(t.row_prefix_bytes(), std::size_t(65) * 32 * 3 * sizeof(float));  // level 0 only
+    // Level 0 only: 65 knots a row and 32 rows, and as the texture repeats, the margin's knots
+    // and rows.
+    EXPECT_EQ(t.row_prefix_bytes(), std::size_t(65 + RowPrefixTable::kMarginKnots) *
+                                        (32 + RowPrefixTable::kMarginRows) * 3 * sizeof(float));
     EXPECT_GE(t.memory_bytes(), before + t.row_prefix_bytes());
 }

@@ -44,13 +44,32 @@ RowPrefixTable::RowPrefixTable(const Image& image)
       m_wrap_s(image.wrap_s()),
       m_wrap_t(image.wrap_t()),
       m_mean(image.mean()) {
-    const std::size_t stride = static_cast<std::size_t>(m_w + 1) * m_c;
-    m_d = TexelBuffer(stride * static_cast<std::size_t>(m_h));  // zero-filled
+    const bool margin = m_wrap_s == WrapMode::Repeat && m_wrap_t == WrapMode::Repeat &&
+                        std::max(m_w, m_h) <= kMarginMaxSize;
+    m_row_len = m_w + 1 + (margin ? kMarginKnots : 0);
+    m_rows = m_h + (margin ? kMarginRows : 0);
+    // A piece starting in texel k0 reads knots k0 to k0 + 2 (and, three channels to a vector, the
+    // next knot's first): a walked edge stays below x = W, or with the margin three knots before
+    // the row's end.
+    m_walk_w = margin ? double(m_row_len - 3) : double(m_w);
+    m_walk_h = m_rows;
+    const std::size_t stride = static_cast<std::size_t>(m_row_len) * m_c;
+    m_d = TexelBuffer(stride * static_cast<std::size_t>(m_rows));  // zero-filled
     const double mean[4] = {m_mean[0], m_mean[1], m_mean[2], m_mean[3]};
     for (int j = 0; j < m_h; ++j) {
         float* row = m_d.data() + stride * static_cast<std::size_t>(j);
         detail::with_channels(m_c, [&]<int NC>() { prefix_row<NC>(image, j, mean, row); });
+        // The margin's knots: R(q W + r) = q D[W] + D[r].
+        for (int k = m_w + 1; k < m_row_len; ++k) {
+            const int q = k / m_w, r = k % m_w;
+            for (int c = 0; c < m_c; ++c)
+                row[std::size_t(k) * m_c + c] = static_cast<float>(
+                    double(q) * row[std::size_t(m_w) * m_c + c] + row[std::size_t(r) * m_c + c]);
+        }
     }
+    for (int j = m_h; j < m_rows; ++j)  // the margin's rows: row j is row j mod H
+        std::copy_n(m_d.data() + stride * static_cast<std::size_t>(j % m_h), stride,
+                    m_d.data() + stride * static_cast<std::size_t>(j));
 }
 
 namespace {
@@ -191,7 +210,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
         for (int c = 0; c < NC; ++c) acc[c] -= h * m_mean[c] * 0.5 * (x0 + x1);
         return;
     }
-    const float* row = m_d.data() + static_cast<std::size_t>(jj) * (m_w + 1) * NC;
+    const float* row = m_d.data() + static_cast<std::size_t>(jj) * m_row_len * NC;
     if (x0 > x1) std::swap(x0, x1);
     const int64_t k0 = floor_to_int(x0);
     double ra[NC], rb[NC];
@@ -451,7 +470,7 @@ template <int NC>
 [[gnu::always_inline]] inline void RowPrefixTable::edge_inside(Vec2d p, Vec2d q, double sign,
                                                                double dxdy, double h_per_x,
                                                                double* acc) const {
-    const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
+    const std::size_t stride = static_cast<std::size_t>(m_row_len) * NC;
 #if defined(__SSE2__)
     EdgeWalk<NC>(m_d.data(), stride, p, q, sign, dxdy, h_per_x).walk(acc);
 #else
@@ -503,7 +522,7 @@ template <int NC>
 void RowPrefixTable::edge_split(Vec2d p, Vec2d q, double sign, double dxdy, double h_per_x,
                                 double* acc) const {
     const double W = m_w, H = m_h;
-    const std::size_t stride = static_cast<std::size_t>(m_w + 1) * NC;
+    const std::size_t stride = static_cast<std::size_t>(m_row_len) * NC;
     // The cut points, in order along the edge (t its parameter): exactly on their lines.
     struct Cut {
         double t;
@@ -583,8 +602,9 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         const Edge& E = edges[e];
         const Vec2d p = E.p, q = E.q;
         const double u_lo = std::min(p.u, q.u), u_hi = std::max(p.u, q.u);
-        if (p.v >= 0 && q.v <= m_h && u_lo >= 0 && u_hi < m_w) [[likely]] {
-            // The common case, the edge within the table: rows and knots read directly.
+        if (p.v >= 0 && q.v <= m_walk_h && u_lo >= 0 && u_hi < m_walk_w) [[likely]] {
+            // The common case, the edge within the table (its margin included): rows and knots
+            // read directly.
             edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
             continue;
         }

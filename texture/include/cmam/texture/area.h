@@ -40,12 +40,25 @@ class RowPrefixTable {
     /// `signed_area2` is twice the polygon's signed area (what the caller has computed already).
     Texel integral_in_range(const Vec2d* v, int n, double signed_area2) const;
 
+    /// Knots beyond D[W] stored at the end of each row, and rows stored after row H - 1, when
+    /// the image repeats along both axes and is at most kMarginMaxSize texels wide and high: the
+    /// table then continues by periodicity (knot W + i is D[W] + D[i], row H + j is row j), so
+    /// that a region that leaves the base period by less than about 32 texels, as every region
+    /// the area filter walks does (its perimeter is at most kAreaMaxPerimeter), is walked
+    /// without cutting its edges at x = W and y = H. Regions cross those lines often on small
+    /// levels only, where the margin's memory is small too (algorithms.md §5.2).
+    static constexpr int kMarginKnots = 36, kMarginRows = 34, kMarginMaxSize = 128;
+
   private:
     int m_w = 0, m_h = 0, m_c = 0;
     WrapMode m_wrap_s{}, m_wrap_t{};
     Texel m_mean{};
-    // H rows of (W+1) * C floats, in the image's buffer type: aligned and, when large, on
-    // transparent huge pages, since a region's boundary reads one row after another.
+    // Knots per stored row (W + 1, or W + 1 + kMarginKnots) and rows stored (H, or
+    // H + kMarginRows); edges within [0, m_walk_w) x [0, m_walk_h] are walked directly.
+    int m_row_len = 0, m_rows = 0;
+    double m_walk_w = 0, m_walk_h = 0;
+    // m_rows rows of m_row_len * C floats, in the image's buffer type: aligned and, when large,
+    // on transparent huge pages, since a region's boundary reads one row after another.
     TexelBuffer m_d;
 
     template <int NC>
