@@ -797,9 +797,9 @@ bool read_block(const Image& img, double s, double t, double es, double et, Texe
     const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
     const int64_t W = img.width(), H = img.height();
     if (img.wrap_s() == WrapMode::Repeat && img.wrap_t() == WrapMode::Repeat && nx <= W &&
-        ny <= H && b.k0 >= -W && b.j0 >= -H) {
+        ny <= H && b.k0 >= -W && b.k0 < W && b.j0 >= -H && b.j0 < H) {
         // Repeating both ways, with the centre in the base period (gauss_mean): the block starts
-        // at most a period before it, and at most a period of consecutive columns (rows) from a
+        // less than a period before it, and at most a period of consecutive columns (rows) from a
         // start in [0, W) is read from the two-period offset tables without wrapping.
         const std::ptrdiff_t* c0 = cols + (b.k0 < 0 ? b.k0 + W : b.k0);
         const std::ptrdiff_t* r0 = rows + (b.j0 < 0 ? b.j0 + H : b.j0);
