@@ -52,20 +52,21 @@ RowPrefixTable::RowPrefixTable(const Image& image)
     // next knot's first): a walked edge stays below x = W, or with the margin three knots before
     // the row's end.
     m_walk_w = margin ? double(m_row_len - 3) : double(m_w);
-    m_walk_h = m_rows;
     const std::size_t stride = static_cast<std::size_t>(m_row_len) * m_c;
     m_d = TexelBuffer(stride * static_cast<std::size_t>(m_rows));  // zero-filled
     const double mean[4] = {m_mean[0], m_mean[1], m_mean[2], m_mean[3]};
     for (int j = 0; j < m_h; ++j) {
         float* row = m_d.data() + stride * static_cast<std::size_t>(j);
-        detail::with_channels(m_c, [&]<int NC>() { prefix_row<NC>(image, j, mean, row); });
-        // The margin's knots: R(q W + r) = q D[W] + D[r].
-        for (int k = m_w + 1; k < m_row_len; ++k) {
-            const int q = k / m_w, r = k % m_w;
-            for (int c = 0; c < m_c; ++c)
-                row[std::size_t(k) * m_c + c] = static_cast<float>(
-                    double(q) * row[std::size_t(m_w) * m_c + c] + row[std::size_t(r) * m_c + c]);
-        }
+        detail::with_channels(m_c, [&]<int NC>() {
+            prefix_row<NC>(image, j, mean, row);
+            // The margin's knots: R(k) with Repeat's extension, R(q W + r) = q D[W] + D[r].
+            for (int k = m_w + 1; k < m_row_len; ++k) {
+                double r[NC];
+                knot<NC>(row, k, r);
+                for (int c = 0; c < NC; ++c)
+                    row[std::size_t(k) * NC + c] = static_cast<float>(r[c]);
+            }
+        });
     }
     for (int j = m_h; j < m_rows; ++j)  // the margin's rows: row j is row j mod H
         std::copy_n(m_d.data() + stride * static_cast<std::size_t>(j % m_h), stride,
@@ -602,7 +603,7 @@ void RowPrefixTable::integrate(const Vec2d* v, int n, double* acc) const {
         const Edge& E = edges[e];
         const Vec2d p = E.p, q = E.q;
         const double u_lo = std::min(p.u, q.u), u_hi = std::max(p.u, q.u);
-        if (p.v >= 0 && q.v <= m_walk_h && u_lo >= 0 && u_hi < m_walk_w) [[likely]] {
+        if (p.v >= 0 && q.v <= m_rows && u_lo >= 0 && u_hi < m_walk_w) [[likely]] {
             // The common case, the edge within the table (its margin included): rows and knots
             // read directly.
             edge_inside<NC>(p, q, E.sign, E.dxdy, E.h_per_x, acc);
@@ -792,33 +793,35 @@ bool read_block(const Image& img, double s, double t, double es, double et, Texe
     if (nx > TexelBlock::kMax || ny > TexelBlock::kMax) return false;
     b.nx = nx;
     b.ny = ny;
-    std::ptrdiff_t col[TexelBlock::kMax];
-    const float* base = img.row(0);
-    const std::ptrdiff_t *cols = img.column_offsets(), *rows = img.row_offsets();
-    const int64_t W = img.width(), H = img.height();
-    if (img.wrap_s() == WrapMode::Repeat && img.wrap_t() == WrapMode::Repeat && nx <= W &&
-        ny <= H && b.k0 >= -W && b.k0 < W && b.j0 >= -H && b.j0 < H) {
-        // Repeating both ways, with the centre in the base period (gauss_mean): the block starts
-        // less than a period before it, and at most a period of consecutive columns (rows) from a
-        // start in [0, W) is read from the two-period offset tables without wrapping.
-        const std::ptrdiff_t* c0 = cols + (b.k0 < 0 ? b.k0 + W : b.k0);
-        const std::ptrdiff_t* r0 = rows + (b.j0 < 0 ? b.j0 + H : b.j0);
-        for (int jj = 0; jj < ny; ++jj) {
-            const float* row = base + r0[jj];
-            for (int i = 0; i < nx; ++i) b.t[jj][i] = knot4<NC>(row + c0[i]);
+    // Each axis's offsets: a Repeat axis whose start lies less than a period before the base
+    // period (the centre is in it: gauss_mean) reads at most a period of consecutive entries of
+    // the image's two-period offset table in place, without wrapping; otherwise each index is
+    // wrapped into `buf`, -1 outside a Black edge.
+    auto offsets = [](int64_t k0, int n, int64_t size, WrapMode mode, const std::ptrdiff_t* table,
+                      std::ptrdiff_t* buf) -> const std::ptrdiff_t* {
+        if (mode == WrapMode::Repeat && n <= size && k0 >= -size && k0 < size)
+            return table + (k0 < 0 ? k0 + size : k0);
+        for (int i = 0; i < n; ++i) {
+            const int64_t c = wrap_index(k0 + i, size, mode);
+            buf[i] = c < 0 ? -1 : table[c];
         }
+        return buf;
+    };
+    std::ptrdiff_t col_buf[TexelBlock::kMax], row_buf[TexelBlock::kMax];
+    const std::ptrdiff_t* col =
+        offsets(b.k0, nx, img.width(), img.wrap_s(), img.column_offsets(), col_buf);
+    const std::ptrdiff_t* row =
+        offsets(b.j0, ny, img.height(), img.wrap_t(), img.row_offsets(), row_buf);
+    const float* base = img.row(0);
+    if (img.wrap_s() != WrapMode::Black && img.wrap_t() != WrapMode::Black) {
+        for (int jj = 0; jj < ny; ++jj)
+            for (int i = 0; i < nx; ++i) b.t[jj][i] = knot4<NC>(base + row[jj] + col[i]);
         return true;
     }
-    for (int i = 0; i < nx; ++i) {
-        const int64_t c = wrap_index(b.k0 + i, img.width(), img.wrap_s());
-        col[i] = c < 0 ? -1 : cols[c];
-    }
-    for (int jj = 0; jj < ny; ++jj) {
-        const int64_t r = wrap_index(b.j0 + jj, img.height(), img.wrap_t());
+    for (int jj = 0; jj < ny; ++jj)
         for (int i = 0; i < nx; ++i)
             b.t[jj][i] =
-                r < 0 || col[i] < 0 ? _mm_setzero_ps() : knot4<NC>(base + rows[r] + col[i]);
-    }
+                row[jj] < 0 || col[i] < 0 ? _mm_setzero_ps() : knot4<NC>(base + row[jj] + col[i]);
     return true;
 }
 

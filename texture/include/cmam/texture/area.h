@@ -54,9 +54,9 @@ class RowPrefixTable {
     WrapMode m_wrap_s{}, m_wrap_t{};
     Texel m_mean{};
     // Knots per stored row (W + 1, or W + 1 + kMarginKnots) and rows stored (H, or
-    // H + kMarginRows); edges within [0, m_walk_w) x [0, m_walk_h] are walked directly.
+    // H + kMarginRows); edges within [0, m_walk_w) x [0, m_rows] are walked directly.
     int m_row_len = 0, m_rows = 0;
-    double m_walk_w = 0, m_walk_h = 0;
+    double m_walk_w = 0;
     // m_rows rows of m_row_len * C floats, in the image's buffer type: aligned and, when large,
     // on transparent huge pages, since a region's boundary reads one row after another.
     TexelBuffer m_d;
