@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "render/error.h"
 #include "render/scene.h"
@@ -353,6 +354,18 @@ Scene::Scene() {
 #endif
     if (!m_device) throw RenderError("cannot create the Embree device");
     rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
+    // Packets of 16 where Embree traces 16 rays as one (AVX-512); where it has no native
+    // 16-ray packets but 8-ray ones (AVX2), two packets of 8 cost 1-1.5% less render time.
+    m_packet_width =
+        !rtcGetDeviceProperty(m_device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) &&
+                rtcGetDeviceProperty(m_device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)
+            ? 8
+            : 16;
+}
+
+void Scene::set_packet_width(int width) {
+    if (width != 8 && width != 16) throw RenderError("packet width must be 8 or 16");
+    m_packet_width = width;
 }
 
 Scene::~Scene() {
@@ -508,8 +521,9 @@ bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) c
 }
 
 namespace {
-// Lane i of a packet: the ray o + t d, t in (0, tfar).
-void set_lane(RTCRay16& r, int i, const Vec3& o, const Vec3& d, float tfar) {
+// Lane i of a packet (RTCRay8 or RTCRay16): the ray o + t d, t in (0, tfar).
+template <class RayK>
+void set_lane(RayK& r, int i, const Vec3& o, const Vec3& d, float tfar) {
     r.org_x[i] = o.x;
     r.org_y[i] = o.y;
     r.org_z[i] = o.z;
@@ -523,13 +537,27 @@ void set_lane(RTCRay16& r, int i, const Vec3& o, const Vec3& d, float tfar) {
     r.id[i] = 0;
     r.flags[i] = 0;
 }
+
+// Embree's packet types of K (8 or 16) rays.
+template <int K>
+using RayOf = std::conditional_t<K == 8, RTCRay8, RTCRay16>;
+template <int K>
+using RayHitOf = std::conditional_t<K == 8, RTCRayHit8, RTCRayHit16>;
 }  // namespace
 
 void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax, int n,
                             bool* occluded) const {
-    alignas(64) RTCRay16 ray;
-    alignas(64) int valid[kPacketSize];
-    for (int i = 0; i < kPacketSize; ++i) {
+    if (m_packet_width == 16) return occluded_lanes<16>(org, dir, tmax, n, occluded);
+    for (int f = 0; f < n; f += 8)
+        occluded_lanes<8>(org + f, dir + f, tmax + f, std::min(8, n - f), occluded + f);
+}
+
+template <int K>
+void Scene::occluded_lanes(const Vec3* org, const Vec3* dir, const float* tmax, int n,
+                           bool* occluded) const {
+    alignas(64) RayOf<K> ray;
+    alignas(64) int valid[K];
+    for (int i = 0; i < K; ++i) {
         // As occluded(): a ray that is not finite is occluded without tracing.
         const bool ok = i < n && finite(org[i]) && finite(dir[i]) && !std::isnan(tmax[i]);
         valid[i] = ok ? -1 : 0;
@@ -540,7 +568,10 @@ void Scene::occluded_packet(const Vec3* org, const Vec3* dir, const float* tmax,
     // Coherent rays, Embree's hint, but not through instances: Embree 3.13's coherent packet
     // traversal of instances did not return (an occlusion packet on an instanced sphere).
     if (instances.empty()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    rtcOccluded16(valid, m_scene, &ctx, &ray);
+    if constexpr (K == 8)
+        rtcOccluded8(valid, m_scene, &ctx, &ray);
+    else
+        rtcOccluded16(valid, m_scene, &ctx, &ray);
     for (int i = 0; i < n; ++i) occluded[i] = !valid[i] || ray.tfar[i] < 0;
 }
 
@@ -569,9 +600,17 @@ std::optional<SurfaceHit> Scene::intersect(const Vec3& org, const Vec3& dir, flo
 
 void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
                              std::optional<SurfaceHit>* hits, bool uv) const {
-    alignas(64) RTCRayHit16 rh;
-    alignas(64) int valid[kPacketSize];
-    for (int i = 0; i < kPacketSize; ++i) {
+    if (m_packet_width == 16) return intersect_lanes<16>(org, dir, n, hits, uv);
+    for (int f = 0; f < n; f += 8)
+        intersect_lanes<8>(org + f, dir + f, std::min(8, n - f), hits + f, uv);
+}
+
+template <int K>
+void Scene::intersect_lanes(const Vec3* org, const Vec3* dir, int n,
+                            std::optional<SurfaceHit>* hits, bool uv) const {
+    alignas(64) RayHitOf<K> rh;
+    alignas(64) int valid[K];
+    for (int i = 0; i < K; ++i) {
         valid[i] = i < n && finite(org[i]) && finite(dir[i]) ? -1 : 0;
         set_lane(rh.ray, i, valid[i] ? org[i] : Vec3(), valid[i] ? dir[i] : Vec3(0, 0, 1),
                  std::numeric_limits<float>::infinity());
@@ -580,9 +619,12 @@ void Scene::intersect_packet(const Vec3* org, const Vec3* dir, int n,
     }
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    // As in occluded_packet.
+    // As in occluded_lanes.
     if (instances.empty()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    rtcIntersect16(valid, m_scene, &ctx, &rh);
+    if constexpr (K == 8)
+        rtcIntersect8(valid, m_scene, &ctx, &rh);
+    else
+        rtcIntersect16(valid, m_scene, &ctx, &rh);
     for (int i = 0; i < n; ++i) {
         hits[i].reset();
         if (!valid[i] || rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;

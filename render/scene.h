@@ -486,6 +486,12 @@ class Scene {
     static constexpr int kPacketSize = 16;
     void intersect_packet(const Vec3* org, const Vec3* dir, int n, std::optional<SurfaceHit>* hits,
                           bool uv = true) const;
+    /// Rays Embree traces as one packet within intersect_packet and occluded_packet: 16 where
+    /// Embree has native 16-ray packets (AVX-512), else 8 where it has native 8-ray ones (AVX2),
+    /// two packets per kPacketSize rays. The hits are the same either way; set_packet_width (8
+    /// or 16) chooses one, for tests and comparisons.
+    int packet_width() const { return m_packet_width; }
+    void set_packet_width(int width);
     /// True when anything lies along org + t dir, t in (tmin, tmax).
     bool occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const;
     /// occluded(org[i], dir[i], 0, tmax[i]) into occluded[i] for up to kPacketSize rays, traced
@@ -503,7 +509,15 @@ class Scene {
     void surface_hit(const Vec3& org, const Vec3& dir, float t, const RTCHit& hit, bool uv,
                      SurfaceHit& h) const;
 
+    template <int K>
+    void intersect_lanes(const Vec3* org, const Vec3* dir, int n, std::optional<SurfaceHit>* hits,
+                         bool uv) const;
+    template <int K>
+    void occluded_lanes(const Vec3* org, const Vec3* dir, const float* tmax, int n,
+                        bool* occluded) const;
+
     RTCDevice m_device = nullptr;
+    int m_packet_width = 16;  // rays Embree traces as one packet: 16, or 8 (two per kPacketSize)
     RTCScene m_scene = nullptr;
     std::vector<RTCScene> m_object_scenes;
 };

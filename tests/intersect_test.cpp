@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "render/error.h"
 #include "scene_util.h"
 #include "temp_dir.h"
 
@@ -192,14 +193,18 @@ void expect_same_hit(const std::optional<SurfaceHit>& a, const std::optional<Sur
 }
 }  // namespace
 
+// Both packet widths (Embree's packets of 16, or two of 8), whichever this processor uses.
 TEST(Packets, IntersectPacketGivesTheSingleRaysHits) {
     auto s = world(kPacketWorld);
     constexpr int N = render::Scene::kPacketSize;
+    EXPECT_TRUE(s->packet_width() == 8 || s->packet_width() == 16);
     int hits = 0, quadrics = 0, instanced = 0;
-    for (int seed = 0; seed < 8; ++seed) {
+    for (int seed = 0; seed < 16; ++seed) {
+        s->set_packet_width(seed % 2 == 0 ? 16 : 8);
         Vec3 org[N], dir[N];
-        packet_rays(org, dir, seed);
-        for (int n : {N, 11}) {  // a full packet and a partial one
+        packet_rays(org, dir, seed / 2);
+        // A full packet and partial ones (of 8: one packet of 8 and one of 3, one of 8 alone).
+        for (int n : {N, 11, 8, 6}) {
             std::optional<SurfaceHit> packet[N];
             s->intersect_packet(org, dir, n, packet);
             for (int i = 0; i < n; ++i) {
@@ -213,8 +218,9 @@ TEST(Packets, IntersectPacketGivesTheSingleRaysHits) {
             EXPECT_FALSE(packet[5].has_value());  // the NaN ray
         }
     }
+    EXPECT_THROW(s->set_packet_width(4), render::RenderError);
     // The rays reach every kind of shape (else the comparison would prove little).
-    EXPECT_GT(hits, 100);
+    EXPECT_GT(hits, 200);
     EXPECT_GT(quadrics, 10);
     EXPECT_GT(instanced, 2);
 }
@@ -223,23 +229,26 @@ TEST(Packets, OccludedPacketGivesTheSingleRaysAnswers) {
     auto s = world(kPacketWorld);
     constexpr int N = render::Scene::kPacketSize;
     int blocked = 0, clear = 0;
-    for (int seed = 0; seed < 8; ++seed) {
+    for (int seed = 0; seed < 16; ++seed) {
+        s->set_packet_width(seed % 2 == 0 ? 16 : 8);  // as above
         Vec3 org[N], dir[N];
-        packet_rays(org, dir, seed);
+        packet_rays(org, dir, seed / 2);
         float tmax[N];
         for (int i = 0; i < N; ++i) tmax[i] = i % 3 == 0 ? 4.5f : 1e30f;  // some stop short
         tmax[7] = std::numeric_limits<float>::quiet_NaN();
-        bool occluded[N];
-        s->occluded_packet(org, dir, tmax, N, occluded);
-        for (int i = 0; i < N; ++i) {
-            EXPECT_EQ(occluded[i], s->occluded(org[i], dir[i], 0, tmax[i])) << "ray " << i;
-            (occluded[i] ? blocked : clear) += 1;
+        for (int n : {N, 13}) {
+            bool occluded[N];
+            s->occluded_packet(org, dir, tmax, n, occluded);
+            for (int i = 0; i < n; ++i) {
+                EXPECT_EQ(occluded[i], s->occluded(org[i], dir[i], 0, tmax[i])) << "ray " << i;
+                (occluded[i] ? blocked : clear) += 1;
+            }
+            EXPECT_TRUE(occluded[5]);  // not finite: occluded, as occluded() has it
+            EXPECT_TRUE(occluded[7]);
         }
-        EXPECT_TRUE(occluded[5]);  // not finite: occluded, as occluded() has it
-        EXPECT_TRUE(occluded[7]);
     }
-    EXPECT_GT(blocked, 30);
-    EXPECT_GT(clear, 10);
+    EXPECT_GT(blocked, 100);
+    EXPECT_GT(clear, 40);
 }
 
 // A quadric's (u,v) left for later and then computed equal the ones computed at once.
