@@ -203,7 +203,8 @@ TEST(Packets, IntersectPacketGivesTheSingleRaysHits) {
         s->set_packet_width(seed % 2 == 0 ? 16 : 8);
         Vec3 org[N], dir[N];
         packet_rays(org, dir, seed / 2);
-        // A full packet and partial ones (of 8: one packet of 8 and one of 3, one of 8 alone).
+        // A full packet and partial ones; in packets of 8, 11 rays are a packet of 8 and one
+        // of 3, 8 rays one full packet, 6 rays one partial packet.
         for (int n : {N, 11, 8, 6}) {
             std::optional<SurfaceHit> packet[N];
             s->intersect_packet(org, dir, n, packet);
