@@ -292,10 +292,8 @@ inline __m128 knot4(const float* d) {
 // x = W (a part of an edge split there), where a position rounded to W would read two knots
 // past the row; a piece then starts in texel W - 1 at the latest.
 //
-// A steep edge's whole rows go alternately to two sums (`acc[0]` the first piece, the even rows
-// and the last piece; `acc[1]` the odd rows), added at the end: one channel then walks two rows
-// at a time, a row a lane (rows_paired), with each lane's operations those of its row's piece
-// for any channel count, so a channel's result is still the same for every channel count.
+// A steep edge (|dx/dy| < 0.999: each row's piece spans at most one knot) is walked whole by
+// walk_steep, four rows a group with a row per float lane, its first and last rows included.
 template <int NC, bool Guard = false>
 struct EdgeWalk {
     const float* row;
@@ -309,7 +307,7 @@ struct EdgeWalk {
     struct Sum {
         __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();  // channels 0-1, 2-3
     };
-    Sum acc[2];
+    Sum acc;
     int64_t k_last = 0;  // Guard: W - 1
 
     EdgeWalk(const float* table, std::size_t stride_, Vec2d p_, Vec2d q_, double sign_,
@@ -328,15 +326,13 @@ struct EdgeWalk {
     // margin for the rounding of xnext), and then they take no branch.
     bool steep() const { return std::abs(dxdy) < 0.999; }
 
-    // The piece of the current row from xa to xb, of height h (hv: h as a float vector). `Short`:
-    // the caller knows it spans at most one knot.
-    template <bool Short>
+    // The piece of the current row from xa to xb, of height h (hv: h as a float vector).
     [[gnu::always_inline]] void piece(double xa, double xb, __m128 hv, Sum& sum_to) {
         const double x0 = std::min(xa, xb), x1 = std::max(xa, xb);
         int64_t k0 = static_cast<int64_t>(x0);  // x0 >= 0: truncation is floor
         if constexpr (Guard) k0 = std::min(k0, k_last);
         const float* d = row + k0 * NC;
-        if (Short || x1 <= double(k0 + 2)) {
+        if (x1 <= double(k0 + 2)) {
             // Within texel k0, or into the next one by l1: the span's first part [x0, b0] has
             // mean m0, the rest m1, so the piece is h_per_x ((b0 − x0) m0 + l1 m1) =
             // h m0 + h_per_x l1 (m1 − m0), which is h m0 when l1 = 0 (no branch between the two).
@@ -366,96 +362,159 @@ struct EdgeWalk {
     // The first row's piece; the walk is then at the first whole row.
     void first() {
         if (one_row) {
-            piece<false>(p.u, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - p.v))), acc[0]);
+            piece(p.u, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - p.v))), acc);
             return;
         }
         xnext = p.u + (double(j + 1) - p.v) * dxdy;
-        piece<false>(x, xnext, _mm_set1_ps(static_cast<float>(sign * (double(j + 1) - p.v))),
-                     acc[0]);
+        piece(x, xnext, _mm_set1_ps(static_cast<float>(sign * (double(j + 1) - p.v))), acc);
         ++j;
         row += stride;
     }
-    // One whole row (j < j_last).
-    template <bool Steep>
-    [[gnu::always_inline]] void step(Sum& sum_to) {
+    // One whole row (j < j_last) of a shallow edge.
+    void step() {
         x = xnext;
         xnext = p.u + (double(j + 1) - p.v) * dxdy;
-        piece<Steep>(x, xnext, h_row, sum_to);
+        piece(x, xnext, h_row, acc);
         ++j;
         row += stride;
     }
-    template <bool Steep>
-    void rows() {
-        if constexpr (Steep) {
-            if constexpr (NC == 1) rows_paired();
-            for (; j + 1 < j_last;) {
-                step<true>(acc[0]);
-                step<true>(acc[1]);
-            }
-            if (j < j_last) step<true>(acc[0]);
-        } else {
-            while (j < j_last) step<false>(acc[0]);
-        }
-    }
-    // One channel, a steep edge: two whole rows at a time, row j in lane 0 (added to acc[0]) and
-    // row j + 1 in lane 1 (to acc[1]), each lane's operations those of piece<true>; an odd row
-    // left over is step()'s.
-    void rows_paired() {
-        if (j + 1 >= j_last) return;
-        const __m128d pu = _mm_set1_pd(p.u), pv = _mm_set1_pd(p.v), d = _mm_set1_pd(dxdy),
-                      hpx = _mm_set1_pd(h_per_x), half = _mm_set1_pd(0.5), one = _mm_set1_pd(1);
-        const __m128i k_max = _mm_set1_epi32(static_cast<int32_t>(k_last));
-        // The pair's two sums, lane by lane; lane 0 continues acc[0] (which holds the first
-        // piece), lane 1 acc[1].
-        __m128d sums = _mm_unpacklo_pd(acc[0].lo, acc[1].lo);
-        __m128d top = _mm_set1_pd(xnext);  // lane 1: the row boundary above row j
-        for (; j + 1 < j_last; j += 2, row += 2 * stride) {
-            // The boundaries below rows j and j + 1 (xnext of their steps), and above them.
-            const __m128d jj = _mm_setr_pd(double(j + 1), double(j + 2));
-            const __m128d below = _mm_add_pd(pu, _mm_mul_pd(_mm_sub_pd(jj, pv), d));
-            const __m128d above = _mm_shuffle_pd(top, below, 1);  // (top[1], below[0])
-            top = below;
-            const __m128d x0 = _mm_min_pd(below, above), x1 = _mm_max_pd(above, below);
-            __m128i k0 = _mm_cvttpd_epi32(x0);  // x0 >= 0: truncation is floor
+    // A steep edge, all of it (its first and last rows' pieces too), four rows a group, a row a
+    // float lane. Row r (from row j) spans [yt, yb] = [max(r, c), min(r + 1, e)], with c and e
+    // the edge's ends in rows from j: whole rows have height exactly one, the first and last
+    // their partial heights, rows past the last yt = yb = e and height and width zero. Its
+    // x-span follows from x = xp + (y - c) dxdy, counted from the edge's leftmost texel kb, in
+    // float (an edge of at most kSteepRows rows keeps x under about 2^6, within about 1e-6
+    // texel, below the table's own rounding). Every piece spans at most one knot (|dxdy| <
+    // 0.999): piece's short formula in float, h m0 + h_per_x l1 (m1 - m0). Row r adds to
+    // partial sum r mod 4 (in double), the four added ((0 + 2) + (1 + 3)) at the end: one
+    // channel does a group's four rows in the four lanes at once, more channels the rows one
+    // after another with the same lane arithmetic, so a channel's value is the same whatever
+    // the texture's channel count.
+    [[gnu::always_inline]] void walk_steep(double* out) {
+        const int64_t kb = static_cast<int64_t>(std::min(p.u, q.u));  // >= 0: the floor
+        const int64_t n_rows = j_last - j + 1;
+        const float* base = row + kb * NC;  // row j, texel kb
+        const __m128 c = _mm_set1_ps(static_cast<float>(p.v - double(j))),
+                     e = _mm_set1_ps(static_cast<float>(q.v - double(j))),
+                     xp = _mm_set1_ps(static_cast<float>(p.u - double(kb))),
+                     d = _mm_set1_ps(static_cast<float>(dxdy)),
+                     hpx = _mm_set1_ps(static_cast<float>(h_per_x)),
+                     sg = _mm_set1_ps(static_cast<float>(sign)), one = _mm_set1_ps(1),
+                     half = _mm_set1_ps(0.5f), four = _mm_set1_ps(4);
+        const __m128i k_max = _mm_set1_epi32(static_cast<int32_t>(k_last - kb));
+        __m128 r = _mm_setr_ps(0, 1, 2, 3);
+        __m128d part[4][2];  // partial sums by row mod 4: channels 0-1, 2-3
+        for (auto& pr : part) pr[0] = pr[1] = _mm_setzero_pd();
+        for (int64_t i = 0; i < n_rows; i += 4) {
+            const __m128 yt = _mm_min_ps(_mm_max_ps(r, c), e),
+                         yb = _mm_min_ps(_mm_max_ps(_mm_add_ps(r, one), c), e);
+            r = _mm_add_ps(r, four);
+            const __m128 xt = _mm_add_ps(xp, _mm_mul_ps(_mm_sub_ps(yt, c), d)),
+                         xb = _mm_add_ps(xp, _mm_mul_ps(_mm_sub_ps(yb, c), d));
+            const __m128 x0 = _mm_min_ps(xt, xb), x1 = _mm_max_ps(xt, xb);
+            __m128i k0 = _mm_cvttps_epi32(x0);  // x0 >= 0 (or a rounding below): the floor
             if constexpr (Guard) {
                 const __m128i over = _mm_cmpgt_epi32(k0, k_max);
                 k0 = _mm_or_si128(_mm_and_si128(over, k_max), _mm_andnot_si128(over, k0));
             }
-            const __m128d dk0 = _mm_cvtepi32_pd(k0);
-            const __m128d b0 = _mm_min_pd(x1, _mm_add_pd(dk0, one)), l1 = _mm_sub_pd(x1, b0);
-            const __m128 f0 = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(half, _mm_add_pd(x0, b0)), dk0));
-            const __m128 f1 = _mm_cvtpd_ps(_mm_mul_pd(half, l1));
-            const __m128 w = _mm_cvtpd_ps(_mm_mul_pd(hpx, l1));
-            const float* da = row + _mm_cvtsi128_si32(k0);
-            const float* db = row + stride + _mm_cvtsi128_si32(_mm_srli_si128(k0, 4));
-            const __m128 d0 = _mm_unpacklo_ps(_mm_load_ss(da), _mm_load_ss(db)),
-                         d1 = _mm_unpacklo_ps(_mm_load_ss(da + 1), _mm_load_ss(db + 1)),
-                         d2 = _mm_unpacklo_ps(_mm_load_ss(da + 2), _mm_load_ss(db + 2));
-            const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
-            const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
-            const __m128 v = _mm_add_ps(_mm_mul_ps(h_row, m0), _mm_mul_ps(w, _mm_sub_ps(m1, m0)));
-            sums = _mm_add_pd(sums, _mm_cvtps_pd(v));
+            const __m128 dk = _mm_cvtepi32_ps(k0);
+            const __m128 b0 = _mm_min_ps(x1, _mm_add_ps(dk, one)), l1 = _mm_sub_ps(x1, b0);
+            const __m128 f0 = _mm_sub_ps(_mm_mul_ps(half, _mm_add_ps(x0, b0)), dk),
+                         f1 = _mm_mul_ps(half, l1), w = _mm_mul_ps(hpx, l1),
+                         h = _mm_mul_ps(sg, _mm_sub_ps(yb, yt));
+            alignas(16) int32_t k[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(k), k0);
+            // The lanes' first knots (rows past the last read the last row: they add zero).
+            const float* at[4];
+            for (int l = 0; l < 4; ++l)
+                at[l] = base + std::min<int64_t>(i + l, n_rows - 1) * static_cast<int64_t>(stride) +
+                        int64_t(k[l]) * NC;
+            if constexpr (NC == 1) {
+                // Knots k0, k0 + 1 of each row in one load, k0 + 2 in another, transposed.
+                auto pair = [](const float* q) {
+                    return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(q)));
+                };
+                const __m128 p01 = _mm_unpacklo_ps(pair(at[0]), pair(at[1])),
+                             p23 = _mm_unpacklo_ps(pair(at[2]), pair(at[3]));
+                const __m128 d0 = _mm_movelh_ps(p01, p23), d1 = _mm_movehl_ps(p23, p01);
+                const __m128 d2 =
+                    _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(at[0] + 2), _mm_load_ss(at[1] + 2)),
+                                  _mm_unpacklo_ps(_mm_load_ss(at[2] + 2), _mm_load_ss(at[3] + 2)));
+                const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
+                const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
+                const __m128 v = _mm_add_ps(_mm_mul_ps(h, m0), _mm_mul_ps(w, _mm_sub_ps(m1, m0)));
+                part[0][0] = _mm_add_pd(part[0][0], _mm_cvtps_pd(v));  // rows 0 and 1: lanes
+                part[1][0] = _mm_add_pd(part[1][0], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+            } else {
+                alignas(16) float lf0[4], lf1[4], lw[4], lh[4];
+                _mm_store_ps(lf0, f0);
+                _mm_store_ps(lf1, f1);
+                _mm_store_ps(lw, w);
+                _mm_store_ps(lh, h);
+                const int lanes = static_cast<int>(std::min<int64_t>(4, n_rows - i));
+                for (int l = 0; l < lanes; ++l) {
+                    const __m128 d0 = knot4<NC>(at[l]), d1 = knot4<NC>(at[l] + NC),
+                                 d2 = knot4<NC>(at[l] + 2 * NC);
+                    const __m128 m0 =
+                        _mm_add_ps(d0, _mm_mul_ps(_mm_set1_ps(lf0[l]), _mm_sub_ps(d1, d0)));
+                    const __m128 m1 =
+                        _mm_add_ps(d1, _mm_mul_ps(_mm_set1_ps(lf1[l]), _mm_sub_ps(d2, d1)));
+                    const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(lh[l]), m0),
+                                                _mm_mul_ps(_mm_set1_ps(lw[l]), _mm_sub_ps(m1, m0)));
+                    part[l][0] = _mm_add_pd(part[l][0], _mm_cvtps_pd(v));
+                    if constexpr (NC > 2)
+                        part[l][1] = _mm_add_pd(part[l][1], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+                }
+            }
         }
-        xnext = _mm_cvtsd_f64(_mm_unpackhi_pd(top, top));
-        acc[0].lo = _mm_move_sd(acc[0].lo, sums);
-        acc[1].lo = _mm_move_sd(acc[1].lo, _mm_unpackhi_pd(sums, sums));
+        alignas(16) double sum[4];
+        if constexpr (NC == 1) {
+            // part[0][0] holds rows 0 and 1 mod 4 (lanes), part[1][0] rows 2 and 3.
+            const __m128d t = _mm_add_pd(part[0][0], part[1][0]);  // (0 + 2, 1 + 3)
+            _mm_store_pd(sum, t);
+            out[0] += sum[0] + sum[1];
+        } else {
+            for (int hh = 0; hh < 2; ++hh) {
+                const __m128d t = _mm_add_pd(_mm_add_pd(part[0][hh], part[2][hh]),
+                                             _mm_add_pd(part[1][hh], part[3][hh]));
+                _mm_store_pd(sum + 2 * hh, t);
+            }
+            for (int cc = 0; cc < NC; ++cc) out[cc] += sum[cc];
+        }
     }
     // The last row's piece (none when first() had the whole edge); the sums into `out`.
     void finish(double* out) {
         if (!one_row)
-            piece<false>(xnext, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - double(j)))),
-                         acc[0]);
+            piece(xnext, q.u, _mm_set1_ps(static_cast<float>(sign * (q.v - double(j)))), acc);
         alignas(16) double sum[4];
-        _mm_store_pd(sum, _mm_add_pd(acc[0].lo, acc[1].lo));
-        _mm_store_pd(sum + 2, _mm_add_pd(acc[0].hi, acc[1].hi));
+        _mm_store_pd(sum, acc.lo);
+        _mm_store_pd(sum + 2, acc.hi);
         for (int c = 0; c < NC; ++c) out[c] += sum[c];
     }
+    // The most rows walk_steep takes in one frame; a longer steep edge (the level rule's regions
+    // have at most 32 rows an edge; other polygons may have more) is walked as parts of this many.
+    static constexpr int64_t kSteepRows = 64;
+    [[gnu::noinline]] void walk_steep_parts(double* out) const {
+        for (int64_t j0 = j; j0 <= j_last; j0 += kSteepRows) {
+            const double ya = std::max(p.v, double(j0)),
+                         yz = std::min(q.v, double(j0 + kSteepRows));
+            const Vec2d a{ya == p.v ? p.u : p.u + (ya - p.v) * dxdy, ya},
+                z{yz == q.v ? q.u : p.u + (yz - p.v) * dxdy, yz};
+            EdgeWalk(row - j * static_cast<int64_t>(stride), stride, a, z, sign, dxdy, h_per_x,
+                     k_last + 1)
+                .walk_steep(out);
+        }
+    }
     void walk(double* out) {
+        if (steep()) {
+            if (j_last - j < kSteepRows) [[likely]]
+                walk_steep(out);
+            else
+                walk_steep_parts(out);
+            return;
+        }
         first();
-        if (steep())
-            rows<true>();
-        else
-            rows<false>();
+        while (j < j_last) step();
         finish(out);
     }
 };
