@@ -1059,10 +1059,15 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
 
 }  // namespace
 
-AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, Vec2d b) {
+namespace {
+// area_region with the sides' components apart: with Vec2d arguments the compiler built (a.u W,
+// a.v H) as one vector from the arguments stored to memory, and that 16-byte load of two 8-byte
+// stores waited for both (store forwarding fails), at the head of every walked lookup.
+[[gnu::noinline]] AreaRegion region_of(const FilteredTexture& tex, double u, double v, double au,
+                                       double av, double bu, double bv) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
-    Vec2d A{a.u * W, a.v * H}, B{b.u * W, b.v * H};  // level-0 texels
+    Vec2d A{au * W, av * H}, B{bu * W, bv * H};  // level-0 texels
     double la2 = dot(A, A), lb2 = dot(B, B);
     if (la2 < lb2) {
         std::swap(A, B);
@@ -1107,6 +1112,11 @@ AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, 
     r.level = area_level(tex, r.area / r.major, r.perimeter);
     return r;
 }
+}  // namespace
+
+AreaRegion area_region(const FilteredTexture& tex, double u, double v, Vec2d a, Vec2d b) {
+    return region_of(tex, u, v, a.u, a.v, b.u, b.v);
+}
 
 AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Vec2d a, Vec2d b) {
     if (!(std::isfinite(u) && std::isfinite(v) && std::isfinite(a.u) && std::isfinite(a.v) &&
@@ -1140,7 +1150,7 @@ AreaResult area_parallelogram(const FilteredTexture& tex, double u, double v, Ve
             return r;
         }
     }
-    const AreaRegion g = area_region(tex, u, v, a, b);
+    const AreaRegion g = region_of(tex, u, v, a.u, a.v, b.u, b.v);
     if (!within_range(g.corners, 4, g.area)) [[unlikely]] {
         AreaResult r;  // beyond 2^30 texels no sum keeps any precision: the mean, as every filter
         r.value = tex.image().mean();
