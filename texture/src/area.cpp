@@ -1057,9 +1057,6 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
     return out;
 }
 
-}  // namespace
-
-namespace {
 // area_region with the sides' components apart: with Vec2d arguments the compiler built (a.u W,
 // a.v H) as one vector from the arguments stored to memory, and that 16-byte load of two 8-byte
 // stores waited for both (store forwarding fails), at the head of every walked lookup.
