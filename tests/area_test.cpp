@@ -148,8 +148,8 @@ TEST_P(AreaWrap, EachChannelIsItsOwnOneChannelIntegral) {
     // Two, three and four channels walk the boundary with a channel per vector lane, one channel
     // with a row per lane: a channel's integral must still equal, bit for bit, that of a table
     // holding that channel alone. Long regions with steep and shallow edges, inside the table
-    // (walked directly), across its edges and beyond; a 100x60 table repeats with a margin, a
-    // 150x70 one without.
+    // (walked directly), across its edges and beyond; repeating, a 100x60 table has a margin, a
+    // 150x70 one none.
     const WrapMode w = GetParam();
     for (const auto& [tw, th] : {std::pair{100, 60}, std::pair{150, 70}}) {
         const std::vector<float> px = noise(tw, th, 4, 23);
