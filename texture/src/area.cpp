@@ -282,6 +282,16 @@ inline __m128 knot4(const float* d) {
         return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(d)));
     return _mm_loadu_ps(d);
 }
+
+// A piece spanning at most one knot, lane by lane: h m0 + w (m1 - m0), with m0 the mean of knots
+// d0, d1 at fraction f0 and m1 that of d1, d2 at f1 (EdgeWalk::piece's short formula).
+[[gnu::always_inline]] inline __m128 short_piece(__m128 d0, __m128 d1, __m128 d2, __m128 f0,
+                                                 __m128 f1, __m128 h, __m128 w) {
+    const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
+    const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
+    return _mm_add_ps(_mm_mul_ps(h, m0), _mm_mul_ps(w, _mm_sub_ps(m1, m0)));
+}
+
 // The walk of one edge within the table (p.v < q.v, `sign` its direction), row by row: the
 // first row's piece (from p to the next row's line, or to q), whole rows of height one, then the
 // last row's piece to q. Each piece adds its height times the mean of R_j over its x-span (the
@@ -309,6 +319,12 @@ struct EdgeWalk {
     };
     Sum acc;
     int64_t k_last = 0;  // Guard: W - 1
+
+    // A piece's value (its channels in float lanes) added to a double sum.
+    [[gnu::always_inline]] static void add(Sum& sum, __m128 v) {
+        sum.lo = _mm_add_pd(sum.lo, _mm_cvtps_pd(v));
+        if constexpr (NC > 2) sum.hi = _mm_add_pd(sum.hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+    }
 
     EdgeWalk(const float* table, std::size_t stride_, Vec2d p_, Vec2d q_, double sign_,
              double dxdy_, double h_per_x_, int64_t width = 0)
@@ -341,15 +357,8 @@ struct EdgeWalk {
             const double b0 = std::min(x1, double(k0 + 1)), l1 = x1 - b0;
             const __m128 f0 = _mm_set1_ps(static_cast<float>(0.5 * (x0 + b0) - double(k0))),
                          f1 = _mm_set1_ps(static_cast<float>(0.5 * l1));
-            const __m128 d0 = knot4<NC>(d), d1 = knot4<NC>(d + NC), d2 = knot4<NC>(d + 2 * NC);
-            const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
-            const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
-            const __m128 v = _mm_add_ps(
-                _mm_mul_ps(hv, m0),
-                _mm_mul_ps(_mm_set1_ps(static_cast<float>(h_per_x * l1)), _mm_sub_ps(m1, m0)));
-            sum_to.lo = _mm_add_pd(sum_to.lo, _mm_cvtps_pd(v));
-            if constexpr (NC > 2)
-                sum_to.hi = _mm_add_pd(sum_to.hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+            add(sum_to, short_piece(knot4<NC>(d), knot4<NC>(d + NC), knot4<NC>(d + 2 * NC), f0, f1,
+                                    hv, _mm_set1_ps(static_cast<float>(h_per_x * l1))));
         } else {  // partial first and last texels, whole ones between
             alignas(16) double sum[4] = {0, 0, 0, 0};
             integral_inside<NC>(row, x0, x1, sum);
@@ -403,8 +412,7 @@ struct EdgeWalk {
                      half = _mm_set1_ps(0.5f), four = _mm_set1_ps(4);
         const __m128i k_max = _mm_set1_epi32(static_cast<int32_t>(k_last - kb));
         __m128 r = _mm_setr_ps(0, 1, 2, 3);
-        __m128d part[4][2];  // partial sums by row mod 4: channels 0-1, 2-3
-        for (auto& pr : part) pr[0] = pr[1] = _mm_setzero_pd();
+        Sum part[4];  // partial sums by row mod 4
         for (int64_t i = 0; i < n_rows; i += 4) {
             const __m128 yt = _mm_min_ps(_mm_max_ps(r, c), e),
                          yb = _mm_min_ps(_mm_max_ps(_mm_add_ps(r, one), c), e);
@@ -440,11 +448,9 @@ struct EdgeWalk {
                 const __m128 d2 =
                     _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(at[0] + 2), _mm_load_ss(at[1] + 2)),
                                   _mm_unpacklo_ps(_mm_load_ss(at[2] + 2), _mm_load_ss(at[3] + 2)));
-                const __m128 m0 = _mm_add_ps(d0, _mm_mul_ps(f0, _mm_sub_ps(d1, d0)));
-                const __m128 m1 = _mm_add_ps(d1, _mm_mul_ps(f1, _mm_sub_ps(d2, d1)));
-                const __m128 v = _mm_add_ps(_mm_mul_ps(h, m0), _mm_mul_ps(w, _mm_sub_ps(m1, m0)));
-                part[0][0] = _mm_add_pd(part[0][0], _mm_cvtps_pd(v));  // rows 0 and 1: lanes
-                part[1][0] = _mm_add_pd(part[1][0], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+                const __m128 v = short_piece(d0, d1, d2, f0, f1, h, w);
+                part[0].lo = _mm_add_pd(part[0].lo, _mm_cvtps_pd(v));  // rows 0 and 1: lanes
+                part[1].lo = _mm_add_pd(part[1].lo, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
             } else {
                 alignas(16) float lf0[4], lf1[4], lw[4], lh[4];
                 _mm_store_ps(lf0, f0);
@@ -452,33 +458,24 @@ struct EdgeWalk {
                 _mm_store_ps(lw, w);
                 _mm_store_ps(lh, h);
                 const int lanes = static_cast<int>(std::min<int64_t>(4, n_rows - i));
-                for (int l = 0; l < lanes; ++l) {
-                    const __m128 d0 = knot4<NC>(at[l]), d1 = knot4<NC>(at[l] + NC),
-                                 d2 = knot4<NC>(at[l] + 2 * NC);
-                    const __m128 m0 =
-                        _mm_add_ps(d0, _mm_mul_ps(_mm_set1_ps(lf0[l]), _mm_sub_ps(d1, d0)));
-                    const __m128 m1 =
-                        _mm_add_ps(d1, _mm_mul_ps(_mm_set1_ps(lf1[l]), _mm_sub_ps(d2, d1)));
-                    const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(lh[l]), m0),
-                                                _mm_mul_ps(_mm_set1_ps(lw[l]), _mm_sub_ps(m1, m0)));
-                    part[l][0] = _mm_add_pd(part[l][0], _mm_cvtps_pd(v));
-                    if constexpr (NC > 2)
-                        part[l][1] = _mm_add_pd(part[l][1], _mm_cvtps_pd(_mm_movehl_ps(v, v)));
-                }
+                for (int l = 0; l < lanes; ++l)
+                    add(part[l],
+                        short_piece(knot4<NC>(at[l]), knot4<NC>(at[l] + NC),
+                                    knot4<NC>(at[l] + 2 * NC), _mm_set1_ps(lf0[l]),
+                                    _mm_set1_ps(lf1[l]), _mm_set1_ps(lh[l]), _mm_set1_ps(lw[l])));
             }
         }
         alignas(16) double sum[4];
         if constexpr (NC == 1) {
-            // part[0][0] holds rows 0 and 1 mod 4 (lanes), part[1][0] rows 2 and 3.
-            const __m128d t = _mm_add_pd(part[0][0], part[1][0]);  // (0 + 2, 1 + 3)
+            // part[0].lo holds rows 0 and 1 mod 4 (lanes), part[1].lo rows 2 and 3.
+            const __m128d t = _mm_add_pd(part[0].lo, part[1].lo);  // (0 + 2, 1 + 3)
             _mm_store_pd(sum, t);
             out[0] += sum[0] + sum[1];
         } else {
-            for (int hh = 0; hh < 2; ++hh) {
-                const __m128d t = _mm_add_pd(_mm_add_pd(part[0][hh], part[2][hh]),
-                                             _mm_add_pd(part[1][hh], part[3][hh]));
-                _mm_store_pd(sum + 2 * hh, t);
-            }
+            _mm_store_pd(sum, _mm_add_pd(_mm_add_pd(part[0].lo, part[2].lo),
+                                         _mm_add_pd(part[1].lo, part[3].lo)));
+            _mm_store_pd(sum + 2, _mm_add_pd(_mm_add_pd(part[0].hi, part[2].hi),
+                                             _mm_add_pd(part[1].hi, part[3].hi)));
             for (int cc = 0; cc < NC; ++cc) out[cc] += sum[cc];
         }
     }
