@@ -827,26 +827,47 @@ double rule4_weight(double major) {
 }
 
 #if defined(__SSE2__)
-// A block of texels around the region, read once (wrapped per row and column) as four lanes a
-// texel (a 3-channel texel's fourth lane is the next float, unused; one or two channels leave the
-// other lanes zero), so every channel count has the same lane arithmetic.
+// A block of texels around the region, read once (wrapped per row and column). Texels of two to
+// four channels are four lanes each (a 3-channel texel's fourth lane is the next float, unused;
+// two channels leave the other lanes zero), so those channel counts have the same lane
+// arithmetic; one channel is a float each (rule_sum_1).
+template <int NC>
+struct BlockTexel {
+    using type = __m128;
+};
+template <>
+struct BlockTexel<1> {
+    using type = float;
+};
+template <int NC>
 struct TexelBlock {
     static constexpr int kMax = 10;
-    __m128 t[kMax][kMax];
+    using Texel = typename BlockTexel<NC>::type;
+    Texel t[kMax][kMax];
     int64_t k0, j0;  // texel indices of t[0][0], before wrapping
     int nx, ny;      // texels read per row, rows read
 };
+
+// One texel into the block's form; a texel outside a Black edge is zero.
+template <int NC>
+[[gnu::always_inline]] inline typename TexelBlock<NC>::Texel block_texel(const float* d) {
+    if constexpr (NC == 1)
+        return *d;
+    else
+        return knot4<NC>(d);
+}
 
 // The block holding every point within es texels of the centre s along s and et along t (with
 // the texel after each, for the bilinear blend); false when it would not fit. NC: the image's
 // channels (a texel is one load of that width).
 template <int NC>
-bool read_block(const Image& img, double s, double t, double es, double et, TexelBlock& b) {
+bool read_block(const Image& img, double s, double t, double es, double et, TexelBlock<NC>& b) {
+    constexpr int kMax = TexelBlock<NC>::kMax;
     b.k0 = floor_to_int(s - es);
     b.j0 = floor_to_int(t - et);
     const int nx = static_cast<int>(floor_to_int(s + es) - b.k0) + 2,
               ny = static_cast<int>(floor_to_int(t + et) - b.j0) + 2;
-    if (nx > TexelBlock::kMax || ny > TexelBlock::kMax) return false;
+    if (nx > kMax || ny > kMax) return false;
     b.nx = nx;
     b.ny = ny;
     // Each axis's offsets: a Repeat axis whose start lies less than a period before the base
@@ -863,7 +884,7 @@ bool read_block(const Image& img, double s, double t, double es, double et, Texe
         }
         return buf;
     };
-    std::ptrdiff_t col_buf[TexelBlock::kMax], row_buf[TexelBlock::kMax];
+    std::ptrdiff_t col_buf[kMax], row_buf[kMax];
     const std::ptrdiff_t* col =
         offsets(b.k0, nx, img.width(), img.wrap_s(), img.column_offsets(), col_buf);
     const std::ptrdiff_t* row =
@@ -871,49 +892,60 @@ bool read_block(const Image& img, double s, double t, double es, double et, Texe
     const float* base = img.row(0);
     if (img.wrap_s() != WrapMode::Black && img.wrap_t() != WrapMode::Black) {
         for (int jj = 0; jj < ny; ++jj)
-            for (int i = 0; i < nx; ++i) b.t[jj][i] = knot4<NC>(base + row[jj] + col[i]);
+            for (int i = 0; i < nx; ++i) b.t[jj][i] = block_texel<NC>(base + row[jj] + col[i]);
         return true;
     }
     for (int jj = 0; jj < ny; ++jj)
         for (int i = 0; i < nx; ++i)
-            b.t[jj][i] =
-                row[jj] < 0 || col[i] < 0 ? _mm_setzero_ps() : knot4<NC>(base + row[jj] + col[i]);
+            b.t[jj][i] = row[jj] < 0 || col[i] < 0 ? typename TexelBlock<NC>::Texel{}
+                                                   : block_texel<NC>(base + row[jj] + col[i]);
     return true;
 }
 
-// The N x N rule's weighted sum of the bilinear reconstruction at c + fa a + fb b, from the block.
-// The points' positions, taps and weights are computed four at a time, in float relative to the
-// block (a few texels, so float keeps about 1e-6 texel); each point then adds its four texels,
-// weighted, to the sum in one vector, point after point: the same operations for every channel.
+// The rule's points relative to the block, and per group of four points the taps' index in the
+// block and the four bilinear weights of each (rule_sum and rule_sum_1). A point's position is
+// (rs + xa as) + xb bs along s (likewise along t), in float, with xa and xb its nodes; the
+// groups are the points in order (a along, then b), four at a time, the last one padded with
+// points at the block's origin of weight 0.
 template <int N>
-__m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, double bs,
-                double bt) {
-    using R = GaussRule<N>;
-    constexpr int kPoints = N * N, kGroups = (kPoints + 3) / 4;
-    const float rs = static_cast<float>(s - double(b.k0)),
-                rt = static_cast<float>(t - double(b.j0));
-    const float fas = static_cast<float>(as), fat = static_cast<float>(at),
-                fbs = static_cast<float>(bs), fbt = static_cast<float>(bt);
-    alignas(16) float ps[kGroups * 4], pt[kGroups * 4], gw[kGroups * 4];
-    for (int k = 0; k < kGroups * 4; ++k) {
-        const int ia = k % N, ib = k / N;
-        if (k < kPoints) {
-            const float xa = static_cast<float>(R::x[ia]), xb = static_cast<float>(R::x[ib]);
-            ps[k] = rs + xa * fas + xb * fbs;
-            pt[k] = rt + xa * fat + xb * fbt;
-            gw[k] = R::w[ia] * R::w[ib];
-        } else {
-            ps[k] = pt[k] = gw[k] = 0;
+struct RulePoints {
+    static constexpr int kPoints = N * N, kGroups = (kPoints + 3) / 4;
+    // The nodes and weights of each point, padded to whole groups.
+    struct Table {
+        alignas(16) float xa[kGroups * 4], xb[kGroups * 4], w[kGroups * 4];
+    };
+    static constexpr Table kTable = [] {
+        using R = GaussRule<N>;
+        Table t{};
+        for (int k = 0; k < kPoints; ++k) {
+            t.xa[k] = static_cast<float>(R::x[k % N]);
+            t.xb[k] = static_cast<float>(R::x[k / N]);
+            t.w[k] = R::w[k % N] * R::w[k / N];
         }
-    }
+        return t;
+    }();
+    __m128 rs, rt, as, at, bs, bt;
+
+    RulePoints(int64_t k0, int64_t j0, double s, double t, double as_, double at_, double bs_,
+               double bt_)
+        : rs(_mm_set1_ps(static_cast<float>(s - double(k0)))),
+          rt(_mm_set1_ps(static_cast<float>(t - double(j0)))),
+          as(_mm_set1_ps(static_cast<float>(as_))),
+          at(_mm_set1_ps(static_cast<float>(at_))),
+          bs(_mm_set1_ps(static_cast<float>(bs_))),
+          bt(_mm_set1_ps(static_cast<float>(bt_))) {}
+
+    // Group g's four points: each one's tap (row j times kMax plus column i of its first texel)
+    // and its texels' weights w00 (i, j), w10 (i + 1, j), w01 (i, j + 1), w11 (i + 1, j + 1).
     // Tap indices are clamped into the block: rounding can put a point on the block's far edge
     // (the points' extent along each axis is the block's own).
-    const __m128i hi_s = _mm_set1_epi32(b.nx - 2), hi_t = _mm_set1_epi32(b.ny - 2),
-                  zero = _mm_setzero_si128();
-    const __m128 one = _mm_set1_ps(1);
-    __m128 total = _mm_setzero_ps();
-    for (int g = 0; g < kGroups; ++g) {
-        const __m128 vs = _mm_load_ps(ps + 4 * g), vt = _mm_load_ps(pt + 4 * g);
+    void group(int g, int nx, int ny, int32_t* tap, __m128* w4) const {
+        const __m128i hi_s = _mm_set1_epi32(nx - 2), hi_t = _mm_set1_epi32(ny - 2),
+                      zero = _mm_setzero_si128();
+        const __m128 one = _mm_set1_ps(1);
+        const __m128 xa = _mm_load_ps(kTable.xa + 4 * g), xb = _mm_load_ps(kTable.xb + 4 * g);
+        const __m128 vs = _mm_add_ps(_mm_add_ps(rs, _mm_mul_ps(xa, as)), _mm_mul_ps(xb, bs)),
+                     vt = _mm_add_ps(_mm_add_ps(rt, _mm_mul_ps(xa, at)), _mm_mul_ps(xb, bt));
         // Truncation is the floor here (positions are at least about -1e-6). The fractions are
         // taken from the clamped taps, so a point rounded onto the block's far edge still gets
         // that edge's texel (weight 1 on the tap's second texel).
@@ -924,30 +956,94 @@ __m128 rule_sum(const TexelBlock& b, double s, double t, double as, double at, d
                       jc = _mm_max_epi16(_mm_min_epi16(jj, hi_t), zero);
         const __m128 fs = _mm_sub_ps(vs, _mm_cvtepi32_ps(ic)),
                      ft = _mm_sub_ps(vt, _mm_cvtepi32_ps(jc));
+        static_assert(TexelBlock<1>::kMax == 10 && TexelBlock<4>::kMax == 10);
         const __m128i idx = _mm_add_epi32(
             _mm_add_epi32(_mm_slli_epi32(jc, 3), _mm_slli_epi32(jc, 1)), ic);  // j kMax + i
-        static_assert(TexelBlock::kMax == 10);
-        alignas(16) int32_t at_[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(at_), idx);
-        const __m128 w = _mm_load_ps(gw + 4 * g), gs = _mm_sub_ps(one, fs),
+        _mm_store_si128(reinterpret_cast<__m128i*>(tap), idx);
+        const __m128 w = _mm_load_ps(kTable.w + 4 * g), gs = _mm_sub_ps(one, fs),
                      gt = _mm_sub_ps(one, ft);
         const __m128 w0 = _mm_mul_ps(w, gt), w1 = _mm_mul_ps(w, ft);
+        w4[0] = _mm_mul_ps(w0, gs);
+        w4[1] = _mm_mul_ps(w0, fs);
+        w4[2] = _mm_mul_ps(w1, gs);
+        w4[3] = _mm_mul_ps(w1, fs);
+    }
+};
+
+// The N x N rule's weighted sum of the bilinear reconstruction at c + fa a + fb b, from the block.
+// The points' positions, taps and weights are computed four at a time, in float relative to the
+// block (a few texels, so float keeps about 1e-6 texel); each point then adds its four texels,
+// weighted, to the sum in one vector, point after point: the same operations for every channel.
+template <int N, int NC>
+__m128 rule_sum(const TexelBlock<NC>& b, double s, double t, double as, double at, double bs,
+                double bt) {
+    const RulePoints<N> pts(b.k0, b.j0, s, t, as, at, bs, bt);
+    constexpr int kMax = TexelBlock<NC>::kMax;
+    __m128 total = _mm_setzero_ps();
+    for (int g = 0; g < pts.kGroups; ++g) {
+        alignas(16) int32_t tap[4];
+        __m128 w4[4];
+        pts.group(g, b.nx, b.ny, tap, w4);
         alignas(16) float w00[4], w10[4], w01[4], w11[4];
-        _mm_store_ps(w00, _mm_mul_ps(w0, gs));
-        _mm_store_ps(w10, _mm_mul_ps(w0, fs));
-        _mm_store_ps(w01, _mm_mul_ps(w1, gs));
-        _mm_store_ps(w11, _mm_mul_ps(w1, fs));
-        for (int k = 0; k < 4 && 4 * g + k < kPoints; ++k) {
-            const __m128* r = &b.t[0][0] + at_[k];
+        _mm_store_ps(w00, w4[0]);
+        _mm_store_ps(w10, w4[1]);
+        _mm_store_ps(w01, w4[2]);
+        _mm_store_ps(w11, w4[3]);
+        for (int k = 0; k < 4 && 4 * g + k < pts.kPoints; ++k) {
+            const __m128* r = &b.t[0][0] + tap[k];
             const __m128 v =
                 _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(w00[k]), r[0]),
                                                  _mm_mul_ps(_mm_set1_ps(w10[k]), r[1])),
-                                      _mm_mul_ps(_mm_set1_ps(w01[k]), r[TexelBlock::kMax])),
-                           _mm_mul_ps(_mm_set1_ps(w11[k]), r[TexelBlock::kMax + 1]));
+                                      _mm_mul_ps(_mm_set1_ps(w01[k]), r[kMax])),
+                           _mm_mul_ps(_mm_set1_ps(w11[k]), r[kMax + 1]));
             total = _mm_add_ps(total, v);
         }
     }
     return total;
+}
+
+// rule_sum for one channel: a group's four points are the four lanes. Each point's value is
+// rule_sum's lane 0 (the same products and sums in the same order) and the values are added to
+// the sum point after point, so the result is rule_sum's bit for bit (in lane 0; the others are
+// 0), with a quarter of the arithmetic and the texels gathered in pairs.
+template <int N>
+__m128 rule_sum_1(const TexelBlock<1>& b, double s, double t, double as, double at, double bs,
+                  double bt) {
+    const RulePoints<N> pts(b.k0, b.j0, s, t, as, at, bs, bt);
+    constexpr int kMax = TexelBlock<1>::kMax;
+    const float* block = &b.t[0][0];
+    // Texels i and i + 1 of a row, as lanes 0 and 1 (or 2 and 3) of a vector.
+    auto lo = [](__m128 v, const float* p) {
+        return _mm_loadl_pi(v, reinterpret_cast<const __m64*>(p));
+    };
+    auto hi = [](__m128 v, const float* p) {
+        return _mm_loadh_pi(v, reinterpret_cast<const __m64*>(p));
+    };
+    float total = 0;
+    for (int g = 0; g < pts.kGroups; ++g) {
+        alignas(16) int32_t tap[4];
+        __m128 w4[4];
+        pts.group(g, b.nx, b.ny, tap, w4);
+        const float *p0 = block + tap[0], *p1 = block + tap[1], *p2 = block + tap[2],
+                    *p3 = block + tap[3];
+        const __m128 z = _mm_setzero_ps();
+        // Rows j (t00 t10 per point) and j + 1 (t01 t11), two points a vector, then split into
+        // one vector per texel of the tap.
+        const __m128 a01 = hi(lo(z, p0), p1), a23 = hi(lo(z, p2), p3);
+        const __m128 b01 = hi(lo(z, p0 + kMax), p1 + kMax), b23 = hi(lo(z, p2 + kMax), p3 + kMax);
+        const __m128 t00 = _mm_shuffle_ps(a01, a23, _MM_SHUFFLE(2, 0, 2, 0)),
+                     t10 = _mm_shuffle_ps(a01, a23, _MM_SHUFFLE(3, 1, 3, 1)),
+                     t01 = _mm_shuffle_ps(b01, b23, _MM_SHUFFLE(2, 0, 2, 0)),
+                     t11 = _mm_shuffle_ps(b01, b23, _MM_SHUFFLE(3, 1, 3, 1));
+        const __m128 v =
+            _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(w4[0], t00), _mm_mul_ps(w4[1], t10)),
+                                  _mm_mul_ps(w4[2], t01)),
+                       _mm_mul_ps(w4[3], t11));
+        alignas(16) float vk[4];
+        _mm_store_ps(vk, v);
+        for (int k = 0; k < 4 && 4 * g + k < pts.kPoints; ++k) total += vk[k];
+    }
+    return _mm_set_ss(total);
 }
 
 // The 3x3 rule, the 4x4 one or their blend (w4 the 4x4 rule's weight) from a block around the
@@ -956,21 +1052,25 @@ template <int NC>
 [[gnu::noinline]] bool block_rules(const Image& img, double s, double t, double as, double at,
                                    double bs, double bt, double w4, int* texels, Texel& out) {
     const double reach = w4 > 0 ? GaussRule<4>::x[3] : GaussRule<3>::x[2];
-    TexelBlock block;
+    TexelBlock<NC> block;
     if (!read_block<NC>(img, s, t, reach * (std::abs(as) + std::abs(bs)),
                         reach * (std::abs(at) + std::abs(bt)), block))
         return false;
     *texels = block.nx * block.ny;
-    __m128 sum;
-    if (w4 == 0)
-        sum = rule_sum<3>(block, s, t, as, at, bs, bt);
-    else if (w4 == 1)
-        sum = rule_sum<4>(block, s, t, as, at, bs, bt);
-    else
-        sum = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - w4)),
-                                    rule_sum<3>(block, s, t, as, at, bs, bt)),
-                         _mm_mul_ps(_mm_set1_ps(static_cast<float>(w4)),
-                                    rule_sum<4>(block, s, t, as, at, bs, bt)));
+    auto rule = [&]<int N>() {
+        if constexpr (NC == 1)
+            return rule_sum_1<N>(block, s, t, as, at, bs, bt);
+        else
+            return rule_sum<N, NC>(block, s, t, as, at, bs, bt);
+    };
+    // One call of each rule (a blend's two are the lone rules' calls).
+    const __m128 r3 = w4 < 1 ? rule.template operator()<3>() : _mm_setzero_ps(),
+                 r4 = w4 > 0 ? rule.template operator()<4>() : _mm_setzero_ps();
+    const __m128 sum = w4 == 0 ? r3
+                       : w4 == 1
+                           ? r4
+                           : _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - w4)), r3),
+                                        _mm_mul_ps(_mm_set1_ps(static_cast<float>(w4)), r4));
     _mm_storeu_ps(out.data(), sum);
     if constexpr (NC == 3) out[3] = 0;
     return true;
