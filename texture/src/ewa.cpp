@@ -68,17 +68,16 @@ enum class ColumnWrap { Repeat, Clamp, Other };
 // per line. Walking the direction with fewer lines (along the ellipse's longer extent) visits,
 // for a thin ellipse at a random angle, about 40% fewer lines than walking rows only.
 // Texel (i along, k across) is data + line[k] + along[i], both offsets from the image's
-// two-period tables.
-template <bool Columns>
+// two-period tables. Rows and columns are the same code (one instance of the walk, not two).
 struct Lines {
-    explicit Lines(const Image& img)
+    Lines(const Image& img, bool columns)
         : data(img.row(0)),
-          along(Columns ? img.row_offsets() : img.column_offsets()),
-          line(Columns ? img.column_offsets() : img.row_offsets()),
-          n_along(Columns ? img.height() : img.width()),
-          n_across(Columns ? img.width() : img.height()),
-          wrap_along(Columns ? img.wrap_t() : img.wrap_s()),
-          wrap_across(Columns ? img.wrap_s() : img.wrap_t()),
+          along(columns ? img.row_offsets() : img.column_offsets()),
+          line(columns ? img.column_offsets() : img.row_offsets()),
+          n_along(columns ? img.height() : img.width()),
+          n_across(columns ? img.width() : img.height()),
+          wrap_along(columns ? img.wrap_t() : img.wrap_s()),
+          wrap_across(columns ? img.wrap_s() : img.wrap_t()),
           nc(img.channels()) {}
     const float* data;
     const std::ptrdiff_t *along, *line;
@@ -405,11 +404,11 @@ void ewa_accumulate_wrap(const L& lines, double s0, double t0, double A, double 
 template <int NC>
 void ewa_accumulate_nc(const Image& img, double s0, double t0, const EwaEllipse& e, double A,
                        double B, double C, float* sum, double* wsum, int* count) {
-    if (e.hy <= e.hx)
-        return ewa_accumulate_wrap<NC>(Lines<false>(img), s0, t0, A, B, C, e.hx, e.hy, 0.5 * e.F,
-                                       e.A, sum, wsum, count);
-    return ewa_accumulate_wrap<NC>(Lines<true>(img), t0, s0, C, B, A, e.hy, e.hx, 0.5 * e.F, e.C,
-                                   sum, wsum, count);
+    const bool columns = e.hy > e.hx;
+    ewa_accumulate_wrap<NC>(Lines(img, columns), columns ? t0 : s0, columns ? s0 : t0,
+                            columns ? C : A, B, columns ? A : C, columns ? e.hy : e.hx,
+                            columns ? e.hx : e.hy, 0.5 * e.F, columns ? e.C : e.A, sum, wsum,
+                            count);
 }
 
 }  // namespace
