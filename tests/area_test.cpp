@@ -11,6 +11,7 @@
 #include <memory>
 #include <random>
 #include <tuple>
+#include <vector>
 
 using namespace cmam::texture;
 
@@ -190,9 +191,9 @@ TEST_P(AreaWrap, EachChannelIsItsOwnOneChannelIntegral) {
 TEST_P(AreaWrap, SmallRegionsGiveEachChannelItsOneChannelValue) {
     // Under kAreaBlendHi texels the Gauss rules run with a channel per vector lane for two to
     // four channels, and with one of the rule's points per lane for one channel: each channel
-    // must still get, bit for bit, what a texture of that channel alone gets. Sides of 0.3 to 5
-    // texels (the 3x3 rule, its blend into the 4x4 one, the 4x4 rule and its blend into the
-    // region integral), centres inside the texture and beyond its edges.
+    // must still get, bit for bit, what a texture of that channel alone gets. Sides of 0.3 to 6
+    // texels (the 3x3, 4x4 and 5x5 rules, their blends, and the 5x5 rule's blend into the region
+    // integral), centres inside the texture and beyond its edges.
     const WrapMode w = GetParam();
     const int tw = 24, th = 20;
     const std::vector<float> px = noise(tw, th, 4, 41);
@@ -203,7 +204,7 @@ TEST_P(AreaWrap, SmallRegionsGiveEachChannelItsOneChannelValue) {
         single.push_back(std::make_unique<FilteredTexture>(Image(tw, th, 1, one, w, w)));
     }
     std::mt19937 rng(43);
-    std::uniform_real_distribution<double> pos(-0.3, 1.3), len(0.3, 5), ratio(0.2, 1),
+    std::uniform_real_distribution<double> pos(-0.3, 1.3), len(0.3, 6), ratio(0.2, 1),
         angle(0, 6.3);
     for (int nc : {2, 3, 4}) {
         std::vector<float> many(std::size_t(tw) * th * nc);
@@ -416,8 +417,9 @@ TEST(Area, MagnificationIsTheBilinearMeanAndContinuous) {
     // Continuous through the blend band and at both of its ends, on texel-sized detail.
     FilteredTexture t(Image(64, 64, 1, noise(64, 64, 1, 12)));
     double prev = 0;
-    for (int k = 0; k <= 450; ++k) {
-        // texels: through [kAreaRule4Lo, kAreaRule4Hi] and [kAreaBlendLo, kAreaBlendHi]
+    for (int k = 0; k <= 550; ++k) {
+        // texels (the longer side is 1.044 times `side`): through [kAreaRule4Lo, kAreaRule4Hi],
+        // [kAreaRule5Lo, kAreaRule5Hi] and [kAreaBlendLo, kAreaBlendHi]
         const double side = 0.5 + 0.01 * k;
         const Footprint fp = Footprint::axes({side / 64, 0.3 * side / 64}, {-0.2 / 64, 0.7 / 64});
         const double x = t.lookup(0.41, 0.57, fp, {FilterKind::Area})[0];
@@ -429,19 +431,21 @@ TEST(Area, MagnificationIsTheBilinearMeanAndContinuous) {
 }
 
 TEST(Area, SmallRegionsAreCloseToTheBilinearMean) {
-    // Footprints of 0.5 to 2.5 and of 2.5 to 4.5 texels on texel-sized detail (white noise in
-    // [0,1], the worst case) against the bilinear reconstruction's mean over the parallelogram by
-    // a 64x64-point midpoint rule. The 3x3 Gauss rule gives an RMS error of 0.0044 on the first
-    // set, where the 2x2 rule blended into the region integral from one texel on gave 0.012; the
-    // 4x4 rule gives 0.0063 on the second, where the region integral gave 0.0089 (algorithms.md
-    // §5.2).
+    // Footprints of 0.5 to 2.5, 2.5 to 4.5 and 4.5 to 5.5 texels on texel-sized detail (white
+    // noise in [0,1], the worst case) against the bilinear reconstruction's mean over the
+    // parallelogram by a 64x64-point midpoint rule. The 3x3 Gauss rule gives an RMS error of
+    // 0.0044 on the first set, where the 2x2 rule blended into the region integral from one texel
+    // on gave 0.012; the 4x4 and 5x5 rules give 0.0048 on the second, where the 4x4 rule and its
+    // blend into the region integral from 4 texels gave 0.0063 and the region integral alone
+    // 0.0089; the 5x5 rule and its blend into the region integral give 0.0076 on the third, where
+    // the region integral gave 0.0106 (algorithms.md §5.2).
     const int n = 32;
     const Image img(n, n, 1, noise(n, n, 1, 21));
     FilteredTexture t(img);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0, 1);
     for (const auto& [lo, hi, bound] :
-         {std::tuple{0.5, 2.5, 0.007}, std::tuple{2.5, 4.5, 0.0075}}) {
+         {std::tuple{0.5, 2.5, 0.007}, std::tuple{2.5, 4.5, 0.0055}, std::tuple{4.5, 5.5, 0.009}}) {
         double se = 0;
         const int count = 200;
         for (int k = 0; k < count; ++k) {
@@ -468,41 +472,56 @@ TEST(Area, SmallRegionsAreCloseToTheBilinearMean) {
 }
 
 TEST(Area, GaussRuleReadsTheRightTexelsAtTheBlocksEdges) {
-    // The 3x3 rule's outermost points lie exactly on the extent of the block of texels it reads.
+    // A rule's outermost points lie exactly on the extent of the block of texels it reads.
     // Footprints are placed so that extent falls on a texel centre, give or take a few units in
     // the last place: a point rounded onto the block's far edge must still take that texel. On
     // alternating columns and rows (every neighbour differs by 1) a wrong tap is off by a
-    // point's weight, 0.08 or more; the rule itself is compared, point by point in double.
+    // point's weight, 0.05 or more; the rule itself is compared, point by point in double. The
+    // 3x3 rule (sides of 1.2 to 2.2 texels) and the 5x5 one (3.8 to 4.8).
     const int n = 16;
     std::vector<float> px(std::size_t(n) * n);
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) px[std::size_t(j) * n + i] = float((i + j) % 2);
     const Image img(n, n, 1, px);
     FilteredTexture t(img);
-    const double x3 = 0.38729833462074170, w3[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
-    const double node[3] = {-x3, 0, x3};
+    struct Rule {
+        std::vector<double> node, weight;
+        double side;  // the shortest side tried
+    };
+    const double x3 = 0.38729833462074170, x5a = 0.45308992296933200, x5b = 0.26923465505284155;
+    const Rule rules[] = {{{-x3, 0, x3}, {5.0 / 18, 8.0 / 18, 5.0 / 18}, 1.2},
+                          {{-x5a, -x5b, 0, x5b, x5a},
+                           {0.11846344252809454, 0.23931433524968326, 0.28444444444444444,
+                            0.23931433524968326, 0.11846344252809454},
+                           3.8}};
     std::mt19937 rng(3);
     std::uniform_int_distribution<int> cell(2, n - 5), ulps(-4, 4);
     std::uniform_real_distribution<double> unit(0, 1);
     double worst = 0;
-    for (int k = 0; k < 2000; ++k) {
-        // Texel-space centre s (lattice: texel centres at integers), sides of 1.2 to 2.2 texels
-        // along s and 1.2 to 1.7 along t, so that s + x3 (|a_s| + |b_s|) is the integer `edge`.
-        const double la = 1.2 + unit(rng), lb = 1.2 + 0.5 * unit(rng);
-        const double edge = cell(rng) + 2, s = edge - x3 * la;
-        double t0 = cell(rng) + unit(rng);
-        if (k % 2) t0 = cell(rng) + 2 - x3 * lb;  // the far row edge too
-        double u = (s + 0.5) / n, v = (t0 + 0.5) / n;
-        for (int i = ulps(rng); i != 0; i += i > 0 ? -1 : 1)
-            u = std::nextafter(u, i > 0 ? 1.0 : 0.0);
-        const Vec2d a{la / n, 0}, b{0, lb / n};
-        double want = 0;
-        for (int ib = 0; ib < 3; ++ib)
-            for (int ia = 0; ia < 3; ++ia)
-                want += w3[ia] * w3[ib] * bilinear(img, u + node[ia] * a.u, v + node[ib] * b.v)[0];
-        const double got = t.lookup(u, v, Footprint::axes(a, b), {FilterKind::Area})[0];
-        worst = std::max(worst, std::abs(got - want));
-        ASSERT_NEAR(got, want, 1e-4) << "footprint " << k << " at " << u << "," << v;
+    for (const Rule& r : rules) {
+        const double outer = r.node.back();
+        for (int k = 0; k < 2000; ++k) {
+            // Texel-space centre s (lattice: texel centres at integers), sides of `side` to
+            // side + 1 texels along s and side to side + 0.5 along t, so that
+            // s + outer (|a_s| + |b_s|) is the integer `edge`.
+            const double la = r.side + unit(rng), lb = r.side + 0.5 * unit(rng);
+            const double edge = cell(rng) + 2, s = edge - outer * la;
+            double t0 = cell(rng) + unit(rng);
+            if (k % 2) t0 = cell(rng) + 2 - outer * lb;  // the far row edge too
+            double u = (s + 0.5) / n, v = (t0 + 0.5) / n;
+            for (int i = ulps(rng); i != 0; i += i > 0 ? -1 : 1)
+                u = std::nextafter(u, i > 0 ? 1.0 : 0.0);
+            const Vec2d a{la / n, 0}, b{0, lb / n};
+            double want = 0;
+            for (std::size_t ib = 0; ib < r.node.size(); ++ib)
+                for (std::size_t ia = 0; ia < r.node.size(); ++ia)
+                    want += r.weight[ia] * r.weight[ib] *
+                            bilinear(img, u + r.node[ia] * a.u, v + r.node[ib] * b.v)[0];
+            const double got = t.lookup(u, v, Footprint::axes(a, b), {FilterKind::Area})[0];
+            worst = std::max(worst, std::abs(got - want));
+            ASSERT_NEAR(got, want, 1e-4) << r.node.size() << "x" << r.node.size()
+                                         << " rule, footprint " << k << " at " << u << "," << v;
+        }
     }
     RecordProperty("max_error", std::to_string(worst));
 }

@@ -820,10 +820,29 @@ struct GaussRule<4> {
                                    0.17392742256872693f};
 };
 
-// The rule's weights for a region whose longer side is `major` level-0 texels: the 3x3 rule up to
-// kAreaRule4Lo, the 4x4 one from kAreaRule4Hi, linearly between (continuous in the size).
-double rule4_weight(double major) {
-    return std::clamp((major - kAreaRule4Lo) / (kAreaRule4Hi - kAreaRule4Lo), 0.0, 1.0);
+template <>
+struct GaussRule<5> {
+    static constexpr double x[5] = {-0.45308992296933200, -0.26923465505284155, 0,
+                                    0.26923465505284155, 0.45308992296933200};
+    static constexpr float w[5] = {0.11846344252809454f, 0.23931433524968326f, 0.28444444444444444f,
+                                   0.23931433524968326f, 0.11846344252809454f};
+};
+
+// The rules for a region whose longer side is `major` level-0 texels: the 3x3 rule up to
+// kAreaRule4Lo, the 4x4 one from kAreaRule4Hi to kAreaRule5Lo, the 5x5 one from kAreaRule5Hi,
+// each blended linearly into the next between (continuous in the size): rule `lo`, and the next
+// one with weight w when w > 0.
+struct RuleMix {
+    int lo;
+    double w;
+    int largest() const { return w > 0 ? lo + 1 : lo; }
+};
+RuleMix rule_mix(double major) {
+    if (major >= kAreaRule5Hi) return {5, 0};
+    if (major > kAreaRule5Lo) return {4, (major - kAreaRule5Lo) / (kAreaRule5Hi - kAreaRule5Lo)};
+    if (major >= kAreaRule4Hi) return {4, 0};
+    if (major > kAreaRule4Lo) return {3, (major - kAreaRule4Lo) / (kAreaRule4Hi - kAreaRule4Lo)};
+    return {3, 0};
 }
 
 #if defined(__SSE2__)
@@ -841,7 +860,7 @@ struct BlockTexel<1> {
 };
 template <int NC>
 struct TexelBlock {
-    static constexpr int kMax = 10;
+    static constexpr int kMax = 12;
     using Texel = typename BlockTexel<NC>::type;
     Texel t[kMax][kMax];
     int64_t k0, j0;  // texel indices of t[0][0], before wrapping
@@ -956,9 +975,9 @@ struct RulePoints {
                       jc = _mm_max_epi16(_mm_min_epi16(jj, hi_t), zero);
         const __m128 fs = _mm_sub_ps(vs, _mm_cvtepi32_ps(ic)),
                      ft = _mm_sub_ps(vt, _mm_cvtepi32_ps(jc));
-        static_assert(TexelBlock<1>::kMax == 10 && TexelBlock<4>::kMax == 10);
+        static_assert(TexelBlock<1>::kMax == 12 && TexelBlock<4>::kMax == 12);
         const __m128i idx = _mm_add_epi32(
-            _mm_add_epi32(_mm_slli_epi32(jc, 3), _mm_slli_epi32(jc, 1)), ic);  // j kMax + i
+            _mm_add_epi32(_mm_slli_epi32(jc, 3), _mm_slli_epi32(jc, 2)), ic);  // j kMax + i
         _mm_store_si128(reinterpret_cast<__m128i*>(tap), idx);
         const __m128 w = _mm_load_ps(kTable.w + 4 * g), gs = _mm_sub_ps(one, fs),
                      gt = _mm_sub_ps(one, ft);
@@ -1046,12 +1065,15 @@ __m128 rule_sum_1(const TexelBlock<1>& b, double s, double t, double as, double 
     return _mm_set_ss(total);
 }
 
-// The 3x3 rule, the 4x4 one or their blend (w4 the 4x4 rule's weight) from a block around the
-// region; false when it would not fit in one.
+// The rules of `mix` (one, or two blended) from a block around the region; false when it would
+// not fit in one.
 template <int NC>
 [[gnu::noinline]] bool block_rules(const Image& img, double s, double t, double as, double at,
-                                   double bs, double bt, double w4, int* texels, Texel& out) {
-    const double reach = w4 > 0 ? GaussRule<4>::x[3] : GaussRule<3>::x[2];
+                                   double bs, double bt, RuleMix mix, int* texels, Texel& out) {
+    const int largest = mix.largest();
+    const double reach = largest == 3   ? GaussRule<3>::x[2]
+                         : largest == 4 ? GaussRule<4>::x[3]
+                                        : GaussRule<5>::x[4];
     TexelBlock<NC> block;
     if (!read_block<NC>(img, s, t, reach * (std::abs(as) + std::abs(bs)),
                         reach * (std::abs(at) + std::abs(bt)), block))
@@ -1064,13 +1086,16 @@ template <int NC>
             return rule_sum<N, NC>(block, s, t, as, at, bs, bt);
     };
     // One call of each rule (a blend's two are the lone rules' calls).
-    const __m128 r3 = w4 < 1 ? rule.template operator()<3>() : _mm_setzero_ps(),
-                 r4 = w4 > 0 ? rule.template operator()<4>() : _mm_setzero_ps();
-    const __m128 sum = w4 == 0 ? r3
-                       : w4 == 1
-                           ? r4
-                           : _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - w4)), r3),
-                                        _mm_mul_ps(_mm_set1_ps(static_cast<float>(w4)), r4));
+    const bool blend = mix.w > 0;
+    const __m128 z = _mm_setzero_ps();
+    const __m128 r3 = mix.lo == 3 ? rule.template operator()<3>() : z,
+                 r4 = mix.lo == 4 || (mix.lo == 3 && blend) ? rule.template operator()<4>() : z,
+                 r5 = mix.lo == 5 || (mix.lo == 4 && blend) ? rule.template operator()<5>() : z;
+    const __m128 lo = mix.lo == 3 ? r3 : mix.lo == 4 ? r4 : r5, hi = mix.lo == 3 ? r4 : r5;
+    const __m128 sum = !blend
+                           ? lo
+                           : _mm_add_ps(_mm_mul_ps(_mm_set1_ps(static_cast<float>(1 - mix.w)), lo),
+                                        _mm_mul_ps(_mm_set1_ps(static_cast<float>(mix.w)), hi));
     _mm_storeu_ps(out.data(), sum);
     if constexpr (NC == 3) out[3] = 0;
     return true;
@@ -1098,9 +1123,9 @@ template <int N>
 // one bilinear patch it is exact in closed form: B there is B(c) plus the twist d = t00 − t10 −
 // t01 + t11 times the product of the offsets from c, whose mean over the parallelogram is
 // (a_s a_t + b_s b_t) / 12, so one patch read does. Otherwise a Gauss–Legendre product rule in the
-// parallelogram's coordinates, 3x3 or 4x4 points by size (rule4_weight), which is exact within one
-// patch too, so the cases agree where the choice changes. `texels` receives the number of texels
-// read.
+// parallelogram's coordinates, 3x3, 4x4 or 5x5 points by size (rule_mix), which is exact within
+// one patch too, so the cases agree where the choice changes. `texels` receives the number of
+// texels read.
 Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double major,
                  int* texels) {
     const double W = img.width(), H = img.height();
@@ -1125,31 +1150,34 @@ Texel gauss_mean(const Image& img, double u, double v, Vec2d a, Vec2d b, double 
             out[c] += twist * (p.t00[c] - p.t10[c] - p.t01[c] + p.t11[c]);
         return out;
     }
-    const double w4 = rule4_weight(major);
+    const RuleMix mix = rule_mix(major);
 #if defined(__SSE2__)
-    // The points lie within a block of at most 10x10 texels: per axis they span twice the outer
-    // node (0.86) times the two sides' extents, under 7.75 texels while the longer side is under
-    // kAreaBlendHi = 4.5.
-    static_assert(kAreaBlendHi <= 4.5);
+    // The points lie within a block of at most 12x12 texels: per axis they span twice the outer
+    // node (0.906 for the 5x5 rule) times the two sides' extents, under 9.97 texels while the
+    // longer side is under kAreaBlendHi = 5.5.
+    static_assert(kAreaBlendHi <= 5.5 && TexelBlock<1>::kMax >= 12);
     {
         Texel out;
         const bool fits = detail::with_channels(img.channels(), [&]<int NC>() {
-            return block_rules<NC>(img, s, t, as, at, bs, bt, w4, texels, out);
+            return block_rules<NC>(img, s, t, as, at, bs, bt, mix, texels, out);
         });
         if (fits) [[likely]]
             return out;
     }
 #endif
+    auto points = [&](int n) {
+        *texels += 4 * n * n;
+        return n == 3   ? rule_points<3>(img, s, t, as, at, bs, bt)
+               : n == 4 ? rule_points<4>(img, s, t, as, at, bs, bt)
+                        : rule_points<5>(img, s, t, as, at, bs, bt);
+    };
+    *texels = 0;
     Texel out{};
-    if (w4 < 1) {
-        const Texel g3 = rule_points<3>(img, s, t, as, at, bs, bt);
-        for (int c = 0; c < 4; ++c) out[c] += static_cast<float>(1 - w4) * g3[c];
-        *texels = 36;
-    }
-    if (w4 > 0) {
-        const Texel g4 = rule_points<4>(img, s, t, as, at, bs, bt);
-        for (int c = 0; c < 4; ++c) out[c] += static_cast<float>(w4) * g4[c];
-        *texels += 64;
+    const Texel lo = points(mix.lo);
+    for (int c = 0; c < 4; ++c) out[c] += static_cast<float>(1 - mix.w) * lo[c];
+    if (mix.w > 0) {
+        const Texel hi = points(mix.lo + 1);
+        for (int c = 0; c < 4; ++c) out[c] += static_cast<float>(mix.w) * hi[c];
     }
     return out;
 }

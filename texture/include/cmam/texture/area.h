@@ -86,12 +86,14 @@ inline constexpr double kAreaMaxPerimeter = 64;
 /// level-0 texels takes the mean of the bilinear reconstruction over it (exact within one
 /// bilinear patch, a Gauss–Legendre product rule otherwise); up to kAreaBlendHi that is blended
 /// linearly into the region integral.
-inline constexpr double kAreaBlendLo = 4;
-inline constexpr double kAreaBlendHi = 4.5;
-/// The Gauss rule has 3x3 points up to kAreaRule4Lo texels and 4x4 from kAreaRule4Hi, blended
-/// linearly between.
+inline constexpr double kAreaBlendLo = 5;
+inline constexpr double kAreaBlendHi = 5.5;
+/// The Gauss rule has 3x3 points up to kAreaRule4Lo texels, 4x4 from kAreaRule4Hi to
+/// kAreaRule5Lo and 5x5 from kAreaRule5Hi, blended linearly between.
 inline constexpr double kAreaRule4Lo = 2.5;
 inline constexpr double kAreaRule4Hi = 2.75;
+inline constexpr double kAreaRule5Lo = 3.5;
+inline constexpr double kAreaRule5Hi = 3.75;
 
 struct AreaResult {
     Texel value{};
