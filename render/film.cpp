@@ -244,6 +244,9 @@ class FilmTracer {
           m_stratum_y(m_ny),
           m_sub_rows(scene.tags == TagPolicy::Scanline &&
                      scene.footprint_methods.has(FootprintMethod::Cmam)),
+          m_limit_luminance(options.aov == AovKind::None &&
+                            scene.film.max_sample_luminance <
+                                std::numeric_limits<float>::infinity()),
           m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene)),
           m_splat(splat),
           m_traced(splat ? splat->traced() : Traced{0, m_film.width(), 0, m_film.height()}) {}
@@ -374,7 +377,7 @@ class FilmTracer {
         const float fx = px + m_stratum_x.step(sx + j[0]), fy = sp.py + m_stratum_y.step(sy + j[1]);
         packet.i[k] = i;
         packet.sample[k] = sample;
-        packet.aov[k] = Aov{m_options.aov};
+        if (m_options.aov != AovKind::None) packet.aov[k] = Aov{m_options.aov};
         CameraPath& p = packet.paths[k];
         p.seed = mix_seed(sp.seeds[i], uint64_t(sample) + 1);
         p.pixel_seed = sp.seeds[i];
@@ -437,7 +440,7 @@ class FilmTracer {
                     ++sp.counts.non_finite_samples;
                     L = Rgb();
                 }
-                if (m_options.aov == AovKind::None) L = limit_luminance(L);
+                if (m_limit_luminance) L = limit_luminance(L);
                 const auto [a, b] = m_splat->splat(sp.row_sums, packet.fx[k], packet.fy[k], L);
                 if (a < b) {
                     x0 = std::min(x0, a);
@@ -471,7 +474,7 @@ class FilmTracer {
                 if (i >= sp.prime) ++sp.counts.non_finite_samples;
                 L = Rgb();
             }
-            if (m_options.aov == AovKind::None) L = limit_luminance(L);
+            if (m_limit_luminance) L = limit_luminance(L);
             r += L.r;
             g += L.g;
             b += L.b;
@@ -483,7 +486,8 @@ class FilmTracer {
     }
 
     // A sample's radiance scaled down to the film's maxsampleluminance where its luminance
-    // (pbrt-v3's y of an RGB) is above it.
+    // (pbrt-v3's y of an RGB) is above it. Only radiance is limited, and only below infinity
+    // (pbrt-v3's default, which limits nothing: then m_limit_luminance is false).
     Rgb limit_luminance(const Rgb& L) const {
         const float y = 0.212671f * L.r + 0.715160f * L.g + 0.072169f * L.b;
         return y > m_film.max_sample_luminance ? L * (m_film.max_sample_luminance / y) : L;
@@ -507,6 +511,7 @@ class FilmTracer {
     };
     const Stratum m_stratum_x, m_stratum_y;
     const bool m_sub_rows;
+    const bool m_limit_luminance;  // an AOV's samples are not radiance
     const FootprintProducers m_footprints;
     SplatFilm* m_splat;  // the filtered film, or null (each sample counts for its own pixel)
     const Traced m_traced;
