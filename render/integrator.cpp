@@ -945,7 +945,7 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
         aov->v[2] = float(std::max(0.0, r->info.lambda));
         return;
     }
-    const texture::Footprint fp = node_footprint(*n, ctx);  // in the node's (s,t) units
+    const texture::Footprint fp = lookup_footprint(*n, ctx);  // in the node's (s,t) units
     if (fp.kind != texture::Footprint::Kind::Axes) return;
     const double W = n->image->image().width(), H = n->image->image().height();
     double la = std::hypot(fp.axis_a.u * W, fp.axis_a.v * H),

@@ -64,9 +64,9 @@ texture::Vec2d mapped_st(const TextureNode& n, const Vec3& p) {
 }
 
 // A 2-D mapping's (s,t) at the hit and the footprint its lookup uses: for uv mapping the
-// node's (node_footprint); for the others the images of dP/dx and dP/dy (exact for planar,
-// finite differences for the angular mappings, across their seam the short way), or none
-// without ray differentials.
+// node's (node_footprint); for the others the images of the world-space footprint the node's
+// lod gives, dP/dx and dP/dy or a ray cone's cross-section (exact for planar, finite
+// differences for the angular mappings, across their seam the short way), or none without one.
 struct MappedSt {
     texture::Vec2d st;
     texture::Footprint footprint;  // None unless asked for
@@ -76,12 +76,30 @@ MappedSt node_st(const TextureNode& n, const TexContext& ctx, bool with_footprin
         return {{double(n.su) * ctx.u + n.du, double(n.sv) * ctx.v + n.dv},
                 with_footprint ? node_footprint(n, ctx) : texture::Footprint{}};
     const texture::Vec2d st = mapped_st(n, ctx.p);
-    if (!with_footprint || n.lod != FootprintMethod::Differentials ||
-        (dot(ctx.footprints.dpdx, ctx.footprints.dpdx) == 0 &&
-         dot(ctx.footprints.dpdy, ctx.footprints.dpdy) == 0))
-        return {st, {}};
+    if (!with_footprint) return {st, {}};
+    const HitFootprint& f = ctx.footprints;
+    Vec3 dp[2];
+    switch (n.lod) {
+        case FootprintMethod::Differentials:
+            dp[0] = f.dpdx, dp[1] = f.dpdy;
+            break;
+        case FootprintMethod::Cones:
+            dp[0] = f.cone_world[0], dp[1] = f.cone_world[1];
+            break;
+        case FootprintMethod::ConesAniso:
+            dp[0] = f.cone_aniso_world[0], dp[1] = f.cone_aniso_world[1];
+            break;
+        default:
+            return {st, {}};
+    }
+    if (dot(dp[0], dp[0]) == 0 && dot(dp[1], dp[1]) == 0) return {st, {}};
+    // A cone's cross-section integrated by the area filter: the parallelogram of equal second
+    // moments, as node_footprint makes it for (u,v).
+    if (n.lod != FootprintMethod::Differentials && n.filter.kind == texture::FilterKind::Area) {
+        dp[0] = dp[0] * float(kConeToArea);
+        dp[1] = dp[1] * float(kConeToArea);
+    }
     texture::Vec2d axis[2];
-    const Vec3 dp[2] = {ctx.footprints.dpdx, ctx.footprints.dpdy};
     for (int k = 0; k < 2; ++k) {
         if (n.mapping == TextureNode::Mapping::Planar) {
             axis[k] = {dot(dp[k], n.v1), dot(dp[k], n.v2)};
@@ -98,6 +116,14 @@ MappedSt node_st(const TextureNode& n, const TexContext& ctx, bool with_footprin
     }
     return {st, texture::Footprint::axes(axis[0], axis[1])};
 }
+
+}  // namespace
+
+texture::Footprint lookup_footprint(const TextureNode& n, const TexContext& ctx) {
+    return node_st(n, ctx, n.lod != FootprintMethod::Cmam).footprint;
+}
+
+namespace {
 
 float noise2(float x, float y) {
     return perlin_noise(Vec3(x, y, 0.5f));

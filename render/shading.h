@@ -47,6 +47,11 @@ inline constexpr double kConeToArea = 0.86602540378443865;
 /// the node's uv mapping like the lookup point; None for point sampling and the CMAM.
 texture::Footprint node_footprint(const TextureNode& n, const TexContext& ctx);
 
+/// The footprint an image or checkerboard node's lookup uses, in its (s,t) units: the
+/// node_footprint of a uv mapping, or the image of the lod's world-space footprint under a
+/// spherical, cylindrical or planar one (none for point sampling and the CMAM).
+texture::Footprint lookup_footprint(const TextureNode& n, const TexContext& ctx);
+
 /// A texture node's value at a shading point; float textures return it in all three channels.
 Rgb eval_texture_node(const Scene& scene, int node, const TexContext& ctx);
 

@@ -505,34 +505,68 @@ TEST(Checkerboard, ClosedFormAveragesUnderALargeFootprint) {
     EXPECT_EQ(eval_texture(*s, in, ctx).r, 1.0f);
 }
 
-TEST(Aov, FootprintAndTextureOfAFrontoParallelPlane) {
-    // 512x512 pixels, plane z = 10: one pixel covers 0.0390625 world units = 5 texels of a
-    // 512^2 texture that spans 4 units.
-    std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
-    auto s = test::scene_from(
-        camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
-                  "\" Material \"matte\" \"texture Kd\" \"b\" LightSource \"distant\" "
+namespace {
+// The plane z = 10 of camera512, 200 units square with (u,v) 0..50, matte, under a distant
+// light, its Kd the image texture "b" (brick.png, 512^2) with the imagemap parameters `params`.
+std::unique_ptr<Scene> textured_plane(const std::string& params) {
+    const std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
+    return test::scene_from(
+        camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex + "\" " +
+                  params +
+                  " Material \"matte\" \"texture Kd\" \"b\" LightSource \"distant\" "
                   "Shape \"trianglemesh\" \"point3 P\" [-100 -100 10  100 -100 10  100 100 10  "
                   "-100 100 10] "
                   "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 50 0 50 50 0 50]"),
         "t.pbrt", 1);
-    s->film.x0 = 250;
-    s->film.x1 = 262;
-    s->film.y0 = 250;
-    s->film.y1 = 252;
+}
+// The footprint AOV of pixels 250-261 x 250-251.
+Framebuffer footprint_aov(Scene& s) {
+    s.film.x0 = 250;
+    s.film.x1 = 262;
+    s.film.y0 = 250;
+    s.film.y1 = 252;
     RenderOptions o;
     o.aov = AovKind::Footprint;
-    Framebuffer fp = render::render(*s, o, nullptr);
+    return render::render(s, o, nullptr);
+}
+}  // namespace
+
+TEST(Aov, FootprintAndTextureOfAFrontoParallelPlane) {
+    // 512x512 pixels, plane z = 10: one pixel covers 0.0390625 world units = 5 texels of a
+    // 512^2 texture that spans 4 units.
+    auto s = textured_plane("");
+    Framebuffer fp = footprint_aov(*s);
     ASSERT_EQ(fp.channel_names, (std::vector<std::string>{"major", "minor", "lambda"}));
     for (std::size_t p = 0; p < fp.rgb.size() / 3; ++p) {
         EXPECT_NEAR(fp.rgb[3 * p], 5.0, 0.01);
         EXPECT_NEAR(fp.rgb[3 * p + 1], 5.0, 0.01);
         EXPECT_NEAR(fp.rgb[3 * p + 2], std::log2(5.0), 0.01);  // EWA: level of the minor axis
     }
+    RenderOptions o;
     o.aov = AovKind::Texture;
     Framebuffer tx = render::render(*s, o, nullptr);
     Framebuffer lit = render::render(*s, {}, nullptr);
     // Unlit: the lit value is Kd/pi * L * cos = Kd/pi here (distant light along +z, L = 1).
     for (std::size_t i = 0; i < tx.rgb.size(); ++i)
         EXPECT_NEAR(lit.rgb[i], tx.rgb[i] / 3.14159265f, 1e-5);
+}
+
+// A texture that maps the hit's point (here planar, 8 world units to one repeat) is looked up
+// over the image of the world-space footprint, and the footprint AOV reports that, for every
+// source with one: ray differentials (dP/dx, dP/dy) and ray cones (their cross-section on the
+// tangent plane). One pixel is 0.0390625 units on the plane z = 10, 2.5 texels of the
+// 512^2 texture under the mapping, where the surface's own (u,v) would give 5.
+TEST(Aov, MappedTexturesReportTheFootprintTheirLookupUses) {
+    for (const char* lod : {"differentials", "cones", "cones-aniso"}) {
+        SCOPED_TRACE(lod);
+        auto s = textured_plane(
+            "\"string mapping\" \"planar\" \"vector3 v1\" [0.125 0 0] \"vector3 v2\" [0 0.125 0] "
+            "\"string lod\" \"" +
+            std::string(lod) + "\"");
+        const Framebuffer fp = footprint_aov(*s);
+        for (std::size_t p = 0; p < fp.rgb.size() / 3; ++p) {
+            EXPECT_NEAR(fp.rgb[3 * p], 2.5, 0.01);
+            EXPECT_NEAR(fp.rgb[3 * p + 1], 2.5, 0.01);
+        }
+    }
 }

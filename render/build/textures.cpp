@@ -316,7 +316,8 @@ void Builder::texture(const pbrt::TextureDesc& t) {
     const std::string what =
         std::string(t.is_float ? "float" : "spectrum") + " texture " + in_quotes(e.type);
     (this->*builder_for(kClasses, e, "texture class"))(t, n);
-    // Non-uv mappings take their footprints from dP/dx and dP/dy.
+    // Non-uv mappings take their footprints from dP/dx and dP/dy (with cones, from the
+    // cone's cross-section at the hit: FootprintProducers::at_hit, which the lod below enables).
     if (n.mapping != TextureNode::Mapping::Uv &&
         (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
         n.lod == FootprintMethod::Differentials)

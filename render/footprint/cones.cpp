@@ -68,12 +68,14 @@ float cone_uv_width(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {
     return w / (dn * density(hit));
 }
 
-texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {
+namespace {
+// The anisotropic cone's ellipse on the hit's tangent plane: semi-axes a1 (along the incidence
+// plane, elongated by 1 / |d.n|) and a2 (across it).
+void cone_ellipse(const RayCone& cone, const Vec3& d, const SurfaceHit& hit, Vec3& a1, Vec3& a2) {
     const Vec3& n = hit.ng;
     float r = 0.5f * std::abs(cone_width_at(cone, hit.t));
     float dn = clamp_cos(dot(n, d));
     Vec3 along = d - dot(n, d) * n;
-    Vec3 a1, a2;
     if (dot(along, along) < 1e-12f) {  // head-on: a circle of radius r in the tangent plane
         Frame f = Frame::from_z(n);
         a1 = f.s * r;
@@ -82,9 +84,30 @@ texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const Surfac
         a1 = normalize(along) * (r / std::abs(dn));  // elongated along the incidence plane
         a2 = normalize(cross(n, a1)) * r;
     }
+}
+}  // namespace
+
+texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit,
+                                Vec3& world_a, Vec3& world_b) {
+    Vec3 a1, a2;
+    cone_ellipse(cone, d, hit, a1, a2);
     UvDelta g1, g2;
     hit.uv_offsets(a1, a2, g1, g2);
+    world_a = a1 * 2.0f;
+    world_b = a2 * 2.0f;
     return texture::Footprint::axes({2 * g1.du, 2 * g1.dv}, {2 * g2.du, 2 * g2.dv});
+}
+
+texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {
+    Vec3 a, b;
+    return cone_uv_axes(cone, d, hit, a, b);
+}
+
+void cone_world_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit, Vec3& a, Vec3& b) {
+    const float w = std::abs(cone_width_at(cone, hit.t)) / std::abs(clamp_cos(dot(d, hit.ng)));
+    const Frame f = Frame::from_z(hit.ng);
+    a = f.s * w;
+    b = f.t * w;
 }
 
 RayCone reflect_cone(const RayCone& cone, const Vec3& d, const SurfaceHit& hit) {

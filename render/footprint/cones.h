@@ -28,6 +28,14 @@ float surface_curvature(const SurfaceHit& hit);
 float cone_uv_width(const RayCone& cone, const Vec3& d, const SurfaceHit& hit);
 /// Anisotropic footprint axes (2 g1, 2 g2) in (u,v) units (JCGT 2021, with its factor 2).
 texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit);
+/// The same, and the ellipse's diameters 2 a1, 2 a2 themselves (world-space vectors in the
+/// tangent plane, whose (u,v) images the axes are) in `world_a`, `world_b`: what a texture
+/// mapping the hit's point rather than its (u,v) (spherical, cylindrical, planar) maps.
+texture::Footprint cone_uv_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit,
+                                Vec3& world_a, Vec3& world_b);
+/// The isotropic cone's footprint for those mappings: two orthogonal tangents |w| / |d.n| long,
+/// the world extent cone_uv_width measures in (u,v).
+void cone_world_axes(const RayCone& cone, const Vec3& d, const SurfaceHit& hit, Vec3& a, Vec3& b);
 
 /// Cone after a perfect reflection at `hit` (width kept, spread + 2 beta).
 RayCone reflect_cone(const RayCone& cone, const Vec3& d, const SurfaceHit& hit);

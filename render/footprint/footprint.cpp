@@ -166,10 +166,12 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
     if (!uv) return;
     if (m_cones) {
         const float w = cone_uv_width(ray.cone, dir, hit);
-        f.cone = {{w, 0}, {0, w}, true};
+        f.cone = {w, true};
+        cone_world_axes(ray.cone, dir, hit, f.cone_world[0], f.cone_world[1]);
     }
     if (m_cones_aniso) {
-        const texture::Footprint ax = cone_uv_axes(ray.cone, dir, hit);
+        const texture::Footprint ax =
+            cone_uv_axes(ray.cone, dir, hit, f.cone_aniso_world[0], f.cone_aniso_world[1]);
         f.cone_aniso = {ax.axis_a, ax.axis_b, ax.kind == texture::Footprint::Kind::Axes};
     }
 }

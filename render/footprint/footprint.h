@@ -45,6 +45,16 @@ struct UvAxes {
     }
 };
 
+/// An isotropic footprint of width w in (u,v): the axes (w, 0), (0, w).
+struct UvWidth {
+    float w = 0;
+    bool valid = false;
+
+    texture::Footprint footprint() const {
+        return valid ? texture::Footprint::axes({w, 0}, {0, w}) : texture::Footprint::none();
+    }
+};
+
 /// The producers' footprints at one hit, in the surface's (u,v) units.
 struct HitFootprint {
     HitDifferential diff;  // as transferred (invalid: no footprint from differentials)
@@ -55,8 +65,12 @@ struct HitFootprint {
     // From the hit to its stratum's centre in (u,v): through the differentials at every hit, or
     // through the camera ray's at the first hit for cones (`cone_strata`); zero otherwise.
     texture::Vec2d stratum_offset;
-    UvAxes cone;  // isotropic ray cone
+    UvWidth cone;  // isotropic ray cone
     UvAxes cone_aniso;
+    // The cones' footprints as world-space vectors in the tangent plane (cone_world_axes), set
+    // with `cone` and `cone_aniso`: what a texture mapping the hit's point (spherical,
+    // cylindrical, planar) maps to its (s,t), as it maps dP/dx and dP/dy for the differentials.
+    Vec3 cone_world[2]{}, cone_aniso_world[2]{};
     texture::RayTag tag;  // the ray's tag at this depth
     uint64_t path = 1;
     bool dropped = false;  // the ray carried differentials, but they failed at this hit
