@@ -511,7 +511,7 @@ class FilmTracer {
     };
     const Stratum m_stratum_x, m_stratum_y;
     const bool m_sub_rows;
-    const bool m_limit_luminance;  // an AOV's samples are not radiance
+    const bool m_limit_luminance;  // radiance (not an AOV) under a finite maxsampleluminance
     const FootprintProducers m_footprints;
     SplatFilm* m_splat;  // the filtered film, or null (each sample counts for its own pixel)
     const Traced m_traced;
