@@ -442,3 +442,50 @@ TEST(Cmam2d, JitteredNeighboursNearlyInLineAreFittedOverFour) {
     EXPECT_EQ(grid.b.v, grid2.b.v);
     EXPECT_EQ(grid.a.u, g.s - gl.s);
 }
+
+// An angular coordinate (a spherical or cylindrical mapping's longitude) jumps from 1 to 0 at
+// its seam. With it declared periodic, the samples on either side are neighbours one step
+// apart: two rows of the 2-D CMAM crossing the seam at different columns give the regions and
+// values of the same rows unwrapped (u continuing past 1 on a repeating texture), in u for
+// periodic_u and in v for periodic_v. Without it the region spans the whole texture.
+TEST(Cmam2d, NeighboursAcrossAPeriodicSeamAreTakenTheShortWay) {
+    FilteredTexture tex(tmip1());
+    for (const bool along_v : {false, true}) {
+        SCOPED_TRACE(along_v ? "periodic_v" : "periodic_u");
+        CmamOptions o;
+        o.two_d = true;
+        o.filter = FilterKind::Area;
+        CmamOptions periodic = o;
+        (along_v ? periodic.periodic_v : periodic.periodic_u) = true;
+        CmamCache wrapped, unwrapped;
+        CmamResult w, uw;
+        // Row 0 crosses the seam after its third sample, row 1 after its second.
+        const double row_u[2][5] = {{0.88, 0.93, 0.98, 1.03, 1.08}, {0.90, 0.95, 1.00, 1.05, 1.10}};
+        for (uint32_t row = 0; row < 2; ++row)
+            for (uint32_t k = 0; k < 5; ++k) {
+                const double u = row_u[row][k] + 0.001 * row, a = 0.4 + 0.03 * row;
+                const double seam = u >= 1 ? u - 1 : u;
+                auto look = [&](CmamCache& c, double x, const CmamOptions& opts) {
+                    return along_v ? cmam_lookup_with_info(tex, c, {row, 0, k}, a, x, opts)
+                                   : cmam_lookup_with_info(tex, c, {row, 0, k}, x, a, opts);
+                };
+                w = look(wrapped, seam, periodic);
+                uw = look(unwrapped, u, o);
+                if (row == 0 && k == 0) continue;
+                EXPECT_NEAR(w.region.a.u, uw.region.a.u, 1e-9) << row << " " << k;
+                EXPECT_NEAR(w.region.a.v, uw.region.a.v, 1e-9) << row << " " << k;
+                EXPECT_NEAR(w.region.b.u, uw.region.b.u, 1e-9) << row << " " << k;
+                EXPECT_NEAR(w.region.b.v, uw.region.b.v, 1e-9) << row << " " << k;
+                EXPECT_NEAR(w.value[0], uw.value[0], 1e-5) << row << " " << k;
+            }
+        // The last sample of row 1: its left neighbour (1.05) is past the seam as it is, but the
+        // sample above (1.08, as 0.08) is too, and the one before it in row 0 (1.03) as well;
+        // the plain CMAM sees the step from 0.99 to 0.01 in row 0 as a whole texture's width.
+        EXPECT_LT(std::max(length(w.region.a), length(w.region.b)), 1.0);
+        CmamCache seam_row;
+        cmam_lookup(tex, seam_row, {0, 0, 0}, along_v ? 0.4 : 0.98, along_v ? 0.98 : 0.4, o);
+        const CmamResult across = cmam_lookup_with_info(
+            tex, seam_row, {0, 0, 1}, along_v ? 0.4 : 0.03, along_v ? 0.03 : 0.4, o);
+        EXPECT_GT(std::max(length(across.region.a), length(across.region.b)), 3.0);
+    }
+}

@@ -235,6 +235,43 @@ struct CacheStep {
     return st;
 }
 
+// Moves `e` by whole periods along the periodic coordinates to the copy nearest the sample at
+// (u, v); s and t follow, at `kw` and `kh` texels per unit of u and v.
+void nearest_period(CmamCache::Entry& e, double u, double v, double kw, double kh,
+                    const CmamOptions& o) {
+    if (o.periodic_u) {
+        e.u += std::round(u - e.u);
+        e.s = e.u * kw;
+    }
+    if (o.periodic_v) {
+        e.v += std::round(v - e.v);
+        e.t = e.v * kh;
+    }
+}
+
+// The sample's neighbours taken the short way round periodic coordinates: the cached samples in
+// place, and copies of the row above's (`above`, `left`, `right` then point at the copies).
+struct NearestNeighbours {
+    CmamCache::Entry above, left, right;
+};
+void take_short_way(CmamCache::Entry (&cached)[2], const CmamCache::Entry*& above,
+                    const CmamCache::Entry*& left, const CmamCache::Entry*& right,
+                    std::optional<NearestNeighbours>& copies, double u, double v, double kw,
+                    double kh, const CmamOptions& o) {
+    for (CmamCache::Entry& e : cached) nearest_period(e, u, v, kw, kh, o);
+    if (!above) return;
+    copies.emplace();
+    auto move = [&](const CmamCache::Entry*& p, CmamCache::Entry& copy) {
+        if (!p) return;
+        copy = *p;
+        nearest_period(copy, u, v, kw, kh, o);
+        p = &copy;
+    };
+    move(above, copies->above);
+    move(left, copies->left);
+    move(right, copies->right);
+}
+
 // The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
 Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
@@ -244,12 +281,17 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     // The cached samples before the step. Their texture coordinates are read from the cache
     // itself (read from the copies, a 16-byte read of u and v spans two of their stores and
     // waits for both).
-    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
-    const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
-                                {cache.second_last.u, cache.second_last.v}};
+    CmamCache::Entry cached[2] = {cache.last, cache.second_last};
+    Vec2d cached_uv[2] = {{cache.last.u, cache.last.v}, {cache.second_last.u, cache.second_last.v}};
     const CacheStep st = advance(cache, tag, s0, t0, u, v, o);
     int matches = st.matches;
-    const CmamCache::Entry* above = st.above;
+    const CmamCache::Entry *above = st.above, *above_left = st.above_left,
+                           *above_right = st.above_right;
+    std::optional<NearestNeighbours> near_copies;
+    if (o.periodic_u || o.periodic_v) {
+        take_short_way(cached, above, above_left, above_right, near_copies, u, v, W, H, o);
+        for (int k = 0; k < 2; ++k) cached_uv[k] = {cached[k].u, cached[k].v};
+    }
     const bool in_range = st.in_range;
 
     if (info) *info = LookupInfo{};
@@ -266,7 +308,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     std::optional<CmamRegion> region;
     if (above)
         region = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag,
-                                st.above_left, st.above_right);
+                                above_left, above_right);
     else if (o.hull || region_out)
         region = cmam_region(s0, t0, cached, matches, o);
     if (above) matches = std::max(matches, 1);  // a region exists: no miss
@@ -384,12 +426,17 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
 Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const CmamOptions& o,
                          Vec2d* offset) {
     *offset = {};
-    const CmamCache::Entry cached[2] = {cache.last, cache.second_last};
+    CmamCache::Entry cached[2] = {cache.last, cache.second_last};
     const CacheStep st = advance(cache, tag, u, v, u, v, o);
     if (!st.in_range) return Footprint::none();
-    if (st.above) {
-        const CmamRegion r = cmam_region_2d(u, v, st.matches > 0 ? &cached[0] : nullptr, *st.above,
-                                            o, tag, st.above_left, st.above_right);
+    const CmamCache::Entry *above = st.above, *above_left = st.above_left,
+                           *above_right = st.above_right;
+    std::optional<NearestNeighbours> near_copies;
+    if (o.periodic_u || o.periodic_v)
+        take_short_way(cached, above, above_left, above_right, near_copies, u, v, 1, 1, o);
+    if (above) {
+        const CmamRegion r = cmam_region_2d(u, v, st.matches > 0 ? &cached[0] : nullptr, *above, o,
+                                            tag, above_left, above_right);
         *offset = r.offset;
         return Footprint::axes(r.a, r.b);
     }

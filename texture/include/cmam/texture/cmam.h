@@ -75,6 +75,11 @@ struct CmamOptions {
     /// so the two vectors approximate the screen-space Jacobian columns d(s,t)/dx and d(s,t)/dy
     /// instead of two nearly collinear steps along the row. Meant for scanline tags.
     bool two_d = false;
+    /// Texture coordinates that are angles, u or v of period 1 (a spherical or cylindrical
+    /// mapping's longitude): each cached neighbour is taken the short way round, whole periods
+    /// added to it, so that samples on either side of the seam are neighbours one step apart
+    /// rather than a whole texture apart (algorithms.md §6.3).
+    bool periodic_u = false, periodic_v = false;
 };
 
 /// The last two samples of one textured object (the paper's Figure 6 fields): tag and
