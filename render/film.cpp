@@ -31,13 +31,25 @@ namespace cmam::render {
 
 namespace {
 
+bool reads_cones(const TextureNode& n) {
+    return n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso;
+}
+
 // Whether an image texture filtered by `area` takes its footprint from ray cones: the camera
 // rays then carry differentials to centre the first hit's parallelogram on its stratum.
 bool cones_read_by_area(const Scene& scene) {
     return std::any_of(scene.textures.begin(), scene.textures.end(), [](const TextureNode& n) {
         return n.kind == TextureNode::Kind::Image && n.filter.kind == texture::FilterKind::Area &&
-               n.mapping == TextureNode::Mapping::Uv &&
-               (n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso);
+               n.mapping == TextureNode::Mapping::Uv && reads_cones(n);
+    });
+}
+
+// Whether a texture with a spherical, cylindrical or planar mapping takes its footprint from ray
+// cones: the hits then keep the cones' cross-sections as world-space vectors.
+bool cones_read_by_mapping(const Scene& scene) {
+    return std::any_of(scene.textures.begin(), scene.textures.end(), [](const TextureNode& n) {
+        return (n.kind == TextureNode::Kind::Image || n.kind == TextureNode::Kind::Checkerboard) &&
+               n.mapping != TextureNode::Mapping::Uv && reads_cones(n);
     });
 }
 
@@ -247,7 +259,8 @@ class FilmTracer {
           m_limit_luminance(options.aov == AovKind::None &&
                             scene.film.max_sample_luminance <
                                 std::numeric_limits<float>::infinity()),
-          m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene)),
+          m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene),
+                       cones_read_by_mapping(scene)),
           m_splat(splat),
           m_traced(splat ? splat->traced() : Traced{0, m_film.width(), 0, m_film.height()}) {}
 

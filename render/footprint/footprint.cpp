@@ -50,7 +50,7 @@ texture::Footprint HitFootprint::of(FootprintMethod method) const {
 }
 
 FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& camera, int spp,
-                                       bool cone_strata)
+                                       bool cone_strata, bool cone_world)
     : m_methods(methods),
       m_camera(camera),
       m_steps(camera_steps(camera)),
@@ -60,6 +60,7 @@ FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& c
       m_cones(methods.has(FootprintMethod::Cones) || methods.has(FootprintMethod::ConesAniso)),
       m_cones_aniso(methods.has(FootprintMethod::ConesAniso)),
       m_cone_strata(cone_strata && m_cones),
+      m_cone_world(cone_world && m_cones),
       m_camera_differentials(m_differentials || m_cone_strata) {}
 
 RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
@@ -167,11 +168,13 @@ void FootprintProducers::at_hit(HitFootprint& f, const RayFootprint& ray, const 
     if (m_cones) {
         const float w = cone_uv_width(ray.cone, dir, hit);
         f.cone = {w, true};
-        cone_world_axes(ray.cone, dir, hit, f.cone_world[0], f.cone_world[1]);
+        if (m_cone_world) cone_world_axes(ray.cone, dir, hit, f.cone_world[0], f.cone_world[1]);
     }
     if (m_cones_aniso) {
         const texture::Footprint ax =
-            cone_uv_axes(ray.cone, dir, hit, f.cone_aniso_world[0], f.cone_aniso_world[1]);
+            m_cone_world
+                ? cone_uv_axes(ray.cone, dir, hit, f.cone_aniso_world[0], f.cone_aniso_world[1])
+                : cone_uv_axes(ray.cone, dir, hit);
         f.cone_aniso = {ax.axis_a, ax.axis_b, ax.kind == texture::Footprint::Kind::Axes};
     }
 }

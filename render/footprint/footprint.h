@@ -68,8 +68,9 @@ struct HitFootprint {
     UvWidth cone;  // isotropic ray cone
     UvAxes cone_aniso;
     // The cones' footprints as world-space vectors in the tangent plane (cone_world_axes), set
-    // with `cone` and `cone_aniso`: what a texture mapping the hit's point (spherical,
-    // cylindrical, planar) maps to its (s,t), as it maps dP/dx and dP/dy for the differentials.
+    // with `cone` and `cone_aniso` where a texture mapping the hit's point (spherical,
+    // cylindrical, planar) reads them: it maps them to its (s,t), as it maps dP/dx and dP/dy for
+    // the differentials.
     Vec3 cone_world[2]{}, cone_aniso_world[2]{};
     texture::RayTag tag;  // the ray's tag at this depth
     uint64_t path = 1;
@@ -91,9 +92,11 @@ class FootprintProducers {
     /// footprint by 1/sqrt(spp)). `cone_strata`: an area-filtered texture reads ray cones, so
     /// camera rays carry their differentials to the first hit, where they map the sample's offset
     /// to its stratum's centre into (u,v) (algorithms.md §5.2, "Cones"); nothing else reads them
-    /// unless `methods` has the differentials.
+    /// unless `methods` has the differentials. `cone_world`: a texture mapping the hit's point
+    /// (spherical, cylindrical, planar) reads ray cones, so each hit keeps the cones'
+    /// cross-sections as world-space vectors too (HitFootprint::cone_world).
     FootprintProducers(FootprintMethods methods, const Camera& camera, int spp,
-                       bool cone_strata = false);
+                       bool cone_strata = false, bool cone_world = false);
 
     /// The state of the camera ray through raster position (fx, fy), direction `dir`.
     RayFootprint camera_ray(float fx, float fy, const Vec3& dir, texture::RayTag tag,
@@ -162,6 +165,7 @@ class FootprintProducers {
     RayCone m_camera_cone;  // every camera ray's cone
     bool m_differentials, m_cones, m_cones_aniso;
     bool m_cone_strata;           // cones' first hits centred on their strata (constructor)
+    bool m_cone_world;            // the cones' world-space cross-sections kept (constructor)
     bool m_camera_differentials;  // m_differentials || m_cone_strata
 };
 
