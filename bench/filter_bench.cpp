@@ -45,7 +45,7 @@ struct Fixture {
         ours = std::make_unique<FilteredTexture>(Image(kRes, kRes, 3, px));
         ours->pyramid();
         ours->sat();
-        for (int l = 0; l < ours->pyramid().levels(); ++l) ours->row_prefix(l);
+        for (int l = 0; l < ours->pyramid().levels(); ++l) ours->row_prefix(l).build_all();
         std::string path = (std::filesystem::temp_directory_path() /
                             ("cmam_bench_" + std::to_string(::getpid()) + ".exr"))
                                .string();

@@ -47,7 +47,7 @@ std::unique_ptr<render::Scene> lod_scene(render::FootprintMethod lod, texture::F
         tex->pyramid();
         tex->sat();
         if (filter == texture::FilterKind::Area)
-            for (int l = 0; l < tex->pyramid().levels(); ++l) tex->row_prefix(l);
+            for (int l = 0; l < tex->pyramid().levels(); ++l) tex->row_prefix(l).build_all();
     }
     return scene;
 }

@@ -599,7 +599,9 @@ void render_cmam_strips(const FilmTracer& tracer, const RenderOptions& options, 
 
 // The pyramids and tables the scene's filters read, built before tracing and in parallel: each
 // texture's pyramid (and summed-area table), then every level's row prefix table. Left to the
-// first lookup, one thread would build each while the others wait for it.
+// first lookup, one thread would build each while the others wait for it. (A row prefix table
+// larger than its margin's bound is only made here: its rows are built a band at a time as the
+// workers' regions first read them, so a short render of large textures builds what it reads.)
 void build_texture_tables(const Scene& scene, int threads) {
     const auto uses = texture_uses(scene);
     const std::vector<std::pair<const texture::FilteredTexture*, TextureUses>> textures(

@@ -125,6 +125,44 @@ TEST(Area, RepeatRegionsAcrossThePeriodsEdgeMatchTheCellOracle) {
     }
 }
 
+TEST_P(AreaWrap, RowsBuiltOnDemandEqualTheWholeTable) {
+    // A table built on demand builds the rows a region reads as it first reads them: each
+    // polygon, inside, across and beyond the edges of a 150x70 texture (too large for a margin),
+    // on a fresh table of a texture of its own, integrates to the whole table's value bit for
+    // bit (a row read before it was built would hold another texture's sums, or nothing).
+    const WrapMode w = GetParam();
+    const int tw = 150, th = 70;
+    const std::size_t row_bytes = std::size_t(tw + 1) * 3 * sizeof(float);
+    std::mt19937 rng(41);
+    for (int k = 0; k < 120; ++k) {
+        const Image img(tw, th, 3, noise(tw, th, 3, 100 + k), w, w);
+        const RowPrefixTable whole(img), lazy(img, RowPrefixTable::OnDemand{});
+        EXPECT_EQ(lazy.memory_bytes(), 0u);
+        Vec2d p[4];
+        if (k % 3 == 0)
+            random_parallelogram(rng, 20, 50, p);  // inside: a few bands
+        else
+            random_parallelogram(rng, -90, 240, p);
+        const int n = k % 4 == 3 ? 3 : 4;
+        const Texel got = lazy.integral(p, n), want = whole.integral(p, n);
+        for (int c = 0; c < 3; ++c)
+            ASSERT_EQ(got[c], want[c]) << to_string(w) << " polygon " << k << " channel " << c;
+        if (k % 3 == 0) {
+            // Sides up to 9.2 texels: at most 14 rows (one more read at its edge), 3 bands.
+            EXPECT_GT(lazy.memory_bytes(), 0u);
+            EXPECT_LE(lazy.memory_bytes(), 3 * RowPrefixTable::kBandRows * row_bytes);
+        }
+        if (k % 2) {  // a copy is a whole table
+            const RowPrefixTable copy(lazy);
+            EXPECT_EQ(copy.memory_bytes(), whole.memory_bytes());
+            EXPECT_EQ(copy.integral(p, n)[1], want[1]);
+        }
+        lazy.build_all();
+        EXPECT_EQ(lazy.memory_bytes(), whole.memory_bytes());
+        EXPECT_EQ(lazy.memory_bytes(), th * row_bytes);
+    }
+}
+
 TEST_P(AreaWrap, ConstantTextureStaysConstant) {
     const WrapMode w = GetParam();
     std::vector<float> px(std::size_t(40) * 24 * 3);
@@ -587,6 +625,28 @@ TEST(Area, CollinearAndNonFiniteFootprints) {
     EXPECT_EQ(m.value[0], t.image().mean()[0]);
     EXPECT_EQ(area_parallelogram(t, 0.5, INFINITY, {0.1, 0}, {0, 0.1}).value[0],
               t.image().mean()[0]);
+}
+
+TEST(Area, LargeTablesBuildOnlyTheRowsTheirRegionsRead) {
+    // Lookups in one corner of a 512x512 texture (regions 8 to 40 texels long, 0.3 as wide:
+    // walked, not the Gauss rule's) build a few bands of the levels they walk, not the levels'
+    // tables, and give the values of a texture whose tables were built whole.
+    const std::vector<float> px = noise(512, 512, 1, 9);
+    FilteredTexture lazy(Image(512, 512, 1, px)), whole(Image(512, 512, 1, px));
+    for (int l = 0; l < whole.pyramid().levels(); ++l) whole.row_prefix(l).build_all();
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> pos(0.1, 0.15), side(8.0 / 512, 40.0 / 512),
+        angle(0, 6.3);
+    for (int k = 0; k < 200; ++k) {
+        const double u = pos(rng), v = pos(rng), la = side(rng), ta = angle(rng);
+        const Footprint fp = Footprint::axes({la * std::cos(ta), la * std::sin(ta)},
+                                             {-0.3 * la * std::sin(ta), 0.3 * la * std::cos(ta)});
+        const LookupResult a = lazy.lookup_with_info(u, v, fp, {FilterKind::Area}),
+                           b = whole.lookup_with_info(u, v, fp, {FilterKind::Area});
+        ASSERT_EQ(a.value[0], b.value[0]) << "lookup " << k;
+    }
+    EXPECT_GT(lazy.row_prefix_bytes(), 0u);
+    EXPECT_LT(lazy.row_prefix_bytes() * 4, whole.row_prefix_bytes());
 }
 
 TEST(Area, TablesAreBuiltLazilyAndCounted) {

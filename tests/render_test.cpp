@@ -289,6 +289,33 @@ TEST(Determinism, OneAndTwoThreadsGiveIdenticalImages) {
     EXPECT_GT(sum / a.rgb.size(), 0.05);  // not black
 }
 
+TEST(Determinism, AreaTablesBuiltOnDemandGiveIdenticalImages) {
+    // The area filter's row prefix tables are built a band at a time by whichever worker first
+    // reads it (the demo's 512x512 textures): one and two threads, each on a scene of its own
+    // whose tables start empty, give the same image.
+    std::string scenes = CMAM_SCENES_DIR;
+    pbrt::SceneDesc d = pbrt::parse_file(scenes + "/demo.pbrt");
+    BuildOptions bo;
+    bo.spp_override = 4;
+    bo.filter = texture::FilterKind::Area;
+    Framebuffer fb[2];
+    for (int threads : {1, 2}) {
+        auto s = build_scene(d, bo, {});
+        s->film.x0 = 120;
+        s->film.x1 = 440;
+        s->film.y0 = 170;
+        s->film.y1 = 300;  // the floor and the astronaut
+        RenderOptions ro;
+        ro.threads = threads;
+        fb[threads - 1] = render::render(*s, ro, nullptr);
+        std::size_t built = 0;
+        for (const auto& [key, tex] : s->images) built += tex->row_prefix_bytes();
+        EXPECT_GT(built, 0u);
+    }
+    ASSERT_EQ(fb[0].rgb.size(), fb[1].rgb.size());
+    EXPECT_EQ(0, std::memcmp(fb[0].rgb.data(), fb[1].rgb.data(), fb[0].rgb.size() * sizeof(float)));
+}
+
 TEST(Determinism, AGeneratorsKthNumberIsTheOneItDrawsKth) {
     // The film computes sample k's jitter as the pixel generator's numbers 2k and 2k + 1
     // (Rng::float_at) rather than drawing the pixel's numbers in sequence: the two must agree

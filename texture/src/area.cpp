@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <thread>
 
 #include "kernels.h"
 
@@ -37,7 +38,7 @@ void prefix_row(const Image& image, int j, const double* mean, float* out) {
 }
 }  // namespace
 
-RowPrefixTable::RowPrefixTable(const Image& image)
+RowPrefixTable::RowPrefixTable(const Image& image, OnDemand)
     : m_w(image.width()),
       m_h(image.height()),
       m_c(image.channels()),
@@ -53,12 +54,56 @@ RowPrefixTable::RowPrefixTable(const Image& image)
     // the row's end.
     m_walk_w = margin ? double(m_row_len - 3) : double(m_w);
     const std::size_t stride = static_cast<std::size_t>(m_row_len) * m_c;
-    m_d = TexelBuffer(stride * static_cast<std::size_t>(m_rows));  // zero-filled
+    m_d = TexelBuffer(stride * static_cast<std::size_t>(m_rows), TexelBuffer::Unfilled{});
+    m_source = &image;
+    if (!margin) {
+        m_band_count = (m_h + kBandRows - 1) / kBandRows;
+        m_bands = std::make_unique<std::atomic<uint8_t>[]>(static_cast<std::size_t>(m_band_count));
+        return;
+    }
+    build_rows(0, m_h);
+    m_source = nullptr;
+    for (int j = m_h; j < m_rows; ++j)  // the margin's rows: row j is row j mod H
+        std::copy_n(m_d.data() + stride * static_cast<std::size_t>(j % m_h), stride,
+                    m_d.data() + stride * static_cast<std::size_t>(j));
+}
+
+RowPrefixTable::RowPrefixTable(const Image& image) : RowPrefixTable(image, OnDemand{}) {
+    build_all();
+    m_source = nullptr;
+    m_bands.reset();
+    m_band_count = 0;
+}
+
+RowPrefixTable::RowPrefixTable(const RowPrefixTable& other)
+    : m_w(other.m_w),
+      m_h(other.m_h),
+      m_c(other.m_c),
+      m_wrap_s(other.m_wrap_s),
+      m_wrap_t(other.m_wrap_t),
+      m_mean(other.m_mean),
+      m_row_len(other.m_row_len),
+      m_rows(other.m_rows),
+      m_walk_w(other.m_walk_w) {
+    other.build_all();
+    m_d = other.m_d;
+}
+
+RowPrefixTable& RowPrefixTable::operator=(const RowPrefixTable& other) {
+    if (this != &other) *this = RowPrefixTable(other);
+    return *this;
+}
+
+// Rows j0 to j1 - 1 from the source image: entry 0 is 0, then the prefix sums, then the
+// margin's knots.
+void RowPrefixTable::build_rows(int j0, int j1) const {
+    const std::size_t stride = static_cast<std::size_t>(m_row_len) * m_c;
     const double mean[4] = {m_mean[0], m_mean[1], m_mean[2], m_mean[3]};
-    for (int j = 0; j < m_h; ++j) {
+    for (int j = j0; j < j1; ++j) {
         float* row = m_d.data() + stride * static_cast<std::size_t>(j);
         detail::with_channels(m_c, [&]<int NC>() {
-            prefix_row<NC>(image, j, mean, row);
+            for (int c = 0; c < NC; ++c) row[c] = 0;
+            prefix_row<NC>(*m_source, j, mean, row);
             // The margin's knots: R(k) with Repeat's extension, R(q W + r) = q D[W] + D[r].
             for (int k = m_w + 1; k < m_row_len; ++k) {
                 double r[NC];
@@ -68,9 +113,58 @@ RowPrefixTable::RowPrefixTable(const Image& image)
             }
         });
     }
-    for (int j = m_h; j < m_rows; ++j)  // the margin's rows: row j is row j mod H
-        std::copy_n(m_d.data() + stride * static_cast<std::size_t>(j % m_h), stride,
-                    m_d.data() + stride * static_cast<std::size_t>(j));
+}
+
+void RowPrefixTable::build_band(int64_t b) const {
+    std::atomic<uint8_t>& state = m_bands[static_cast<std::size_t>(b)];
+    uint8_t expected = 0;
+    if (state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+        const int j0 = static_cast<int>(b) * kBandRows;
+        build_rows(j0, std::min(j0 + kBandRows, m_h));
+        state.store(2, std::memory_order_release);
+        return;
+    }
+    while (state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+}
+
+inline void RowPrefixTable::ensure_band(int64_t b) const {
+    if (m_bands[static_cast<std::size_t>(b)].load(std::memory_order_acquire) != 2) [[unlikely]]
+        build_band(b);
+}
+
+// A piece in row j reads that row's knots and, at most, the first entry of the row stored
+// after it (EdgeWalk::piece), so that row is built too.
+void RowPrefixTable::ensure_rows(double y0, double y1) const {
+    const int64_t j0 = floor_to_int(y0), j1 = floor_to_int(y1);
+    if (j0 >= 0 && j1 < m_h) [[likely]] {
+        const int64_t last = std::min<int64_t>(j1 + 1, m_h - 1) / kBandRows;
+        for (int64_t b = j0 / kBandRows; b <= last; ++b) ensure_band(b);
+        return;
+    }
+    if (j1 - j0 + 1 >= m_h) {
+        build_all();
+        return;
+    }
+    for (int64_t j = j0; j <= j1; ++j) {
+        const int64_t jj = wrap_index(j, m_h, m_wrap_t);
+        if (jj < 0) continue;  // a Black row: nothing read
+        ensure_band(jj / kBandRows);
+        if (jj + 1 < m_h) ensure_band((jj + 1) / kBandRows);
+    }
+}
+
+void RowPrefixTable::build_all() const {
+    for (int b = 0; b < m_band_count; ++b) ensure_band(b);
+}
+
+std::size_t RowPrefixTable::memory_bytes() const {
+    if (!m_bands) return m_d.size() * sizeof(float);
+    int rows = 0;
+    for (int b = 0; b < m_band_count; ++b)
+        if (m_bands[static_cast<std::size_t>(b)].load(std::memory_order_acquire) == 2)
+            rows += std::min(kBandRows, m_h - b * kBandRows);
+    return static_cast<std::size_t>(rows) * static_cast<std::size_t>(m_row_len) * m_c *
+           sizeof(float);
 }
 
 namespace {
@@ -715,13 +809,15 @@ Texel RowPrefixTable::integral_in_range(const Vec2d* v0, int n, double area2) co
     n = std::min(n, 8);
     const double area = std::abs(area2) / 2;
     // Periodic modes: move the polygon to the base period (small knots, no cancellation).
-    double xmin = v0[0].u, ymin = v0[0].v;
+    double xmin = v0[0].u, ymin = v0[0].v, ymax = v0[0].v;
     for (int i = 1; i < n; ++i) {
         xmin = std::min(xmin, v0[i].u);
         ymin = std::min(ymin, v0[i].v);
+        ymax = std::max(ymax, v0[i].v);
     }
     const double sx = period_shift(xmin, m_w, m_wrap_s), sy = period_shift(ymin, m_h, m_wrap_t);
     for (int i = 0; i < n; ++i) v[i] = {v0[i].u - sx, v0[i].v - sy};
+    if (m_bands) ensure_rows(ymin - sy, ymax - sy);
     double acc[4] = {0, 0, 0, 0};
     detail::with_channels(m_c, [&]<int NC>() { integrate<NC>(v, n, acc); });
     const double sign = area2 < 0 ? -1 : 1;

@@ -38,7 +38,7 @@ const RowPrefixTable& FilteredTexture::row_prefix(int l) const {
     const Image& level = l > 0 ? pyramid().level(l) : m_image;
     std::lock_guard<std::mutex> lock(m_build);
     if (!m_row_prefix[l]) {
-        m_row_prefix[l] = std::make_unique<RowPrefixTable>(level);
+        m_row_prefix[l] = std::make_unique<RowPrefixTable>(level, RowPrefixTable::OnDemand{});
         m_row_prefix_ready[l].store(m_row_prefix[l].get(), std::memory_order_release);
     }
     return *m_row_prefix[l];

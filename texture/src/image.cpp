@@ -34,7 +34,7 @@ float linear_to_srgb(float c) {
     return 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-TexelBuffer::TexelBuffer(std::size_t count) : m_size(count) {
+TexelBuffer::TexelBuffer(std::size_t count, Unfilled) : m_size(count) {
     if (count == 0) return;
     constexpr std::size_t kHuge = std::size_t{2} << 20;
     // Four floats of slack after the last texel: a filter may load a 3-channel texel as four
@@ -50,6 +50,12 @@ TexelBuffer::TexelBuffer(std::size_t count) : m_size(count) {
     // 2 MB the buffer never uses.
     if (align == kHuge) madvise(m_data, bytes / kHuge * kHuge, MADV_HUGEPAGE);
 #endif
+    std::memset(m_data + count, 0, 4 * sizeof(float));
+}
+
+TexelBuffer::TexelBuffer(std::size_t count) : TexelBuffer(count, Unfilled{}) {
+    if (count == 0) return;
+    const std::size_t bytes = count * sizeof(float);
 #if defined(__linux__) && defined(MADV_POPULATE_WRITE)
     // From 64 KB, the pages are made present in one call rather than faulted in one at a time
     // by the zero fill below (a fault per 4 KB page, each costly under virtualisation; kernels

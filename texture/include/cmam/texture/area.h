@@ -9,6 +9,9 @@
 #include <cmam/texture/footprint.h>
 #include <cmam/texture/image.h>
 
+#include <atomic>
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace cmam::texture {
@@ -22,13 +25,29 @@ class FilteredTexture;
 class RowPrefixTable {
   public:
     RowPrefixTable() = default;
+    /// The whole table, built now.
     explicit RowPrefixTable(const Image& image);
+    /// Rows built on demand, a band of kBandRows at a time, when a region first reads them (by
+    /// whichever thread gets there first; the others wait for that band): a render that reads a
+    /// few regions of a large texture builds and holds only the bands they cross. `image` must
+    /// outlive the table. A table with a margin (below) is small and built now.
+    struct OnDemand {};
+    RowPrefixTable(const Image& image, OnDemand);
+    static constexpr int kBandRows = 16;
+    /// A copy is a whole table (the source's rows not built yet are built first).
+    RowPrefixTable(const RowPrefixTable& other);
+    RowPrefixTable& operator=(const RowPrefixTable& other);
+    RowPrefixTable(RowPrefixTable&&) noexcept = default;
+    RowPrefixTable& operator=(RowPrefixTable&&) noexcept = default;
 
     int width() const { return m_w; }
     int height() const { return m_h; }
     int channels() const { return m_c; }
     const Texel& mean() const { return m_mean; }
-    std::size_t memory_bytes() const { return m_d.size() * sizeof(float); }
+    /// Memory of the rows built so far.
+    std::size_t memory_bytes() const;
+    /// Builds every row not built yet (a benchmark's set-up, outside its timing).
+    void build_all() const;
 
     /// Exact integral of the box-reconstructed texture over the convex polygon `v` (n >= 3
     /// vertices in either orientation, texel space of this image: texel (i,j) covers
@@ -58,8 +77,21 @@ class RowPrefixTable {
     int m_row_len = 0, m_rows = 0;
     double m_walk_w = 0;
     // m_rows rows of m_row_len * C floats, in the image's buffer type: aligned and, when large,
-    // on transparent huge pages, since a region's boundary reads one row after another.
-    TexelBuffer m_d;
+    // on transparent huge pages, since a region's boundary reads one row after another. Mutable:
+    // a table built on demand fills its rows as regions first read them.
+    mutable TexelBuffer m_d;
+    // Built on demand: the image the rows are made from, and each band's state (0 not built,
+    // 1 being built, 2 built); null when the whole table was built at once.
+    const Image* m_source = nullptr;
+    std::unique_ptr<std::atomic<uint8_t>[]> m_bands;
+    int m_band_count = 0;
+
+    void build_rows(int j0, int j1) const;
+    // Makes sure the rows that a region spanning rows floor(y0)..floor(y1) (before the wrap)
+    // reads are built.
+    void ensure_rows(double y0, double y1) const;
+    void ensure_band(int64_t b) const;
+    void build_band(int64_t b) const;
 
     template <int NC>
     void integrate(const Vec2d* v, int n, double* acc) const;

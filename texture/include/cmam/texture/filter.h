@@ -85,9 +85,11 @@ class FilteredTexture {
     const SummedAreaTable& sat() const;
     /// Summed-area table of MIP level `l` (level 0 is sat()); built on first use.
     const SummedAreaTable& level_sat(int l) const;
-    /// Row prefix table of MIP level `l` for the area filter; built on first use.
+    /// Row prefix table of MIP level `l` for the area filter: made on first use, its rows built
+    /// as regions first read them (a table of at most RowPrefixTable::kMarginMaxSize texels a
+    /// side that repeats both ways is built whole).
     const RowPrefixTable& row_prefix(int l) const;
-    /// Bytes of the row prefix tables built so far (part of memory_bytes()).
+    /// Bytes of the row prefix tables' rows built so far (part of memory_bytes()).
     std::size_t row_prefix_bytes() const;
     std::size_t memory_bytes() const;  // level 0 + whatever has been built
     bool pyramid_built() const { return m_pyr_ready.load(std::memory_order_acquire) != nullptr; }

@@ -49,6 +49,11 @@ class TexelBuffer {
   public:
     TexelBuffer() = default;
     explicit TexelBuffer(std::size_t count);  // zero-filled
+    /// Not filled: the contents are indeterminate (the slack after them is zero), and the
+    /// pages are made present only as they are first written. For tables filled in parts, on
+    /// demand.
+    struct Unfilled {};
+    TexelBuffer(std::size_t count, Unfilled);
     TexelBuffer(const TexelBuffer& other);
     TexelBuffer(TexelBuffer&& other) noexcept;
     TexelBuffer& operator=(TexelBuffer other) noexcept;
