@@ -687,7 +687,8 @@ struct Tracer {
                            counts && counts->count_lookups ? &counts->lookups : nullptr,
                            h.object_id,
                            cmam,
-                           nullptr};
+                           nullptr,
+                           h.prim->u_periodic};
             footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, uv);
             const HitFootprint& at = ctx.footprints;
             const HitDifferential& hd = at.diff;

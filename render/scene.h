@@ -276,6 +276,10 @@ struct Primitive {
     // Quadrics: object_from_world / world_from_object as 3x4, double precision
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
+    // Its u is a longitude round the whole circle, period 1 (a sphere, disk, cylinder, cone,
+    // paraboloid or hyperboloid with phimax 360): the CMAM takes its neighbours across the
+    // seam the short way round (algorithms.md §6.3).
+    bool u_periodic = false;
     double height = 0, inner_radius = 0;
     // Quadrics: the scale of a transform that keeps them round (a rotation, reflection or
     // uniform scale plus a translation), 0 for any other.

@@ -151,13 +151,18 @@ Rgb marble(const TextureNode& n, const TexContext& ctx) {
     return 1.5f * mix(s0, s1);
 }
 
-// The CMAM's options for node `n`: the scene's, and which of the node's (s,t) are angles (the
-// longitude of a spherical or cylindrical mapping, period 1), whose neighbours across the seam
-// are taken the short way round.
-texture::CmamOptions cmam_options(const Scene& scene, const TextureNode& n) {
+// The CMAM's options for node `n` at a hit: the scene's, and which of the node's (s,t) are
+// angles, whose neighbours across the seam are taken the short way round: the longitude of a
+// spherical or cylindrical mapping (period 1), or under the uv mapping the u of a closed
+// quadric (period 1 in u, |uscale| in s).
+texture::CmamOptions cmam_options(const Scene& scene, const TextureNode& n, const TexContext& ctx) {
     texture::CmamOptions o = scene.cmam;
     o.periodic_u = n.mapping == TextureNode::Mapping::Cylindrical;
     o.periodic_v = n.mapping == TextureNode::Mapping::Spherical;
+    if (n.mapping == TextureNode::Mapping::Uv && ctx.u_periodic && n.su != 0) {
+        o.periodic_u = true;
+        o.period_u = std::abs(double(n.su));
+    }
     return o;
 }
 
@@ -165,7 +170,7 @@ texture::CmamOptions cmam_options(const Scene& scene, const TextureNode& n) {
 // filtered value out; it records what it filtered where the context asks.
 texture::Texel cmam_texel(const Scene& scene, const TextureNode& n, int node, double s, double t,
                           const TexContext& ctx) {
-    texture::CmamOptions o = cmam_options(scene, n);
+    texture::CmamOptions o = cmam_options(scene, n, ctx);
     o.filter = n.filter.kind;
     o.max_aniso = n.filter.max_aniso;
     texture::CmamCache& cache =
@@ -223,7 +228,7 @@ Rgb checkerboard(const Scene& scene, const TextureNode& n, int node, const TexCo
         texture::Vec2d to_stratum;
         fp = texture::cmam_footprint(
             ctx.cmam->cache(ctx.object, static_cast<uint32_t>(node), ctx.footprints.path),
-            ctx.footprints.tag, s, t, cmam_options(scene, n), &to_stratum);
+            ctx.footprints.tag, s, t, cmam_options(scene, n, ctx), &to_stratum);
         s += to_stratum.u;
         t += to_stratum.v;
     }

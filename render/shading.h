@@ -31,6 +31,7 @@ struct TexContext {
     uint32_t object = 0;                // the primitive hit (the CMAM's textured object)
     CmamRowState* cmam = nullptr;       // the strip's CMAM caches (null: no CMAM)
     CmamRecord* cmam_record = nullptr;  // optional: what a CMAM lookup filtered
+    bool u_periodic = false;            // the surface's u has period 1 (Primitive::u_periodic)
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the

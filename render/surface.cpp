@@ -112,6 +112,7 @@ bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
     }
     ctx.p = b0 * positions[i0] + b1 * positions[i1] + b2 * positions[i2];
     ctx.object = id;
+    ctx.u_periodic = u_periodic;
     if (eval_texture(*scene, alpha, ctx).r == 0) return true;
     return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
 }

@@ -449,43 +449,65 @@ TEST(Cmam2d, JitteredNeighboursNearlyInLineAreFittedOverFour) {
 // values of the same rows unwrapped (u continuing past 1 on a repeating texture), in u for
 // periodic_u and in v for periodic_v. Without it the region spans the whole texture.
 TEST(Cmam2d, NeighboursAcrossAPeriodicSeamAreTakenTheShortWay) {
+    // Period 1 (a mapping's longitude) and 3 (a closed quadric's u under uscale 3): rows of
+    // samples across the seam, wrapped into one period, give the regions and values of the same
+    // rows unwrapped.
     FilteredTexture tex(tmip1());
-    for (const bool along_v : {false, true}) {
-        SCOPED_TRACE(along_v ? "periodic_v" : "periodic_u");
-        CmamOptions o;
-        o.two_d = true;
-        o.filter = FilterKind::Area;
-        CmamOptions periodic = o;
-        (along_v ? periodic.periodic_v : periodic.periodic_u) = true;
-        CmamCache wrapped, unwrapped;
-        CmamResult w, uw;
-        // Row 0 crosses the seam after its third sample, row 1 after its second.
-        const double row_u[2][5] = {{0.88, 0.93, 0.98, 1.03, 1.08}, {0.90, 0.95, 1.00, 1.05, 1.10}};
-        for (uint32_t row = 0; row < 2; ++row)
-            for (uint32_t k = 0; k < 5; ++k) {
-                const double u = row_u[row][k] + 0.001 * row, a = 0.4 + 0.03 * row;
-                const double seam = u >= 1 ? u - 1 : u;
-                auto look = [&](CmamCache& c, double x, const CmamOptions& opts) {
-                    return along_v ? cmam_lookup_with_info(tex, c, {row, 0, k}, a, x, opts)
-                                   : cmam_lookup_with_info(tex, c, {row, 0, k}, x, a, opts);
-                };
-                w = look(wrapped, seam, periodic);
-                uw = look(unwrapped, u, o);
-                if (row == 0 && k == 0) continue;
-                EXPECT_NEAR(w.region.a.u, uw.region.a.u, 1e-9) << row << " " << k;
-                EXPECT_NEAR(w.region.a.v, uw.region.a.v, 1e-9) << row << " " << k;
-                EXPECT_NEAR(w.region.b.u, uw.region.b.u, 1e-9) << row << " " << k;
-                EXPECT_NEAR(w.region.b.v, uw.region.b.v, 1e-9) << row << " " << k;
-                EXPECT_NEAR(w.value[0], uw.value[0], 1e-5) << row << " " << k;
+    for (const double period : {1.0, 3.0})
+        for (const bool along_v : {false, true}) {
+            SCOPED_TRACE(along_v ? "periodic_v" : "periodic_u");
+            SCOPED_TRACE(period);
+            CmamOptions o;
+            o.two_d = true;
+            o.filter = FilterKind::Area;
+            CmamOptions periodic = o;
+            (along_v ? periodic.periodic_v : periodic.periodic_u) = true;
+            (along_v ? periodic.period_v : periodic.period_u) = period;
+            CmamCache wrapped, unwrapped;
+            CmamResult w, uw;
+            // Row 0 crosses the seam after its third sample, row 1 after its second.
+            const double row_u[2][5] = {{0.88, 0.93, 0.98, 1.03, 1.08},
+                                        {0.90, 0.95, 1.00, 1.05, 1.10}};
+            for (uint32_t row = 0; row < 2; ++row)
+                for (uint32_t k = 0; k < 5; ++k) {
+                    const double u = (row_u[row][k] + 0.001 * row) * period, a = 0.4 + 0.03 * row;
+                    const double seam = u >= period ? u - period : u;
+                    auto look = [&](CmamCache& c, double x, const CmamOptions& opts) {
+                        return along_v ? cmam_lookup_with_info(tex, c, {row, 0, k}, a, x, opts)
+                                       : cmam_lookup_with_info(tex, c, {row, 0, k}, x, a, opts);
+                    };
+                    w = look(wrapped, seam, periodic);
+                    uw = look(unwrapped, u, o);
+                    if (row == 0 && k == 0) continue;
+                    EXPECT_NEAR(w.region.a.u, uw.region.a.u, 1e-9) << row << " " << k;
+                    EXPECT_NEAR(w.region.a.v, uw.region.a.v, 1e-9) << row << " " << k;
+                    EXPECT_NEAR(w.region.b.u, uw.region.b.u, 1e-9) << row << " " << k;
+                    EXPECT_NEAR(w.region.b.v, uw.region.b.v, 1e-9) << row << " " << k;
+                    EXPECT_NEAR(w.value[0], uw.value[0], 1e-5) << row << " " << k;
+                }
+            // The last sample of row 1: its left neighbour (1.05) is past the seam as it is, but
+            // the sample above (1.08, as 0.08) is too, and the one before it in row 0 (1.03) as
+            // well; the plain CMAM sees the step from 0.99 to 0.01 in row 0 as a whole period.
+            EXPECT_LT(std::max(length(w.region.a), length(w.region.b)), period);
+            CmamCache seam_row;
+            const double before = 0.98 * period, after = 0.03 * period;
+            cmam_lookup(tex, seam_row, {0, 0, 0}, along_v ? 0.4 : before, along_v ? before : 0.4,
+                        o);
+            const CmamResult across = cmam_lookup_with_info(
+                tex, seam_row, {0, 0, 1}, along_v ? 0.4 : after, along_v ? after : 0.4, o);
+            EXPECT_GT(std::max(length(across.region.a), length(across.region.b)), 3.0 * period);
+            // Steps of more than half a unit but less than half the period do not cross the
+            // seam: they stay as they are.
+            CmamCache wide_p, wide;
+            for (uint32_t k = 0; k < 4; ++k) {
+                const double x = (0.1 + 0.25 * k) * period;
+                const CmamResult a = cmam_lookup_with_info(tex, wide_p, {0, 0, k},
+                                                           along_v ? 0.4 : x, along_v ? x : 0.4,
+                                                           periodic),
+                                 b = cmam_lookup_with_info(tex, wide, {0, 0, k}, along_v ? 0.4 : x,
+                                                           along_v ? x : 0.4, o);
+                EXPECT_NEAR(length(a.region.a), length(b.region.a), 1e-9) << k;
+                EXPECT_NEAR(a.value[0], b.value[0], 1e-6) << k;
             }
-        // The last sample of row 1: its left neighbour (1.05) is past the seam as it is, but the
-        // sample above (1.08, as 0.08) is too, and the one before it in row 0 (1.03) as well;
-        // the plain CMAM sees the step from 0.99 to 0.01 in row 0 as a whole texture's width.
-        EXPECT_LT(std::max(length(w.region.a), length(w.region.b)), 1.0);
-        CmamCache seam_row;
-        cmam_lookup(tex, seam_row, {0, 0, 0}, along_v ? 0.4 : 0.98, along_v ? 0.98 : 0.4, o);
-        const CmamResult across = cmam_lookup_with_info(
-            tex, seam_row, {0, 0, 1}, along_v ? 0.4 : 0.03, along_v ? 0.03 : 0.4, o);
-        EXPECT_GT(std::max(length(across.region.a), length(across.region.b)), 3.0);
-    }
+        }
 }

@@ -556,6 +556,47 @@ TEST(Aov, FootprintAndTextureOfAFrontoParallelPlane) {
 // source with one: ray differentials (dP/dx, dP/dy) and ray cones (their cross-section on the
 // tangent plane). One pixel is 0.0390625 units on the plane z = 10, 2.5 texels of the
 // 512^2 texture under the mapping, where the surface's own (u,v) would give 5.
+TEST(Aov, TheCmamTakesAClosedQuadricsSeamTheShortWay) {
+    // A whole sphere's u is a longitude. Seen with its seam (u = 0 and 1) facing the camera, a
+    // vertical line through the image's centre, the CMAM's neighbours across it are a small step
+    // apart the short way round, not a whole texture apart: the regions it builds (the footprint
+    // AOV) along rows crossing the seam stay as small as their neighbours', under the 1-D and
+    // the 2-D CMAM and at any uscale (the period in s). Without the wrap they span the texture.
+    const std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
+    for (const bool two_d : {false, true})
+        for (const char* uscale : {"1", "3"}) {
+            SCOPED_TRACE(two_d ? "2-D" : "1-D");
+            SCOPED_TRACE(uscale);
+            const pbrt::SceneDesc d = pbrt::parse_string(
+                camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
+                          "\" \"string lod\" \"cmam\" \"float uscale\" " + uscale +
+                          " Material \"matte\" \"texture Kd\" \"b\" LightSource \"distant\" "
+                          "AttributeBegin Translate 0 0 5 Rotate 90 0 1 0 Rotate -90 1 0 0 "
+                          "Shape \"sphere\" \"float radius\" 2 AttributeEnd"),
+                "t.pbrt");
+            BuildOptions bo;
+            bo.spp_override = 1;
+            bo.cmam.two_d = two_d;
+            auto s = build_scene(d, bo, {});
+            s->film.x0 = 240;
+            s->film.x1 = 272;
+            s->film.y0 = 250;
+            s->film.y1 = 254;
+            RenderOptions o;
+            o.aov = AovKind::Footprint;
+            const Framebuffer fp = render::render(*s, o, nullptr);
+            const int w = s->film.x1 - s->film.x0;
+            double largest = 0;
+            for (int y = 1; y < s->film.y1 - s->film.y0; ++y)  // rows with a row above
+                for (int x = 1; x < w; ++x)
+                    largest = std::max<double>(largest, fp.rgb[3 * (y * w + x)]);
+            // About one texel a pixel at uscale 1 (the sphere's 12.6 units of longitude over 512
+            // texels, seen 3 units away at 512 pixels for 90 degrees), three at uscale 3.
+            EXPECT_GT(largest, 0.5);
+            EXPECT_LT(largest, 8.0);
+        }
+}
+
 TEST(Aov, MappedTexturesReportTheFootprintTheirLookupUses) {
     for (const char* lod : {"differentials", "cones", "cones-aniso"}) {
         SCOPED_TRACE(lod);

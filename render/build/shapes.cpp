@@ -43,6 +43,7 @@ bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     prim.radius = r;
     double phimax = std::clamp(finite_float(e, "phimax", 360), 0.0, 360.0);
     prim.phi_max = phimax * std::numbers::pi / 180;
+    prim.u_periodic = phimax == 360;
     if (e.type == "sphere") {
         prim.kind = Primitive::Kind::Sphere;
         double z0 = std::clamp(finite_float(e, "zmin", -r), -r, r);
@@ -77,7 +78,9 @@ void Builder::mesh_primitive(const pbrt::ShapeDesc& s, Primitive& prim) {
 bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
     mesh_primitive(s, prim);
-    const QuadricMesh mesh = tessellate(e.type, quadric_params(e));
+    const QuadricParams params = quadric_params(e);
+    prim.u_periodic = params.phimax >= 360;
+    const QuadricMesh mesh = tessellate(e.type, params);
     e.params.check_unused("shape " + in_quotes(e.type), m_warn, {"alpha", "shadowalpha"});
     return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim,
                       NormalSide::Quadric);

@@ -236,15 +236,16 @@ struct CacheStep {
 }
 
 // Moves `e` by whole periods along the periodic coordinates to the copy nearest the sample at
-// (u, v); s and t follow, at `kw` and `kh` texels per unit of u and v.
+// (u, v); s and t follow, at `kw` and `kh` texels per unit of u and v. (A period of 1 moves it
+// by round(u - e.u), exactly: the division and product by 1 are exact.)
 void nearest_period(CmamCache::Entry& e, double u, double v, double kw, double kh,
                     const CmamOptions& o) {
-    if (o.periodic_u) {
-        e.u += std::round(u - e.u);
+    if (o.periodic_u && o.period_u > 0 && std::isfinite(o.period_u)) {
+        e.u += std::round((u - e.u) / o.period_u) * o.period_u;
         e.s = e.u * kw;
     }
-    if (o.periodic_v) {
-        e.v += std::round(v - e.v);
+    if (o.periodic_v && o.period_v > 0 && std::isfinite(o.period_v)) {
+        e.v += std::round((v - e.v) / o.period_v) * o.period_v;
         e.t = e.v * kh;
     }
 }

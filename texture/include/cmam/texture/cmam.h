@@ -75,11 +75,13 @@ struct CmamOptions {
     /// so the two vectors approximate the screen-space Jacobian columns d(s,t)/dx and d(s,t)/dy
     /// instead of two nearly collinear steps along the row. Meant for scanline tags.
     bool two_d = false;
-    /// Texture coordinates that are angles, u or v of period 1 (a spherical or cylindrical
-    /// mapping's longitude): each cached neighbour is taken the short way round, whole periods
-    /// added to it, so that samples on either side of the seam are neighbours one step apart
-    /// rather than a whole texture apart (algorithms.md §6.3).
+    /// Texture coordinates that are angles, u or v of period `period_u` or `period_v` (a
+    /// spherical or cylindrical mapping's longitude, period 1; a closed quadric's own u, scaled
+    /// by a uv mapping's uscale): each cached neighbour is taken the short way round, whole
+    /// periods added to it, so that samples on either side of the seam are neighbours one step
+    /// apart rather than a whole texture apart (algorithms.md §6.3).
     bool periodic_u = false, periodic_v = false;
+    double period_u = 1, period_v = 1;
 };
 
 /// The last two samples of one textured object (the paper's Figure 6 fields): tag and
