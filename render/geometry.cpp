@@ -456,11 +456,16 @@ void Scene::commit() {
     // cones); 24 bytes a triangle, so not made when nothing reads them.
     const bool offsets = footprint_methods.has(FootprintMethod::Differentials) ||
                          footprint_methods.has(FootprintMethod::ConesAniso);
-    auto gradients = [this, offsets](Primitive& pr) {
-        if (offsets && pr.kind == Primitive::Kind::Triangles && pr.material >= 0 &&
-            pr.material < static_cast<int>(materials.size()) &&
-            materials[pr.material].reads_textures())
-            pr.make_uv_gradients();
+    // Their (u,v) charts for the CMAM, which takes no neighbour across a seam (a closed
+    // quadric's tessellation has its own seam, taken the short way round instead).
+    const bool charts = footprint_methods.has(FootprintMethod::Cmam);
+    auto gradients = [this, offsets, charts](Primitive& pr) {
+        if (pr.kind != Primitive::Kind::Triangles || pr.material < 0 ||
+            pr.material >= static_cast<int>(materials.size()) ||
+            !materials[pr.material].reads_textures())
+            return;
+        if (offsets) pr.make_uv_gradients();
+        if (charts && !pr.u_periodic) pr.make_uv_charts();
     };
     for (auto& pr : primitives) gradients(*pr);
     for (Object& o : objects)

@@ -690,6 +690,7 @@ struct Tracer {
                            nullptr,
                            h.prim->u_periodic};
             footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, uv);
+            ctx.footprints.tag.patch = h.prim->uv_chart(h.triangle);  // the CMAM's (u,v) chart
             const HitFootprint& at = ctx.footprints;
             const HitDifferential& hd = at.diff;
             if (counts && at.dropped) ++counts->dropped_differentials;

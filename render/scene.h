@@ -260,6 +260,14 @@ struct Primitive {
     /// basis divided through and combined with the vertices' (u,v), which local_uv_offsets
     /// otherwise does per hit (in float, for triangles without gradients).
     void make_uv_gradients();
+    // Triangles read by the CMAM: per triangle, its (u,v) chart, a set of triangles joined
+    // through edges whose two ends have the same position and the same (u,v) on both sides, so
+    // that (u,v) is continuous across them; empty when the mesh is one chart. The CMAM takes
+    // no neighbour from another chart (algorithms.md §6.3: across a seam (u,v) jumps).
+    std::vector<uint32_t> uv_charts;
+    /// Makes uv_charts (made by Scene::commit when a texture reads the CMAM).
+    void make_uv_charts();
+    uint32_t uv_chart(uint32_t tri) const { return uv_charts.empty() ? 0 : uv_charts[tri]; }
     // Curves (pbrt-v3's "curve" shape, algorithms.md §20): cubic Bezier segments, four control
     // points each (x, y, z and the radius, half the width, in the primitive's space: Embree's
     // vertex buffer, read where it is), the segment's widths at u = 0 and 1, and for ribbons the
@@ -277,7 +285,8 @@ struct Primitive {
     std::array<double, 12> object_from_world{}, world_from_object{};
     double radius = 1, zmin = -1, zmax = 1, theta_zmin = 0, theta_zmax = 0, phi_max = 0;
     // Its u is a longitude round the whole circle, period 1 (a sphere, disk, cylinder, cone,
-    // paraboloid or hyperboloid with phimax 360): the CMAM takes its neighbours across the
+    // paraboloid or hyperboloid with phimax 360, or a mesh whose charts meet themselves only
+    // where u moves by whole units: make_uv_charts): the CMAM takes its neighbours across the
     // seam the short way round (algorithms.md §6.3).
     bool u_periodic = false;
     double height = 0, inner_radius = 0;

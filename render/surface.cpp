@@ -2,7 +2,11 @@
 // normal changes of an offset along it (through instance transforms), points sampled on it for
 // area lights, and alpha cut-outs.
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <unordered_map>
+#include <vector>
 
 #include "render/scene.h"
 #include "render/shading.h"
@@ -265,6 +269,133 @@ void Primitive::make_uv_gradients() {
                                       static_cast<float>(k1 * l1[2] + k2 * l2[2]));
         }
     }
+}
+
+void Primitive::make_uv_charts() {
+    uv_charts.clear();
+    if (kind != Kind::Triangles) return;
+    const std::size_t n = indices.size() / 3;
+    // Vertices by position, bit for bit (-0 is 0): split vertices (for their normals or their
+    // (u,v)) are one point of the surface.
+    struct Point {
+        std::array<uint32_t, 3> bits;
+        bool operator==(const Point&) const = default;
+    };
+    struct PointHash {
+        std::size_t operator()(const Point& p) const {
+            uint64_t h = 0x9e3779b97f4a7c15ull;
+            for (uint32_t b : p.bits) h = (h ^ b) * 0x100000001b3ull;
+            return static_cast<std::size_t>(h ^ (h >> 29));
+        }
+    };
+    auto bits = [](float f) { return std::bit_cast<uint32_t>(f + 0.0f); };
+    std::unordered_map<Point, uint32_t, PointHash> point_ids;
+    point_ids.reserve(positions.size());
+    std::vector<uint32_t> point_of(positions.size());
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        const Vec3& p = positions[i];
+        point_of[i] = point_ids
+                          .try_emplace(Point{{bits(p.x), bits(p.y), bits(p.z)}},
+                                       static_cast<uint32_t>(point_ids.size()))
+                          .first->second;
+    }
+    // A point whose vertices carry more than two (u,v) is singular (a pole, where u is any
+    // longitude): its (u,v) says nothing about continuity.
+    std::vector<uint8_t> singular(point_ids.size(), 0);
+    if (!uvs.empty()) {
+        std::vector<std::array<float, 2>> uv1(point_ids.size()), uv2(point_ids.size());
+        std::vector<uint8_t> count(point_ids.size(), 0);  // distinct (u,v) seen, at most 3
+        for (std::size_t i = 0; i < positions.size(); ++i) {
+            const uint32_t p = point_of[i];
+            const std::array<float, 2>& uv = uvs[i];
+            if (count[p] == 0) {
+                uv1[p] = uv;
+                count[p] = 1;
+            } else if (count[p] == 1 && uv != uv1[p]) {
+                uv2[p] = uv;
+                count[p] = 2;
+            } else if (count[p] == 2 && uv != uv1[p] && uv != uv2[p]) {
+                count[p] = 3;
+                singular[p] = 1;
+            }
+        }
+    }
+    // A corner's (u,v): the vertex's, or without (u,v) the triangle's own (0,0), (1,0), (1,1).
+    auto uv_at = [&](std::size_t t, int k) -> std::array<float, 2> {
+        static constexpr std::array<float, 2> kDefault[3] = {{0, 0}, {1, 0}, {1, 1}};
+        return uvs.empty() ? kDefault[k] : uvs[indices[3 * t + k]];
+    };
+    // Triangles joined through the edges they share with the same (u,v) at both ends, singular
+    // ends aside (union-find with path halving); an edge shared with other (u,v) is a seam.
+    std::vector<uint32_t> parent(n);
+    for (std::size_t t = 0; t < n; ++t) parent[t] = static_cast<uint32_t>(t);
+    auto find = [&](uint32_t t) {
+        while (parent[t] != t) t = parent[t] = parent[parent[t]];
+        return t;
+    };
+    struct Seam {
+        uint32_t t1, t2;
+        uint32_t point[2];          // the edge's ends
+        std::array<float, 2> d[2];  // (u,v) on t2's side minus t1's, at the edge's two ends
+    };
+    std::vector<Seam> seams;
+    struct Side {
+        uint32_t t;
+        int k0, k1;  // the triangle's corners at the key's lower and higher point
+    };
+    std::unordered_map<uint64_t, Side> edges;
+    edges.reserve(3 * n);
+    for (std::size_t t = 0; t < n; ++t) {
+        const uint32_t p0 = point_of[indices[3 * t]], p1 = point_of[indices[3 * t + 1]],
+                       p2 = point_of[indices[3 * t + 2]];
+        if (p0 == p1 || p1 == p2 || p2 == p0) continue;  // no area (a pole's row): never hit
+        for (int k = 0; k < 3; ++k) {
+            const int k2 = (k + 1) % 3;
+            uint32_t a = point_of[indices[3 * t + k]], b = point_of[indices[3 * t + k2]];
+            Side side{static_cast<uint32_t>(t), k, k2};
+            if (a > b) {
+                std::swap(a, b);
+                std::swap(side.k0, side.k1);
+            }
+            const auto [it, added] = edges.try_emplace((uint64_t(a) << 32) | b, side);
+            if (added) continue;
+            const Side& o = it->second;
+            const auto o0 = uv_at(o.t, o.k0), o1 = uv_at(o.t, o.k1), s0 = uv_at(t, side.k0),
+                       s1 = uv_at(t, side.k1);
+            if ((singular[a] || o0 == s0) && (singular[b] || o1 == s1))
+                parent[find(static_cast<uint32_t>(t))] = find(o.t);
+            else
+                seams.push_back({o.t,
+                                 static_cast<uint32_t>(t),
+                                 {a, b},
+                                 {{s0[0] - o0[0], s0[1] - o0[1]}, {s1[0] - o1[0], s1[1] - o1[1]}}});
+        }
+    }
+    // Charts numbered in the order of their first triangle.
+    std::vector<uint32_t> chart(n);
+    std::unordered_map<uint32_t, uint32_t> number;
+    for (std::size_t t = 0; t < n; ++t)
+        chart[t] =
+            number.try_emplace(find(static_cast<uint32_t>(t)), static_cast<uint32_t>(number.size()))
+                .first->second;
+    if (number.size() > 1) uv_charts = chart;
+    // A chart that meets itself: where every such seam moves u by a whole nonzero number of
+    // units and leaves v at its regular ends (a cylinder's or a sphere's unwrapping, u round
+    // the axis), u is periodic with period 1, and the CMAM takes neighbours across it the
+    // short way round, as on a closed quadric. Any other seam inside a chart is left as it is.
+    if (uvs.empty()) return;
+    bool evidence = false, periodic = true;
+    for (const Seam& sm : seams) {
+        if (chart[sm.t1] != chart[sm.t2]) continue;
+        for (int e = 0; e < 2; ++e) {
+            if (singular[sm.point[e]]) continue;
+            const std::array<float, 2>& d = sm.d[e];
+            const float r = std::round(d[0]);
+            evidence = true;
+            periodic = periodic && r != 0 && std::abs(d[0] - r) <= 1e-4f && std::abs(d[1]) <= 1e-4f;
+        }
+    }
+    if (evidence && periodic) u_periodic = true;
 }
 
 template <std::size_t N>

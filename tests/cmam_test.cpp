@@ -448,6 +448,41 @@ TEST(Cmam2d, JitteredNeighboursNearlyInLineAreFittedOverFour) {
 // apart: two rows of the 2-D CMAM crossing the seam at different columns give the regions and
 // values of the same rows unwrapped (u continuing past 1 on a repeating texture), in u for
 // periodic_u and in v for periodic_v. Without it the region spans the whole texture.
+TEST(Cmam, SamplesOfAnotherPatchAreNotNeighbours) {
+    // A tag's patch (a mesh's (u,v) chart) parts samples as the ID and level do: a sample
+    // after a step onto another patch matches nothing (the paper's miss: the texture's mean),
+    // the next one on that patch matches only it, and the 2-D CMAM takes no sample above from
+    // another patch.
+    FilteredTexture tex(tmip1());
+    CmamOptions o;
+    o.filter = FilterKind::Ewa;
+    auto tag = [](uint32_t id, uint32_t seq, uint32_t patch) {
+        RayTag t{id, 0, seq};
+        t.patch = patch;
+        return t;
+    };
+    CmamCache c;
+    cmam_lookup(tex, c, tag(0, 0, 0), 0.30, 0.4, o);
+    EXPECT_EQ(cmam_lookup_with_info(tex, c, tag(0, 1, 0), 0.31, 0.4, o).region.matches, 1);
+    EXPECT_EQ(cmam_lookup_with_info(tex, c, tag(0, 2, 0), 0.32, 0.4, o).region.matches, 2);
+    const CmamResult jump = cmam_lookup_with_info(tex, c, tag(0, 3, 1), 0.80, 0.4, o);
+    EXPECT_EQ(jump.region.matches, 0);
+    EXPECT_EQ(jump.value[0], tex.image().mean()[0]);
+    EXPECT_EQ(cmam_lookup_with_info(tex, c, tag(0, 4, 1), 0.81, 0.4, o).region.matches, 1);
+    EXPECT_EQ(cmam_lookup_with_info(tex, c, tag(0, 5, 1), 0.82, 0.4, o).region.matches, 2);
+    // 2-D: row 1's third sample lies on patch 1 under row 0's patch-0 samples.
+    o.two_d = true;
+    for (const uint32_t patch : {0u, 1u}) {
+        CmamCache rows;
+        for (uint32_t k = 0; k < 4; ++k)
+            cmam_lookup(tex, rows, tag(0, k, 0), 0.3 + 0.01 * k, 0.4, o);
+        cmam_lookup(tex, rows, tag(1, 0, 0), 0.3, 0.41, o);
+        cmam_lookup(tex, rows, tag(1, 1, 0), 0.31, 0.41, o);
+        const CmamResult r = cmam_lookup_with_info(tex, rows, tag(1, 2, patch), 0.32, 0.41, o);
+        EXPECT_EQ(r.region.used_above, patch == 0) << patch;
+    }
+}
+
 TEST(Cmam2d, NeighboursAcrossAPeriodicSeamAreTakenTheShortWay) {
     // Period 1 (a mapping's longitude) and 3 (a closed quadric's u under uscale 3): rows of
     // samples across the seam, wrapped into one period, give the regions and values of the same

@@ -551,11 +551,32 @@ TEST(Aov, FootprintAndTextureOfAFrontoParallelPlane) {
         EXPECT_NEAR(lit.rgb[i], tx.rgb[i] / 3.14159265f, 1e-5);
 }
 
-// A texture that maps the hit's point (here planar, 8 world units to one repeat) is looked up
-// over the image of the world-space footprint, and the footprint AOV reports that, for every
-// source with one: ray differentials (dP/dx, dP/dy) and ray cones (their cross-section on the
-// tangent plane). One pixel is 0.0390625 units on the plane z = 10, 2.5 texels of the
-// 512^2 texture under the mapping, where the surface's own (u,v) would give 5.
+namespace {
+// The largest region the CMAM builds (the footprint AOV's major axis, texels) on pixels
+// 241-271 x 251-253 of camera512's `world` at 1 spp (rows with a row above, each pixel with one
+// to its left), under the 1-D or the 2-D CMAM: a vertical seam through the image's centre
+// crosses them.
+double largest_region_across_seam(const std::string& world, bool two_d) {
+    const pbrt::SceneDesc d = pbrt::parse_string(camera512(world), "t.pbrt");
+    BuildOptions bo;
+    bo.spp_override = 1;
+    bo.cmam.two_d = two_d;
+    auto s = build_scene(d, bo, {});
+    s->film.x0 = 240;
+    s->film.x1 = 272;
+    s->film.y0 = 250;
+    s->film.y1 = 254;
+    RenderOptions o;
+    o.aov = AovKind::Footprint;
+    const Framebuffer fp = render::render(*s, o, nullptr);
+    const int w = s->film.x1 - s->film.x0;
+    double largest = 0;
+    for (int y = 1; y < s->film.y1 - s->film.y0; ++y)
+        for (int x = 1; x < w; ++x) largest = std::max<double>(largest, fp.rgb[3 * (y * w + x)]);
+    return largest;
+}
+}  // namespace
+
 TEST(Aov, TheCmamTakesAClosedQuadricsSeamTheShortWay) {
     // A whole sphere's u is a longitude. Seen with its seam (u = 0 and 1) facing the camera, a
     // vertical line through the image's centre, the CMAM's neighbours across it are a small step
@@ -567,29 +588,13 @@ TEST(Aov, TheCmamTakesAClosedQuadricsSeamTheShortWay) {
         for (const char* uscale : {"1", "3"}) {
             SCOPED_TRACE(two_d ? "2-D" : "1-D");
             SCOPED_TRACE(uscale);
-            const pbrt::SceneDesc d = pbrt::parse_string(
-                camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
-                          "\" \"string lod\" \"cmam\" \"float uscale\" " + uscale +
-                          " Material \"matte\" \"texture Kd\" \"b\" LightSource \"distant\" "
-                          "AttributeBegin Translate 0 0 5 Rotate 90 0 1 0 Rotate -90 1 0 0 "
-                          "Shape \"sphere\" \"float radius\" 2 AttributeEnd"),
-                "t.pbrt");
-            BuildOptions bo;
-            bo.spp_override = 1;
-            bo.cmam.two_d = two_d;
-            auto s = build_scene(d, bo, {});
-            s->film.x0 = 240;
-            s->film.x1 = 272;
-            s->film.y0 = 250;
-            s->film.y1 = 254;
-            RenderOptions o;
-            o.aov = AovKind::Footprint;
-            const Framebuffer fp = render::render(*s, o, nullptr);
-            const int w = s->film.x1 - s->film.x0;
-            double largest = 0;
-            for (int y = 1; y < s->film.y1 - s->film.y0; ++y)  // rows with a row above
-                for (int x = 1; x < w; ++x)
-                    largest = std::max<double>(largest, fp.rgb[3 * (y * w + x)]);
+            const double largest = largest_region_across_seam(
+                "Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
+                    "\" \"string lod\" \"cmam\" \"float uscale\" " + uscale +
+                    " Material \"matte\" \"texture Kd\" \"b\" LightSource \"distant\" "
+                    "AttributeBegin Translate 0 0 5 Rotate 90 0 1 0 Rotate -90 1 0 0 "
+                    "Shape \"sphere\" \"float radius\" 2 AttributeEnd",
+                two_d);
             // About one texel a pixel at uscale 1 (the sphere's 12.6 units of longitude over 512
             // texels, seen 3 units away at 512 pixels for 90 degrees), three at uscale 3.
             EXPECT_GT(largest, 0.5);
@@ -597,6 +602,151 @@ TEST(Aov, TheCmamTakesAClosedQuadricsSeamTheShortWay) {
         }
 }
 
+namespace {
+// A band of `columns` quads round the y axis (radius 2, centre z = 5, y from -3 to 3) in the
+// world of camera512, column i from longitude 2 pi i / columns (0: the point nearest the
+// camera), its (u,v) i / columns and 0..1: the last column's far edge has the first one's
+// positions with u = 1, so the band's unwrapping meets itself at the front, a seam down the
+// image's centre. `offset` moves the second half of the band's (u,v) by that much, a chart of
+// its own (its vertices at the half-way line doubled); 0 leaves one chart. As a trianglemesh.
+std::string band(int columns, float offset) {
+    std::string p, uv, idx;
+    auto num = [](double x) { return std::to_string(x) + " "; };
+    int vertex = 0;
+    auto island = [&](int first, int last, float du) {
+        const int base = vertex;
+        for (int i = first; i <= last; ++i)
+            for (int j = 0; j < 2; ++j) {
+                const double phi = 2 * 3.14159265358979 * (i % columns) / columns;
+                p += num(2 * std::sin(phi)) + num(j ? 3.0 : -3.0) + num(5 - 2 * std::cos(phi));
+                uv += num(double(i) / columns + du) + num(j);
+                ++vertex;
+            }
+        for (int i = 0; i < last - first; ++i) {
+            const int a = base + 2 * i;
+            for (int k : {a, a + 2, a + 1, a + 1, a + 2, a + 3}) idx += std::to_string(k) + " ";
+        }
+    };
+    if (offset == 0) {
+        island(0, columns, 0);
+    } else {
+        island(0, columns / 2, 0);
+        island(columns / 2, columns, offset);
+    }
+    return "Shape \"trianglemesh\" \"point3 P\" [" + p + "] \"point2 uv\" [" + uv +
+           "] \"integer indices\" [" + idx + "]";
+}
+}  // namespace
+
+TEST(UvCharts, AMeshsChartsAndItsPeriodicU) {
+    const std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
+    auto scene = [&](const std::string& shape) {
+        const pbrt::SceneDesc d = pbrt::parse_string(
+            camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
+                      "\" \"string lod\" \"cmam\" Material \"matte\" \"texture Kd\" \"b\" " +
+                      shape),
+            "t.pbrt");
+        BuildOptions bo;
+        bo.spp_override = 1;
+        return build_scene(d, bo, {});
+    };
+    // One chart meeting itself where u moves by 1: periodic, no chart numbers needed.
+    {
+        auto s = scene(band(16, 0));
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_TRUE(pr.u_periodic);
+        EXPECT_TRUE(pr.uv_charts.empty());
+    }
+    // A UV sphere's: its seam from pole to pole moves u by 1; at each pole every column has a
+    // vertex of its own u (a singular point, no evidence), and the triangles of the poles' rows
+    // (two corners at the pole) have no area.
+    {
+        const int nu = 8, nv = 4;
+        std::string p, uv, idx;
+        auto num = [](double x) { return std::to_string(x) + " "; };
+        for (int j = 0; j <= nv; ++j)
+            for (int i = 0; i <= nu; ++i) {
+                const double th = 3.14159265358979 * j / nv,
+                             ph = 2 * 3.14159265358979 * (i % nu) / nu;
+                p += num(std::sin(th) * std::cos(ph)) + num(std::sin(th) * std::sin(ph)) +
+                     num(5 + std::cos(th));
+                uv += num(double(i) / nu) + num(1 - double(j) / nv);
+            }
+        for (int j = 0; j < nv; ++j)
+            for (int i = 0; i < nu; ++i) {
+                const int a = j * (nu + 1) + i, c = a + nu + 1;
+                for (int k : {a, c, a + 1, a + 1, c, c + 1}) idx += std::to_string(k) + " ";
+            }
+        auto s = scene("Shape \"trianglemesh\" \"point3 P\" [" + p + "] \"point2 uv\" [" + uv +
+                       "] \"integer indices\" [" + idx + "]");
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_TRUE(pr.u_periodic);
+        EXPECT_TRUE(pr.uv_charts.empty());
+    }
+    // Two charts: each triangle's, the first half's 0 and the second's 1; the seams between
+    // them are no period.
+    {
+        auto s = scene(band(16, 0.37f));
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_FALSE(pr.u_periodic);
+        ASSERT_EQ(pr.uv_charts.size(), pr.indices.size() / 3);
+        for (std::size_t t = 0; t < pr.uv_charts.size(); ++t)
+            EXPECT_EQ(pr.uv_charts[t], t < pr.uv_charts.size() / 2 ? 0u : 1u) << t;
+    }
+    // A quad whose vertices are doubled with the same positions and (u,v) (split for their
+    // normals) is one chart; with another (u,v) on one side, two; neither is periodic.
+    for (const bool split_uv : {false, true}) {
+        auto s = scene(
+            std::string("Shape \"trianglemesh\" \"point3 P\" [-1 -1 4  1 -1 4  1 1 4  -1 -1 4  1 "
+                        "1 4  -1 1 4] \"point2 uv\" [0 0 1 0 1 1 0 0 ") +
+            (split_uv ? "0.5 1" : "1 1") +
+            " 0 1] \"normal N\" [0 0 -1 0 0 -1 0 0 -1 0 0.1 -1 0 0.1 -1 0 0.1 -1] "
+            "\"integer indices\" [0 1 2 3 4 5]");
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_FALSE(pr.u_periodic);
+        EXPECT_EQ(pr.uv_charts.size(), split_uv ? 2u : 0u);
+    }
+    // Without the CMAM nothing is made.
+    {
+        const pbrt::SceneDesc d = pbrt::parse_string(
+            camera512("Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
+                      "\" Material \"matte\" \"texture Kd\" \"b\" " + band(16, 0.37f)),
+            "t.pbrt");
+        auto s = build_scene(d, {}, {});
+        EXPECT_TRUE(s->primitives[0]->uv_charts.empty());
+        EXPECT_FALSE(s->primitives[0]->u_periodic);
+    }
+}
+
+TEST(Aov, TheCmamTakesNoNeighbourAcrossAMeshsSeam) {
+    // A mesh band's (u,v) seam down the image's centre: where the band's one chart meets itself
+    // (u moves by 1) the CMAM takes its neighbours the short way round, where two charts meet
+    // it takes none from the other chart; either way the regions along rows crossing the seam
+    // (the footprint AOV) stay as small as their neighbours', under the 1-D and the 2-D CMAM.
+    // Without either, the region across the seam spans a whole texture.
+    const std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
+    for (const bool two_d : {false, true})
+        for (const float offset : {0.0f, 0.37f}) {
+            SCOPED_TRACE(two_d ? "2-D" : "1-D");
+            SCOPED_TRACE(offset);
+            const double largest = largest_region_across_seam(
+                "Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
+                    "\" \"string lod\" \"cmam\" Material \"matte\" \"texture Kd\" \"b\" "
+                    "LightSource \"distant\" " +
+                    band(64, offset),
+                two_d);
+            // About a texel a pixel: the band's 12.6 units round over 512 texels, seen 3 units
+            // away at 512 pixels for 90 degrees.
+            EXPECT_GT(largest, 0.5);
+            EXPECT_LT(largest, 8.0);
+        }
+}
+
+// A texture that maps the hit's point (here planar, 8 world units to one repeat) is looked up
+// over the image of the world-space footprint, and the footprint AOV reports that, for every
+// source with one: ray differentials (dP/dx, dP/dy) and ray cones (their cross-section on the
+// tangent plane). One pixel is 0.0390625 units on the plane z = 10, 2.5 texels of the
+// 512^2 texture under the mapping, where the surface's own (u,v) would give 5.
 TEST(Aov, MappedTexturesReportTheFootprintTheirLookupUses) {
     for (const char* lod : {"differentials", "cones", "cones-aniso"}) {
         SCOPED_TRACE(lod);

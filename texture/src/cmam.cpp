@@ -196,7 +196,7 @@ struct CacheStep {
     int matches = 0;
     auto same = [&](const CmamCache::Entry& e, uint32_t steps_back) {
         return e.valid && e.tag.id == tag.id && e.tag.level == tag.level &&
-               (!o.adjacent_only || e.tag.seq + steps_back == tag.seq);
+               e.tag.patch == tag.patch && (!o.adjacent_only || e.tag.seq + steps_back == tag.seq);
     };
     if (same(cache.last, 1)) matches = same(cache.second_last, 2) ? 2 : 1;
     // Positions beyond 2^30 texels (or not numbers) get the mean, as in every filter; they are
@@ -222,7 +222,7 @@ struct CacheStep {
         auto previous = [&](uint32_t seq) -> const CmamCache::Entry* {
             if (seq >= cache.row_previous.size()) return nullptr;
             const CmamCache::Entry& e = cache.row_previous[seq];
-            return e.valid && e.tag.level == tag.level ? &e : nullptr;
+            return e.valid && e.tag.level == tag.level && e.tag.patch == tag.patch ? &e : nullptr;
         };
         st.above = previous(tag.seq);
         if (st.above) {
@@ -315,7 +315,8 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     if (above) matches = std::max(matches, 1);  // a region exists: no miss
     if (o.hull && matches == 2 && !above) {
         // Paper §4: integrate only the part of the new triangle outside the hull so far.
-        if (!cache.hull_valid || cache.hull_tag.id != tag.id || cache.hull_tag.level != tag.level) {
+        if (!cache.hull_valid || cache.hull_tag.id != tag.id || cache.hull_tag.level != tag.level ||
+            cache.hull_tag.patch != tag.patch) {
             cache.hull.clear();
             cache.hull_tag = tag;
             cache.hull_valid = true;

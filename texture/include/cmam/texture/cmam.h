@@ -31,6 +31,11 @@ struct RayTag {
     /// centres the footprint on the sample's stratum (algorithms.md §6.3.1).
     bool positioned = false;
     double x = 0, y = 0;
+    /// Optional, beyond the paper: which piece of the object's parameterization the sample lies
+    /// on (any number the caller chooses: a mesh's (u,v) chart, algorithms.md §6.3). Samples of
+    /// different patches are never neighbours: across a (u,v) seam their coordinates jump, and
+    /// a region spanning the jump would cover texture the pixel never sees.
+    uint32_t patch = 0;
 };
 
 /// What a sample that matches no cached sample gets (paper §3.2.1 item 1).
