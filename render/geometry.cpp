@@ -465,7 +465,7 @@ void Scene::commit() {
             !materials[pr.material].reads_textures())
             return;
         if (offsets) pr.make_uv_gradients();
-        if (charts && !pr.u_periodic) pr.make_uv_charts();
+        if (charts && !pr.u_periodic && !pr.v_periodic) pr.make_uv_charts();
     };
     for (auto& pr : primitives) gradients(*pr);
     for (Object& o : objects)

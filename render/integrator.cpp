@@ -688,7 +688,8 @@ struct Tracer {
                            h.object_id,
                            cmam,
                            nullptr,
-                           h.prim->u_periodic};
+                           h.prim->u_periodic,
+                           h.prim->v_periodic};
             footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, uv);
             ctx.footprints.tag.patch = h.prim->uv_chart(h.triangle);  // the CMAM's (u,v) chart
             const HitFootprint& at = ctx.footprints;

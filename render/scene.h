@@ -287,8 +287,8 @@ struct Primitive {
     // Its u is a longitude round the whole circle, period 1 (a sphere, disk, cylinder, cone,
     // paraboloid or hyperboloid with phimax 360, or a mesh whose charts meet themselves only
     // where u moves by whole units: make_uv_charts): the CMAM takes its neighbours across the
-    // seam the short way round (algorithms.md §6.3).
-    bool u_periodic = false;
+    // seam the short way round (algorithms.md §6.3). v_periodic: the same of v (a mesh's).
+    bool u_periodic = false, v_periodic = false;
     double height = 0, inner_radius = 0;
     // Quadrics: the scale of a transform that keeps them round (a rotation, reflection or
     // uniform scale plus a translation), 0 for any other.

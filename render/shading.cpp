@@ -154,7 +154,7 @@ Rgb marble(const TextureNode& n, const TexContext& ctx) {
 // The CMAM's options for node `n` at a hit: the scene's, and which of the node's (s,t) are
 // angles, whose neighbours across the seam are taken the short way round: the longitude of a
 // spherical or cylindrical mapping (period 1), or under the uv mapping the u of a closed
-// quadric (period 1 in u, |uscale| in s).
+// quadric or the u or v of a mesh found periodic (period 1 in u, |uscale| in s; |vscale| in t).
 texture::CmamOptions cmam_options(const Scene& scene, const TextureNode& n, const TexContext& ctx) {
     texture::CmamOptions o = scene.cmam;
     o.periodic_u = n.mapping == TextureNode::Mapping::Cylindrical;
@@ -162,6 +162,10 @@ texture::CmamOptions cmam_options(const Scene& scene, const TextureNode& n, cons
     if (n.mapping == TextureNode::Mapping::Uv && ctx.u_periodic && n.su != 0) {
         o.periodic_u = true;
         o.period_u = std::abs(double(n.su));
+    }
+    if (n.mapping == TextureNode::Mapping::Uv && ctx.v_periodic && n.sv != 0) {
+        o.periodic_v = true;
+        o.period_v = std::abs(double(n.sv));
     }
     return o;
 }

@@ -32,6 +32,7 @@ struct TexContext {
     CmamRowState* cmam = nullptr;       // the strip's CMAM caches (null: no CMAM)
     CmamRecord* cmam_record = nullptr;  // optional: what a CMAM lookup filtered
     bool u_periodic = false;            // the surface's u has period 1 (Primitive::u_periodic)
+    bool v_periodic = false;            // its v has period 1 (Primitive::v_periodic)
 };
 
 /// The texture lookup seam: filtered value of `image` at texture coordinates (s,t), with the

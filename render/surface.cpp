@@ -117,6 +117,7 @@ bool Primitive::cut_out(uint32_t tri, float b1, float b2, bool shadow) const {
     ctx.p = b0 * positions[i0] + b1 * positions[i1] + b2 * positions[i2];
     ctx.object = id;
     ctx.u_periodic = u_periodic;
+    ctx.v_periodic = v_periodic;
     if (eval_texture(*scene, alpha, ctx).r == 0) return true;
     return shadow && eval_texture(*scene, shadow_alpha, ctx).r == 0;
 }
@@ -379,23 +380,30 @@ void Primitive::make_uv_charts() {
             number.try_emplace(find(static_cast<uint32_t>(t)), static_cast<uint32_t>(number.size()))
                 .first->second;
     if (number.size() > 1) uv_charts = chart;
-    // A chart that meets itself: where every such seam moves u by a whole nonzero number of
-    // units and leaves v at its regular ends (a cylinder's or a sphere's unwrapping, u round
-    // the axis), u is periodic with period 1, and the CMAM takes neighbours across it the
-    // short way round, as on a closed quadric. Any other seam inside a chart is left as it is.
+    // A chart that meets itself: where every such seam moves (u,v) by whole units at its
+    // regular ends (a cylinder's or a sphere's unwrapping, u round the axis; a torus's, u and
+    // v), the coordinates that move are periodic with period 1, and the CMAM takes neighbours
+    // across them the short way round, as on a closed quadric. Any other seam inside a chart
+    // leaves the mesh as it is.
     if (uvs.empty()) return;
-    bool evidence = false, periodic = true;
+    bool whole = true, moves[2] = {false, false};
     for (const Seam& sm : seams) {
         if (chart[sm.t1] != chart[sm.t2]) continue;
         for (int e = 0; e < 2; ++e) {
             if (singular[sm.point[e]]) continue;
             const std::array<float, 2>& d = sm.d[e];
-            const float r = std::round(d[0]);
-            evidence = true;
-            periodic = periodic && r != 0 && std::abs(d[0] - r) <= 1e-4f && std::abs(d[1]) <= 1e-4f;
+            for (int c = 0; c < 2; ++c) {
+                const float r = std::round(d[c]);
+                whole = whole && std::abs(d[c] - r) <= 1e-4f;
+                moves[c] = moves[c] || r != 0;
+            }
+            whole = whole && (std::round(d[0]) != 0 || std::round(d[1]) != 0);
         }
     }
-    if (evidence && periodic) u_periodic = true;
+    if (whole) {
+        u_periodic = u_periodic || moves[0];
+        v_periodic = v_periodic || moves[1];
+    }
 }
 
 template <std::size_t N>

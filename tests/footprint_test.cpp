@@ -608,8 +608,9 @@ namespace {
 // camera), its (u,v) i / columns and 0..1: the last column's far edge has the first one's
 // positions with u = 1, so the band's unwrapping meets itself at the front, a seam down the
 // image's centre. `offset` moves the second half of the band's (u,v) by that much, a chart of
-// its own (its vertices at the half-way line doubled); 0 leaves one chart. As a trianglemesh.
-std::string band(int columns, float offset) {
+// its own (its vertices at the half-way line doubled); 0 leaves one chart. `v_round` swaps u
+// and v (v round the axis). As a trianglemesh.
+std::string band(int columns, float offset, bool v_round = false) {
     std::string p, uv, idx;
     auto num = [](double x) { return std::to_string(x) + " "; };
     int vertex = 0;
@@ -619,7 +620,8 @@ std::string band(int columns, float offset) {
             for (int j = 0; j < 2; ++j) {
                 const double phi = 2 * 3.14159265358979 * (i % columns) / columns;
                 p += num(2 * std::sin(phi)) + num(j ? 3.0 : -3.0) + num(5 - 2 * std::cos(phi));
-                uv += num(double(i) / columns + du) + num(j);
+                const double round = double(i) / columns + du;
+                uv += v_round ? num(j) + num(round) : num(round) + num(j);
                 ++vertex;
             }
         for (int i = 0; i < last - first; ++i) {
@@ -655,32 +657,53 @@ TEST(UvCharts, AMeshsChartsAndItsPeriodicU) {
         auto s = scene(band(16, 0));
         const Primitive& pr = *s->primitives[0];
         EXPECT_TRUE(pr.u_periodic);
+        EXPECT_FALSE(pr.v_periodic);
         EXPECT_TRUE(pr.uv_charts.empty());
     }
-    // A UV sphere's: its seam from pole to pole moves u by 1; at each pole every column has a
-    // vertex of its own u (a singular point, no evidence), and the triangles of the poles' rows
-    // (two corners at the pole) have no area.
-    {
-        const int nu = 8, nv = 4;
+    // A grid of nu x nv quads, point (i, j) at `at(i, j)` with (u,v) (i / nu, j / nv), as a
+    // trianglemesh: the last column's and row's points are where `at` puts them.
+    auto grid = [](int nu, int nv, auto at) {
         std::string p, uv, idx;
         auto num = [](double x) { return std::to_string(x) + " "; };
         for (int j = 0; j <= nv; ++j)
             for (int i = 0; i <= nu; ++i) {
-                const double th = 3.14159265358979 * j / nv,
-                             ph = 2 * 3.14159265358979 * (i % nu) / nu;
-                p += num(std::sin(th) * std::cos(ph)) + num(std::sin(th) * std::sin(ph)) +
-                     num(5 + std::cos(th));
-                uv += num(double(i) / nu) + num(1 - double(j) / nv);
+                const Vec3 x = at(i, j);
+                p += num(x.x) + num(x.y) + num(x.z);
+                uv += num(double(i) / nu) + num(double(j) / nv);
             }
         for (int j = 0; j < nv; ++j)
             for (int i = 0; i < nu; ++i) {
                 const int a = j * (nu + 1) + i, c = a + nu + 1;
                 for (int k : {a, c, a + 1, a + 1, c, c + 1}) idx += std::to_string(k) + " ";
             }
-        auto s = scene("Shape \"trianglemesh\" \"point3 P\" [" + p + "] \"point2 uv\" [" + uv +
-                       "] \"integer indices\" [" + idx + "]");
+        return "Shape \"trianglemesh\" \"point3 P\" [" + p + "] \"point2 uv\" [" + uv +
+               "] \"integer indices\" [" + idx + "]";
+    };
+    const double pi = 3.14159265358979;
+    // A UV sphere's: its seam from pole to pole moves u by 1; at each pole every column has a
+    // vertex of its own u (a singular point, no evidence), and the triangles of the poles' rows
+    // (two corners at the pole) have no area.
+    {
+        auto s = scene(grid(8, 4, [&](int i, int j) {
+            const double th = pi * j / 4, ph = 2 * pi * (i % 8) / 8;
+            return Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), 5 + std::cos(th));
+        }));
         const Primitive& pr = *s->primitives[0];
         EXPECT_TRUE(pr.u_periodic);
+        EXPECT_FALSE(pr.v_periodic);
+        EXPECT_TRUE(pr.uv_charts.empty());
+    }
+    // A torus's: u round the axis and v round the tube, each seam moving one of them by 1 (the
+    // point where the two seams cross has four (u,v), singular).
+    {
+        auto s = scene(grid(8, 6, [&](int i, int j) {
+            const double ph = 2 * pi * (i % 8) / 8, th = 2 * pi * (j % 6) / 6,
+                         r = 2 + 0.5 * std::cos(th);
+            return Vec3(r * std::cos(ph), 0.5 * std::sin(th), 8 + r * std::sin(ph));
+        }));
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_TRUE(pr.u_periodic);
+        EXPECT_TRUE(pr.v_periodic);
         EXPECT_TRUE(pr.uv_charts.empty());
     }
     // Two charts: each triangle's, the first half's 0 and the second's 1; the seams between
@@ -720,20 +743,20 @@ TEST(UvCharts, AMeshsChartsAndItsPeriodicU) {
 
 TEST(Aov, TheCmamTakesNoNeighbourAcrossAMeshsSeam) {
     // A mesh band's (u,v) seam down the image's centre: where the band's one chart meets itself
-    // (u moves by 1) the CMAM takes its neighbours the short way round, where two charts meet
-    // it takes none from the other chart; either way the regions along rows crossing the seam
-    // (the footprint AOV) stay as small as their neighbours', under the 1-D and the 2-D CMAM.
-    // Without either, the region across the seam spans a whole texture.
+    // (u, or v if v goes round, moves by 1) the CMAM takes its neighbours the short way round,
+    // where two charts meet it takes none from the other chart; either way the regions along
+    // rows crossing the seam (the footprint AOV) stay as small as their neighbours', under the
+    // 1-D and the 2-D CMAM. Without either, the region across the seam spans a whole texture.
     const std::string tex = std::string(CMAM_SCENES_DIR) + "/textures/brick.png";
     for (const bool two_d : {false, true})
-        for (const float offset : {0.0f, 0.37f}) {
+        for (const float offset : {0.0f, 0.37f, -1.0f}) {  // -1: one chart, v round the axis
             SCOPED_TRACE(two_d ? "2-D" : "1-D");
             SCOPED_TRACE(offset);
             const double largest = largest_region_across_seam(
                 "Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"" + tex +
                     "\" \"string lod\" \"cmam\" Material \"matte\" \"texture Kd\" \"b\" "
                     "LightSource \"distant\" " +
-                    band(64, offset),
+                    band(64, std::max(offset, 0.0f), offset < 0),
                 two_d);
             // About a texel a pixel: the band's 12.6 units round over 512 texels, seen 3 units
             // away at 512 pixels for 90 degrees.
