@@ -300,34 +300,42 @@ void Primitive::make_uv_charts() {
                                        static_cast<uint32_t>(point_ids.size()))
                           .first->second;
     }
-    // A point whose vertices carry more than two (u,v) is singular (a pole, where u is any
-    // longitude): its (u,v) says nothing about continuity.
+    // A point whose vertices carry three (u,v) or more, all with one u or all with one v, is
+    // singular (a pole, where u is any longitude at one v): its (u,v) says nothing about
+    // continuity. (Three (u,v) that differ in both, a cube's corner between three faces'
+    // charts, are an ordinary point.)
     std::vector<uint8_t> singular(point_ids.size(), 0);
     if (!uvs.empty()) {
         std::vector<std::array<float, 2>> uv1(point_ids.size()), uv2(point_ids.size());
         std::vector<uint8_t> count(point_ids.size(), 0);  // distinct (u,v) seen, at most 3
+        std::vector<uint8_t> same(point_ids.size(), 3);   // bit 0: all one u, bit 1: one v
         for (std::size_t i = 0; i < positions.size(); ++i) {
             const uint32_t p = point_of[i];
             const std::array<float, 2>& uv = uvs[i];
             if (count[p] == 0) {
                 uv1[p] = uv;
                 count[p] = 1;
-            } else if (count[p] == 1 && uv != uv1[p]) {
+                continue;
+            }
+            same[p] &= (uv[0] == uv1[p][0] ? 1 : 0) | (uv[1] == uv1[p][1] ? 2 : 0);
+            if (count[p] == 1 && uv != uv1[p]) {
                 uv2[p] = uv;
                 count[p] = 2;
             } else if (count[p] == 2 && uv != uv1[p] && uv != uv2[p]) {
                 count[p] = 3;
-                singular[p] = 1;
             }
         }
+        for (std::size_t p = 0; p < singular.size(); ++p)
+            singular[p] = count[p] == 3 && same[p] != 0;
     }
     // A corner's (u,v): the vertex's, or without (u,v) the triangle's own (0,0), (1,0), (1,1).
     auto uv_at = [&](std::size_t t, int k) -> std::array<float, 2> {
         static constexpr std::array<float, 2> kDefault[3] = {{0, 0}, {1, 0}, {1, 1}};
         return uvs.empty() ? kDefault[k] : uvs[indices[3 * t + k]];
     };
-    // Triangles joined through the edges they share with the same (u,v) at both ends, singular
-    // ends aside (union-find with path halving); an edge shared with other (u,v) is a seam.
+    // Triangles joined through the edges they share with the same (u,v) at both ends, or at
+    // one end with the other singular (union-find with path halving); any other edge they
+    // share is a seam (a cube's edge between two faces' charts, both its ends singular, too).
     std::vector<uint32_t> parent(n);
     for (std::size_t t = 0; t < n; ++t) parent[t] = static_cast<uint32_t>(t);
     auto find = [&](uint32_t t) {
@@ -363,7 +371,7 @@ void Primitive::make_uv_charts() {
             const Side& o = it->second;
             const auto o0 = uv_at(o.t, o.k0), o1 = uv_at(o.t, o.k1), s0 = uv_at(t, side.k0),
                        s1 = uv_at(t, side.k1);
-            if ((singular[a] || o0 == s0) && (singular[b] || o1 == s1))
+            if ((singular[a] || o0 == s0) && (singular[b] || o1 == s1) && (o0 == s0 || o1 == s1))
                 parent[find(static_cast<uint32_t>(t))] = find(o.t);
             else
                 seams.push_back({o.t,
@@ -380,11 +388,11 @@ void Primitive::make_uv_charts() {
             number.try_emplace(find(static_cast<uint32_t>(t)), static_cast<uint32_t>(number.size()))
                 .first->second;
     if (number.size() > 1) uv_charts = chart;
-    // A chart that meets itself: where every such seam moves (u,v) by whole units at its
-    // regular ends (a cylinder's or a sphere's unwrapping, u round the axis; a torus's, u and
-    // v), the coordinates that move are periodic with period 1, and the CMAM takes neighbours
-    // across them the short way round, as on a closed quadric. Any other seam inside a chart
-    // leaves the mesh as it is.
+    // A chart that meets itself: where every such seam moves (u,v) by the same whole units at
+    // its regular ends (a cylinder's or a sphere's unwrapping, u round the axis; a torus's, u
+    // and v), the coordinates that move are periodic with period 1, and the CMAM takes
+    // neighbours across them the short way round, as on a closed quadric. Any other seam
+    // inside a chart leaves the mesh as it is.
     if (uvs.empty()) return;
     bool whole = true, moves[2] = {false, false};
     for (const Seam& sm : seams) {
@@ -399,6 +407,11 @@ void Primitive::make_uv_charts() {
             }
             whole = whole && (std::round(d[0]) != 0 || std::round(d[1]) != 0);
         }
+        // One translation along the whole edge: the same at both ends (a cube's faces mapped
+        // each onto the whole texture differ by whole units at the corners, by other amounts
+        // between them).
+        if (!singular[sm.point[0]] && !singular[sm.point[1]])
+            for (int c = 0; c < 2; ++c) whole = whole && std::abs(sm.d[0][c] - sm.d[1][c]) <= 1e-4f;
     }
     if (whole) {
         u_periodic = u_periodic || moves[0];

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <type_traits>
 
 #include "render/footprint/cones.h"
 #include "render/footprint/differentials.h"
@@ -660,16 +661,19 @@ TEST(UvCharts, AMeshsChartsAndItsPeriodicU) {
         EXPECT_FALSE(pr.v_periodic);
         EXPECT_TRUE(pr.uv_charts.empty());
     }
-    // A grid of nu x nv quads, point (i, j) at `at(i, j)` with (u,v) (i / nu, j / nv), as a
-    // trianglemesh: the last column's and row's points are where `at` puts them.
-    auto grid = [](int nu, int nv, auto at) {
+    // A grid of nu x nv quads, point (i, j) at `at(i, j)` with (u,v) `uv_of(i, j)`, by default
+    // (i / nu, j / nv), as a trianglemesh: the last column's and row's points are where `at`
+    // puts them.
+    auto grid = [](int nu, int nv, auto at, auto uv_of) {
         std::string p, uv, idx;
         auto num = [](double x) { return std::to_string(x) + " "; };
         for (int j = 0; j <= nv; ++j)
             for (int i = 0; i <= nu; ++i) {
                 const Vec3 x = at(i, j);
+                std::array<double, 2> t{double(i) / nu, double(j) / nv};
+                if constexpr (!std::is_null_pointer_v<decltype(uv_of)>) t = uv_of(i, j);
                 p += num(x.x) + num(x.y) + num(x.z);
-                uv += num(double(i) / nu) + num(double(j) / nv);
+                uv += num(t[0]) + num(t[1]);
             }
         for (int j = 0; j < nv; ++j)
             for (int i = 0; i < nu; ++i) {
@@ -684,27 +688,85 @@ TEST(UvCharts, AMeshsChartsAndItsPeriodicU) {
     // vertex of its own u (a singular point, no evidence), and the triangles of the poles' rows
     // (two corners at the pole) have no area.
     {
-        auto s = scene(grid(8, 4, [&](int i, int j) {
-            const double th = pi * j / 4, ph = 2 * pi * (i % 8) / 8;
-            return Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), 5 + std::cos(th));
-        }));
+        auto s = scene(grid(
+            8, 4,
+            [&](int i, int j) {
+                const double th = pi * j / 4, ph = 2 * pi * (i % 8) / 8;
+                return Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph),
+                            5 + std::cos(th));
+            },
+            nullptr));
         const Primitive& pr = *s->primitives[0];
         EXPECT_TRUE(pr.u_periodic);
         EXPECT_FALSE(pr.v_periodic);
         EXPECT_TRUE(pr.uv_charts.empty());
     }
     // A torus's: u round the axis and v round the tube, each seam moving one of them by 1 (the
-    // point where the two seams cross has four (u,v), singular).
+    // point where the two seams cross has four (u,v), differing in u and in v: not a pole).
     {
-        auto s = scene(grid(8, 6, [&](int i, int j) {
-            const double ph = 2 * pi * (i % 8) / 8, th = 2 * pi * (j % 6) / 6,
-                         r = 2 + 0.5 * std::cos(th);
-            return Vec3(r * std::cos(ph), 0.5 * std::sin(th), 8 + r * std::sin(ph));
-        }));
+        auto s = scene(grid(
+            8, 6,
+            [&](int i, int j) {
+                const double ph = 2 * pi * (i % 8) / 8, th = 2 * pi * (j % 6) / 6,
+                             r = 2 + 0.5 * std::cos(th);
+                return Vec3(r * std::cos(ph), 0.5 * std::sin(th), 8 + r * std::sin(ph));
+            },
+            nullptr));
         const Primitive& pr = *s->primitives[0];
         EXPECT_TRUE(pr.u_periodic);
         EXPECT_TRUE(pr.v_periodic);
         EXPECT_TRUE(pr.uv_charts.empty());
+    }
+    // A cube with each face mapped onto the whole texture: its charts meet where (u,v) jump
+    // by whole units at the corners but by other amounts between them, no period; the corners
+    // carry three (u,v) differing in u and in v, ordinary points, not poles.
+    {
+        std::string p, uv, idx;
+        const int faces[6][9] = {{-1, -1, -1, 2, 0, 0, 0, 2, 0}, {-1, -1, 1, 2, 0, 0, 0, 2, 0},
+                                 {-1, -1, -1, 0, 2, 0, 0, 0, 2}, {1, -1, -1, 0, 2, 0, 0, 0, 2},
+                                 {-1, -1, -1, 2, 0, 0, 0, 0, 2}, {-1, 1, -1, 2, 0, 0, 0, 0, 2}};
+        for (int f = 0; f < 6; ++f) {
+            const int* o = faces[f];
+            for (int c = 0; c < 4; ++c) {
+                const int a = c == 1 || c == 2, b = c >= 2;
+                for (int k = 0; k < 3; ++k)
+                    p +=
+                        std::to_string(o[k] + a * o[3 + k] + b * o[6 + k] + (k == 2 ? 8 : 0)) + " ";
+                uv += std::to_string(a) + " " + std::to_string(b) + " ";
+            }
+            for (int k : {0, 1, 2, 0, 2, 3}) idx += std::to_string(4 * f + k) + " ";
+        }
+        auto s = scene("Shape \"trianglemesh\" \"point3 P\" [" + p + "] \"point2 uv\" [" + uv +
+                       "] \"integer indices\" [" + idx + "]");
+        // The faces z-, x- and y- (triangles 0-1, 4-5, 8-9) meet with the same (u,v) at both
+        // ends of two of their edges, and z+, x+, y+ likewise; every other edge is a seam, and
+        // the one inside each chart (z- with x-, z+ with x+) matches at one end only.
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_FALSE(pr.u_periodic);
+        EXPECT_FALSE(pr.v_periodic);
+        ASSERT_EQ(pr.uv_charts.size(), 12u);
+        for (int f = 0; f < 6; ++f)
+            for (int k = 0; k < 2; ++k)
+                EXPECT_EQ(pr.uv_charts[2 * f + k], f % 2 == 0 ? 0u : 1u) << f << " " << k;
+    }
+    // A band whose (u,v) round the axis come back moved by (1, 0) at its foot and (1, 1) at its
+    // top: whole units at both ends of the seam but no one translation, no period.
+    {
+        // The last column's top vertex at v = 2 instead of 1.
+        const std::string text = grid(
+            8, 1,
+            [&](int i, int j) {
+                const double ph = 2 * pi * (i % 8) / 8;
+                return Vec3(2 * std::sin(ph), j ? 3.0 : -3.0, 5 - 2 * std::cos(ph));
+            },
+            [](int i, int j) {
+                return std::array<double, 2>{i / 8.0, i == 8 && j == 1 ? 2.0 : j};
+            });
+        auto s = scene(text);
+        const Primitive& pr = *s->primitives[0];
+        EXPECT_TRUE(pr.uv_charts.empty());
+        EXPECT_FALSE(pr.u_periodic);
+        EXPECT_FALSE(pr.v_periodic);
     }
     // Two charts: each triangle's, the first half's 0 and the second's 1; the seams between
     // them are no period.
