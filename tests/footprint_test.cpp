@@ -661,9 +661,9 @@ TEST(UvCharts, AMeshsChartsAndItsPeriodicU) {
         EXPECT_FALSE(pr.v_periodic);
         EXPECT_TRUE(pr.uv_charts.empty());
     }
-    // A grid of nu x nv quads, point (i, j) at `at(i, j)` with (u,v) `uv_of(i, j)`, by default
-    // (i / nu, j / nv), as a trianglemesh: the last column's and row's points are where `at`
-    // puts them.
+    // A grid of nu x nv quads, point (i, j) at `at(i, j)` with (u,v) `uv_of(i, j)`, or
+    // (i / nu, j / nv) when uv_of is nullptr, as a trianglemesh: the last column's and row's
+    // points are where `at` puts them.
     auto grid = [](int nu, int nv, auto at, auto uv_of) {
         std::string p, uv, idx;
         auto num = [](double x) { return std::to_string(x) + " "; };
