@@ -459,7 +459,7 @@ void Scene::commit() {
     // Their (u,v) charts for the CMAM, which takes no neighbour across a seam (a closed
     // quadric's tessellation has its own seam, taken the short way round instead).
     const bool charts = footprint_methods.has(FootprintMethod::Cmam);
-    auto gradients = [this, offsets, charts](Primitive& pr) {
+    auto triangle_tables = [this, offsets, charts](Primitive& pr) {
         if (pr.kind != Primitive::Kind::Triangles || pr.material < 0 ||
             pr.material >= static_cast<int>(materials.size()) ||
             !materials[pr.material].reads_textures())
@@ -467,9 +467,9 @@ void Scene::commit() {
         if (offsets) pr.make_uv_gradients();
         if (charts && !pr.u_periodic && !pr.v_periodic) pr.make_uv_charts();
     };
-    for (auto& pr : primitives) gradients(*pr);
+    for (auto& pr : primitives) triangle_tables(*pr);
     for (Object& o : objects)
-        for (auto& pr : o.primitives) gradients(*pr);
+        for (auto& pr : o.primitives) triangle_tables(*pr);
     // Objects first: an instance refers to its object's committed scene. Objects that no
     // instance uses are not built.
     std::vector<bool> used(objects.size(), false);

@@ -5,6 +5,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 #include <unordered_map>
 #include <vector>
 
@@ -380,21 +381,21 @@ void Primitive::make_uv_charts() {
                                  {{s0[0] - o0[0], s0[1] - o0[1]}, {s1[0] - o1[0], s1[1] - o1[1]}}});
         }
     }
-    // Charts numbered in the order of their first triangle.
-    std::vector<uint32_t> chart(n);
-    std::unordered_map<uint32_t, uint32_t> number;
-    for (std::size_t t = 0; t < n; ++t)
-        chart[t] =
-            number.try_emplace(find(static_cast<uint32_t>(t)), static_cast<uint32_t>(number.size()))
-                .first->second;
-    if (number.size() > 1) uv_charts = chart;
+    // Charts numbered in the order of their first triangle (each root's number kept at the
+    // root's index).
+    std::vector<uint32_t> chart(n), number(n, UINT32_MAX);
+    uint32_t charts = 0;
+    for (std::size_t t = 0; t < n; ++t) {
+        uint32_t& k = number[find(static_cast<uint32_t>(t))];
+        if (k == UINT32_MAX) k = charts++;
+        chart[t] = k;
+    }
     // A chart that meets itself: where every such seam moves (u,v) by the same whole units at
     // its regular ends (a cylinder's or a sphere's unwrapping, u round the axis; a torus's, u
     // and v), the coordinates that move are periodic with period 1, and the CMAM takes
     // neighbours across them the short way round, as on a closed quadric. Any other seam
     // inside a chart leaves the mesh as it is.
-    if (uvs.empty()) return;
-    bool whole = true, moves[2] = {false, false};
+    bool whole = !uvs.empty(), moves[2] = {false, false};  // without (u,v), no period
     for (const Seam& sm : seams) {
         if (chart[sm.t1] != chart[sm.t2]) continue;
         for (int e = 0; e < 2; ++e) {
@@ -417,6 +418,7 @@ void Primitive::make_uv_charts() {
         u_periodic = u_periodic || moves[0];
         v_periodic = v_periodic || moves[1];
     }
+    if (charts > 1) uv_charts = std::move(chart);
 }
 
 template <std::size_t N>
