@@ -295,7 +295,7 @@ void local_hit(const Vec3& org, const Vec3& dir, const RTCHit& hit, bool uv, Sur
                 ns = ns / l;
                 if (prim.flip) ns = -ns;
                 h.ns = ns;
-                h.ng = faceforward(n, ns);
+                h.ng = prim.normals_geometric ? ns : faceforward(n, ns);
             }
         }
         return;

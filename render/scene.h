@@ -247,6 +247,11 @@ struct Primitive {
     uint32_t id = 0;    // index in Scene::primitives (the textured object for the CMAM)
     int material = -1;  // -1 is the default matte
     bool flip = false;  // reverse_orientation xor transform swaps handedness
+    // Triangles with normals: the interpolated normal is also the geometric normal (which side a
+    // direction is on, where rays leave from, which plane carries the differentials), not the
+    // facet's. pbrt-v3's hyperboloid, whose normal is that of the swept segment's
+    // parameterisation and up to 80 degrees off the surface it intersects (algorithms.md §15).
+    bool normals_geometric = false;
     // Triangles (world space)
     // (Large meshes are read at random by every hit: their arrays on 2 MiB pages.)
     HugeVector<Vec3> positions, normals;

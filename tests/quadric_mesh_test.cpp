@@ -80,6 +80,36 @@ TEST(QuadricMesh, ConeParaboloidAndHyperboloid) {
         EXPECT_FALSE(two->intersect(Vec3(0, 0, z) + Vec3(10, 0, 0), Vec3(-1, 0, 0), 0, 100)) << z;
 }
 
+// pbrt-v3's hyperboloid takes its normal from the swept segment's parameterisation, dP/du x
+// dP/dv with dP/dv = p2 - p1 turned by phi, at the hit on its fitted surface. Where the
+// segment's closest approach to the axis is not at z = 0 that normal is far from the surface's
+// (here 20-60 degrees), and pbrt-v3 decides sides with it: the hit's geometric normal is it, not
+// the facet's.
+TEST(QuadricMesh, HyperboloidsDecideSidesWithPbrtV3sNormal) {
+    const Vec3 p1(3.0f, 1.2f, 1.0f), p2(1.0f, -0.5f, -1.0f);  // pbrt-v3-rs's all-shapes
+    auto y = shape("Shape \"hyperboloid\" \"point3 p1\" [3 1.2 1] \"point3 p2\" [1 -0.5 -1]");
+    int far_from_facet = 0;
+    for (float z : {-0.6f, -0.2f, 0.3f, 0.7f})
+        for (float phi : {0.4f, 1.9f, 3.5f}) {
+            const SurfaceHit h = hit_towards_axis(*y, phi, z);
+            // pbrt-v3's normal at the hit: phi counted from the segment's point at its height.
+            const float v = (h.p.z - p1.z) / (p2.z - p1.z);
+            const Vec3 pr = (1 - v) * p1 + v * p2, d = p2 - p1;
+            const float a = std::atan2(pr.x * h.p.y - h.p.x * pr.y, h.p.x * pr.x + h.p.y * pr.y);
+            const Vec3 dpdu(-h.p.y, h.p.x, 0), dpdv(d.x * std::cos(a) - d.y * std::sin(a),
+                                                    d.x * std::sin(a) + d.y * std::cos(a), d.z);
+            const Vec3 n = normalize(cross(dpdu, dpdv));
+            EXPECT_GT(dot(h.ng, n), 0.999f) << z << " " << phi;  // interpolated: within 2.6 deg
+            EXPECT_GT(dot(h.ns, n), 0.999f) << z << " " << phi;
+            // The facet's normal, from the surface ah (x^2 + y^2) - ch z^2 = 1 (its gradient).
+            const SurfaceHit h2 = hit_towards_axis(*y, phi + 1e-3f, z);
+            const SurfaceHit h3 = hit_towards_axis(*y, phi, z + 1e-3f);
+            const Vec3 facet = normalize(cross(h2.p - h.p, h3.p - h.p));
+            if (std::abs(dot(facet, n)) < std::cos(0.35f)) ++far_from_facet;  // over 20 degrees
+        }
+    EXPECT_GE(far_from_facet, 6);  // the case this is about
+}
+
 TEST(QuadricMesh, PartialSweepsAndUnsupportedShapes) {
     const QuadricMesh m = tessellate("cylinder", QuadricParams{.phimax = 90}, 128);
     EXPECT_EQ(m.indices.size(), 32u * 6);  // a quarter of the segments, one row

@@ -80,6 +80,8 @@ bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     mesh_primitive(s, prim);
     const QuadricParams params = quadric_params(e);
     prim.u_periodic = params.phimax >= 360;
+    // pbrt-v3 decides sides with the hyperboloid's own normal, wherever it points (§15).
+    prim.normals_geometric = e.type == "hyperboloid";
     const QuadricMesh mesh = tessellate(e.type, params);
     e.params.check_unused("shape " + in_quotes(e.type), m_warn, {"alpha", "shadowalpha"});
     return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim,
