@@ -1,5 +1,7 @@
 #include "render/shading.h"
 
+#include <cmam/texture/area.h>
+
 #include <limits>
 
 #include "render/noise.h"
@@ -197,6 +199,19 @@ texture::Texel cmam_texel(const Scene& scene, const TextureNode& n, int node, do
     return r.value;
 }
 
+// The area filter's parallelogram on its stratum's centre (algorithms.md §5.2, "Strata"):
+// through the differentials, or for cones the camera ray's at the first hit (the offset is zero
+// where none was computed). Not for the CMAM, whose regions are centred by its own tags.
+void to_stratum_centre(const TextureNode& n, const TexContext& ctx, double& s, double& t) {
+    if (n.filter.kind == texture::FilterKind::Area && n.mapping == TextureNode::Mapping::Uv &&
+        (n.lod == FootprintMethod::Differentials
+             ? ctx.footprints.axes.valid
+             : n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso)) {
+        s += n.su * ctx.footprints.stratum_offset.u;
+        t += n.sv * ctx.footprints.stratum_offset.v;
+    }
+}
+
 Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexContext& ctx) {
     // The CMAM's footprint is its cache's, not the hit's (which is none for it).
     const MappedSt m = node_st(n, ctx, n.lod != FootprintMethod::Cmam);
@@ -205,16 +220,7 @@ Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexC
     if (n.lod == FootprintMethod::Cmam && ctx.cmam) {
         x = cmam_texel(scene, n, node, s, t, ctx);
     } else {
-        // The area filter's parallelogram on its stratum's centre (algorithms.md §5.2,
-        // "Strata"): through the differentials, or for cones the camera ray's at the first hit
-        // (the offset is zero where none was computed).
-        if (n.filter.kind == texture::FilterKind::Area && n.mapping == TextureNode::Mapping::Uv &&
-            (n.lod == FootprintMethod::Differentials
-                 ? ctx.footprints.axes.valid
-                 : n.lod == FootprintMethod::Cones || n.lod == FootprintMethod::ConesAniso)) {
-            s += n.su * ctx.footprints.stratum_offset.u;
-            t += n.sv * ctx.footprints.stratum_offset.v;
-        }
+        to_stratum_centre(n, ctx, s, t);
         x = lookup_image(*n.image, n.filter, s, t, m.footprint, ctx.counts);
     }
     if (n.image->image().channels() == 1) return Rgb(x[0]);
@@ -235,6 +241,18 @@ Rgb checkerboard(const Scene& scene, const TextureNode& n, int node, const TexCo
             ctx.footprints.tag, s, t, cmam_options(scene, n, ctx), &to_stratum);
         s += to_stratum.u;
         t += to_stratum.v;
+    }
+    if (fp.kind == texture::Footprint::Kind::Axes && n.filter.kind == texture::FilterKind::Area) {
+        // The area filter: the exact share of the footprint's parallelogram on each colour
+        // (algorithms.md §5.4), on its stratum's centre as for images.
+        if (!(n.lod == FootprintMethod::Cmam && ctx.cmam)) to_stratum_centre(n, ctx, s, t);
+        const double odd = texture::checker_odd_share({s, t}, fp.axis_a, fp.axis_b);
+        if (odd == 0) return eval_texture(scene, n.tex1, ctx);
+        if (odd == 1) return eval_texture(scene, n.tex2, ctx);
+        if (odd > 0)
+            return float(1 - odd) * eval_texture(scene, n.tex1, ctx) +
+                   float(odd) * eval_texture(scene, n.tex2, ctx);
+        // (not finite, or beyond kCheckerMaxLines: pbrt-v3's box below)
     }
     if (fp.kind == texture::Footprint::Kind::Axes) {
         // pbrt-v3's closed-form box filter of the checkerboard over the footprint's box.

@@ -662,3 +662,48 @@ TEST(Area, TablesAreBuiltLazilyAndCounted) {
                                         (32 + RowPrefixTable::kMarginRows) * 3 * sizeof(float));
     EXPECT_GE(t.memory_bytes(), before + t.row_prefix_bytes());
 }
+
+// A checkerboard's odd-cell share of a parallelogram (closed-form checkerboards under the area
+// filter) against the cell-clipping oracle on a 2x2 repeat-wrapped image of the same pattern:
+// small regions within one or two cells, large and thin ones (diagonal strips along cells of
+// one colour), both orientations, centres far from the origin; degenerate regions give their
+// centre's cell.
+TEST(Area, CheckerShareMatchesTheCellOracle) {
+    const std::vector<float> px = {0, 1, 1, 0};  // texel (i, j) = (i + j) & 1
+    const Image img(2, 2, 1, px, WrapMode::Repeat, WrapMode::Repeat);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> unit(0, 1);
+    int checked = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        const double size = std::pow(10.0, -3 + 4.5 * unit(rng));  // 0.001 to 30 cells
+        const double angle = 6.283185307179586 * unit(rng), thin = trial % 3 == 0 ? 0.01 : 1;
+        const double la = size * (0.2 + unit(rng)), lb = thin * size * (0.2 + unit(rng));
+        const double skew = 1.5 * (unit(rng) - 0.5);
+        const Vec2d a{la * std::cos(angle), la * std::sin(angle)},
+            b{lb * std::cos(angle + 1.5707963 + skew), lb * std::sin(angle + 1.5707963 + skew)};
+        const double far = trial % 4 == 0 ? 1e4 : 1;
+        const Vec2d c{far * 20 * (unit(rng) - 0.5), far * 20 * (unit(rng) - 0.5)};
+        const double share = checker_odd_share(c, a, b);
+        // The oracle on the same region moved by whole periods near the origin (its cells are
+        // clipped in texel space, exact within rounding there).
+        const Vec2d c0{c.u - 2 * std::floor(c.u / 2), c.v - 2 * std::floor(c.v / 2)};
+        Vec2d p[4];
+        parallelogram(c0.u, c0.v, a, b, p);
+        const double area = std::abs(cross(a, b));
+        const double want = polygon_integral_cells(img, to_polygon(p, 4))[0] / area;
+        ASSERT_NEAR(share, want, 1e-7 + 1e-9 * size * size / area)
+            << "trial " << trial << " size " << size << " c " << c.u << "," << c.v;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 3000);
+    // A thin strip along the diagonal through the cells' corners stays on one colour but for
+    // the corners' triangles (their share goes with the width), where a box would give 1/2.
+    EXPECT_LT(checker_odd_share({10.5, 10.5}, {20, 20}, {0.001, -0.001}), 1e-3);
+    EXPECT_GT(checker_odd_share({10.5, 11.5}, {20, 20}, {0.001, -0.001}), 1 - 1e-3);
+    // A whole 2x2 block, and no area at all.
+    EXPECT_NEAR(checker_odd_share({3, 5}, {2, 0}, {0, 2}), 0.5, 1e-12);
+    EXPECT_EQ(checker_odd_share({0.5, 1.5}, {0, 0}, {0, 0}), 1);
+    EXPECT_EQ(checker_odd_share({0.5, 0.5}, {1, 1}, {2, 2}), 0);  // collinear sides
+    EXPECT_EQ(checker_odd_share({NAN, 0}, {1, 0}, {0, 1}), -1);
+    EXPECT_EQ(checker_odd_share({0, 0}, {5000, 0}, {0, 5000}), -1);  // beyond kCheckerMaxLines
+}

@@ -209,6 +209,8 @@ void Builder::checkerboard_texture(const pbrt::TextureDesc& t, TextureNode& n) {
     n.tex2 = texture_input(t, "tex2", 0);
     std::string aa = e.params.get_string("aamode", "closedform");
     n.closed_form = aa == "closedform";
+    // --filter area: the closed form's box becomes the footprint's own parallelogram (§5.4).
+    if (m_opts.filter) n.filter.kind = *m_opts.filter;
     if (m_opts.untextured) {  // the mean of the two inputs (constants only)
         if (n.tex1.node < 0 && n.tex2.node < 0) {
             n.kind = TextureNode::Kind::Constant;

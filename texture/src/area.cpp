@@ -1413,4 +1413,82 @@ AreaResult area_polygon(const FilteredTexture& tex, const Vec2d* uv, int n) {
     return integrate_on(tex, area_level(tex, width, perimeter), p, n, area2, perimeter);
 }
 
+namespace {
+// The checkerboard's odd-cell indicator integrated along a row from 0 to x: B(x) in even rows
+// (x - B(x) in odd ones), with B(x + 2) = B(x) + 1 and B = max(r - 1, 0) for r = x - 2k in
+// [0, 2). Its own integral from 0 to x is C(x) = k (k - 1) + k / 2 + k r + max(r - 1, 0)^2 / 2
+// (the whole periods before 2k each add 2m + 1/2). Both hold for negative x.
+double checker_b(double x) {
+    const double k = std::floor(x / 2), r = x - 2 * k;
+    return k + std::max(r - 1, 0.0);
+}
+double checker_c(double x) {
+    const double k = std::floor(x / 2), r = x - 2 * k, e = std::max(r - 1, 0.0);
+    return k * (k - 1) + k / 2 + k * r + e * e / 2;
+}
+// The mean over [x0, x1] of row j's integral R: exact, R being linear within a cell (the
+// midpoint's value) and C its integral.
+double checker_row_mean(int64_t j, double x0, double x1) {
+    const bool odd = (j & 1) != 0;
+    double b;
+    if (std::floor(x0) == std::floor(x1))
+        b = checker_b(0.5 * (x0 + x1));
+    else
+        b = (checker_c(x1) - checker_c(x0)) / (x1 - x0);
+    return odd ? 0.5 * (x0 + x1) - b : b;
+}
+}  // namespace
+
+double checker_odd_share(Vec2d c, Vec2d a, Vec2d b) {
+    if (!(std::isfinite(c.u) && std::isfinite(c.v) && std::isfinite(a.u) && std::isfinite(a.v) &&
+          std::isfinite(b.u) && std::isfinite(b.v)))
+        return -1;
+    const double extent_u = std::abs(a.u) + std::abs(b.u), extent_v = std::abs(a.v) + std::abs(b.v);
+    if (!(extent_u < 1e15 && extent_v < 1e15 && std::abs(c.u) < 1e15 && std::abs(c.v) < 1e15))
+        return -1;
+    // The pattern repeats every two cells both ways: the centre is moved into [0, 2)^2 exactly.
+    c.u -= 2 * std::floor(c.u / 2);
+    c.v -= 2 * std::floor(c.v / 2);
+    const double area2 = 2 * cross(a, b);
+    const double scale = std::max(dot(a, a), dot(b, b));
+    if (!(std::abs(area2) > 1e-12 * scale) || scale == 0)  // a segment or a point: c's cell
+        return static_cast<double>(
+            (static_cast<int64_t>(std::floor(c.u)) + static_cast<int64_t>(std::floor(c.v))) & 1);
+    Vec2d p[4] = {c - 0.5 * a - 0.5 * b, c + 0.5 * a - 0.5 * b, c + 0.5 * a + 0.5 * b,
+                  c - 0.5 * a + 0.5 * b};
+    // Rows are the lines of constant t; with fewer columns, s and t trade places (the pattern is
+    // symmetric in them; the polygon's orientation and so its signed area change together).
+    const int64_t rows = static_cast<int64_t>(std::ceil(c.v + 0.5 * extent_v) -
+                                              std::floor(c.v - 0.5 * extent_v)),
+                  columns = static_cast<int64_t>(std::ceil(c.u + 0.5 * extent_u) -
+                                                 std::floor(c.u - 0.5 * extent_u));
+    double signed_area2 = area2;
+    if (columns < rows) {
+        for (Vec2d& q : p) std::swap(q.u, q.v);
+        signed_area2 = -signed_area2;
+    }
+    if (std::min(rows, columns) > kCheckerMaxLines) return -1;
+    // Green's theorem: the integral over the region is the boundary integral of R(s, t) dt.
+    // Each edge is cut at every row line it crosses; along a piece s is linear in t, so the
+    // piece adds its height times the mean of its row's R over its s-span.
+    double sum = 0;
+    for (int e = 0; e < 4; ++e) {
+        const Vec2d from = p[e], to = p[(e + 1) % 4];
+        if (from.v == to.v) continue;
+        const double dir = to.v > from.v ? 1 : -1;
+        const Vec2d lo = dir > 0 ? from : to, hi = dir > 0 ? to : from;
+        const double dsdt = (hi.u - lo.u) / (hi.v - lo.v);
+        double t = lo.v, s = lo.u;
+        for (int64_t j = static_cast<int64_t>(std::floor(lo.v)); t < hi.v; ++j) {
+            const double t_next = std::min(double(j + 1), hi.v);
+            const double s_next = t_next == hi.v ? hi.u : lo.u + (t_next - lo.v) * dsdt;
+            sum +=
+                dir * (t_next - t) * checker_row_mean(j, std::min(s, s_next), std::max(s, s_next));
+            t = t_next;
+            s = s_next;
+        }
+    }
+    return std::clamp(sum / (0.5 * signed_area2), 0.0, 1.0);
+}
+
 }  // namespace cmam::texture

@@ -164,4 +164,14 @@ AreaResult area_parallelogram(const FilteredTexture& texture, double u, double v
 /// level-0 texel (smaller regions go to area_parallelogram's reconstruction term).
 AreaResult area_polygon(const FilteredTexture& texture, const Vec2d* uv, int n);
 
+/// Regions crossing more lines than this both ways are left to the caller (below).
+inline constexpr int kCheckerMaxLines = 1024;
+
+/// The share of the parallelogram c ± a/2 ± b/2 that lies on a checkerboard's odd cells (cell
+/// (i,j) is [i,i+1) x [j,j+1), odd where i + j is), exactly: Green's theorem with the
+/// checkerboard's row integral in closed form, walking the rows or the columns the region
+/// crosses, whichever are fewer (algorithms.md §5.4). A region of no area gives the parity of
+/// the cell holding c. Not finite, or crossing more than kCheckerMaxLines lines both ways: -1.
+double checker_odd_share(Vec2d c, Vec2d a, Vec2d b);
+
 }  // namespace cmam::texture
