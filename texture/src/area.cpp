@@ -1451,7 +1451,7 @@ double checker_odd_share(Vec2d c, Vec2d a, Vec2d b) {
     c.v -= 2 * std::floor(c.v / 2);
     const double area2 = 2 * cross(a, b);
     const double scale = std::max(dot(a, a), dot(b, b));
-    if (!(std::abs(area2) > 1e-12 * scale) || scale == 0)  // a segment or a point: c's cell
+    if (!(std::abs(area2) > 1e-12 * scale))  // a segment or a point (scale 0): c's cell
         return static_cast<double>(
             (static_cast<int64_t>(std::floor(c.u)) + static_cast<int64_t>(std::floor(c.v))) & 1);
     Vec2d p[4] = {c - 0.5 * a - 0.5 * b, c + 0.5 * a - 0.5 * b, c + 0.5 * a + 0.5 * b,
