@@ -10,21 +10,30 @@ namespace {
 
 // Every type name a parameter declaration may use. The first name of each type is the one
 // printed; the aliases pbrt-v3 also reads are not listed in messages. "blackbody" is pbrt-v3's
-// own type, read into a sampled spectrum.
+// own type, read into a sampled spectrum; "xyz" is a colour in CIE XYZ, read into RGB.
 struct ParamTypeName {
     ParamType type;
     const char* name;
     bool listed;
 };
 constexpr ParamTypeName kParamTypeNames[] = {
-    {ParamType::Integer, "integer", true},   {ParamType::Float, "float", true},
-    {ParamType::Point2, "point2", true},     {ParamType::Vector2, "vector2", true},
-    {ParamType::Point3, "point3", true},     {ParamType::Point3, "point", false},
-    {ParamType::Vector3, "vector3", true},   {ParamType::Vector3, "vector", false},
-    {ParamType::Normal, "normal", true},     {ParamType::Normal, "normal3", false},
-    {ParamType::Rgb, "rgb", true},           {ParamType::Rgb, "color", false},
-    {ParamType::Spectrum, "spectrum", true}, {ParamType::Spectrum, "blackbody", true},
-    {ParamType::Bool, "bool", true},         {ParamType::String, "string", true},
+    {ParamType::Integer, "integer", true},
+    {ParamType::Float, "float", true},
+    {ParamType::Point2, "point2", true},
+    {ParamType::Vector2, "vector2", true},
+    {ParamType::Point3, "point3", true},
+    {ParamType::Point3, "point", false},
+    {ParamType::Vector3, "vector3", true},
+    {ParamType::Vector3, "vector", false},
+    {ParamType::Normal, "normal", true},
+    {ParamType::Normal, "normal3", false},
+    {ParamType::Rgb, "rgb", true},
+    {ParamType::Rgb, "color", false},
+    {ParamType::Rgb, "xyz", true},
+    {ParamType::Spectrum, "spectrum", true},
+    {ParamType::Spectrum, "blackbody", true},
+    {ParamType::Bool, "bool", true},
+    {ParamType::String, "string", true},
     {ParamType::Texture, "texture", true},
 };
 
@@ -158,10 +167,20 @@ std::optional<FileLoc> ParamSet::add(Param p) {
                                         std::to_string(p.numbers.size()) + " numbers");
         check_spectrum_samples(p);
     } else if (p.numbers.size() % k != 0) {
-        throw SceneError(p.loc, std::string(to_string(p.type)) + " parameter " + in_quotes(p.name) +
-                                    " needs a multiple of " + std::to_string(k) + " values, got " +
+        throw SceneError(p.loc, (p.type_name == "xyz" ? std::string("xyz") : to_string(p.type)) +
+                                    " parameter " + in_quotes(p.name) + " needs a multiple of " +
+                                    std::to_string(k) + " values, got " +
                                     std::to_string(p.numbers.size()));
     }
+    // pbrt-v3's "xyz": each colour converted to linear sRGB with the matrix spectra go through
+    // (spectrum_to_rgb), as pbrt-v3's RGB spectra take it.
+    if (p.type_name == "xyz")
+        for (std::size_t i = 0; i + 2 < p.numbers.size(); i += 3) {
+            const Rgb c = xyz_to_rgb(p.numbers[i], p.numbers[i + 1], p.numbers[i + 2]);
+            p.numbers[i] = c[0];
+            p.numbers[i + 1] = c[1];
+            p.numbers[i + 2] = c[2];
+        }
     // Integers are read as doubles: each must convert to int exactly (NaN, infinities, 2.5 and
     // 1e10 do not).
     if (p.type == ParamType::Integer)
@@ -404,7 +423,11 @@ Rgb spectrum_to_rgb(const std::vector<double>& pairs) {
     x *= k;
     y *= k;
     z *= k;
-    // XYZ to linear sRGB (the matrix pbrt-v3 uses).
+    return xyz_to_rgb(x, y, z);
+}
+
+Rgb xyz_to_rgb(double x, double y, double z) {
+    // The matrix pbrt-v3 uses.
     return Rgb{static_cast<float>(3.240479 * x - 1.537150 * y - 0.498535 * z),
                static_cast<float>(-0.969256 * x + 1.875991 * y + 0.041556 * z),
                static_cast<float>(0.055648 * x - 0.204043 * y + 1.057311 * z)};

@@ -99,6 +99,9 @@ class ParamSet {
 /// pbrt-v3 normalises it (a constant 1 has Y = 470/471), then its XYZ-to-sRGB matrix.
 /// The pairs are as ParamSet::add accepts them: at least one, finite, wavelengths increasing.
 Rgb spectrum_to_rgb(const std::vector<double>& lambda_value_pairs);
+/// CIE XYZ to linear sRGB with pbrt-v3's matrix (its "xyz" parameters, and spectrum_to_rgb's
+/// last step).
+Rgb xyz_to_rgb(double x, double y, double z);
 /// pbrt-v3's "blackbody" [T scale]: Planck's spectrum at T kelvin divided by its peak, times
 /// `scale`, as (wavelength in nm, value) pairs every 5 nm from 360 to 830 nm. The parser turns a
 /// blackbody parameter into these samples (a spectrum parameter).

@@ -68,7 +68,7 @@ struct Hyperboloid {
 
 }  // namespace
 
-QuadricMesh tessellate(const std::string& type, const QuadricParams& p, int segments) {
+ShapeMesh tessellate(const std::string& type, const QuadricParams& p, int segments) {
     const double phi_max = std::clamp(p.phimax, 0.0, 360.0) * std::numbers::pi / 180;
     const int nu =
         std::max(2, static_cast<int>(std::ceil(segments * phi_max / (2 * std::numbers::pi))));
@@ -93,7 +93,7 @@ QuadricMesh tessellate(const std::string& type, const QuadricParams& p, int segm
         }
     }
 
-    QuadricMesh m;
+    ShapeMesh m;
     for (auto [v_lo, v_hi] : v_spans) {
         const int base = static_cast<int>(m.positions.size() / 3);
         for (int j = 0; j <= nv; ++j)

@@ -9,8 +9,9 @@
 namespace cmam::render {
 
 /// A mesh in object space: 3 floats per position and normal, 2 per (u,v), 3 indices per
-/// triangle (wound so that the facet normal agrees with the normals).
-struct QuadricMesh {
+/// triangle (wound so that the facet normal agrees with the normals). Also the height fields'
+/// and NURBS patches' (patches.h).
+struct ShapeMesh {
     std::vector<float> positions, normals, uvs;
     std::vector<int> indices;
 };
@@ -23,6 +24,6 @@ struct QuadricParams {
 
 /// The mesh of `type` ("cylinder", "cone", "paraboloid" or "hyperboloid"); `segments` steps
 /// around the full circle (fewer for a partial phimax).
-QuadricMesh tessellate(const std::string& type, const QuadricParams& p, int segments = 128);
+ShapeMesh tessellate(const std::string& type, const QuadricParams& p, int segments = 128);
 
 }  // namespace cmam::render

@@ -52,13 +52,14 @@ TEST(Parser, ParameterTypeNamesRoundTrip) {
     EXPECT_EQ(parse_param_type("blackbody"), ParamType::Spectrum);
     EXPECT_EQ(parse_param_type("Float"), std::nullopt);
     EXPECT_STREQ(to_string(ParamType::Spectrum), "spectrum");
+    EXPECT_EQ(parse_param_type("xyz"), ParamType::Rgb);
     EXPECT_EQ(param_type_names(),
-              "integer, float, point2, vector2, point3, vector3, normal, rgb, spectrum, "
+              "integer, float, point2, vector2, point3, vector3, normal, rgb, xyz, spectrum, "
               "blackbody, bool, string, texture");
     EXPECT_THROW_MSG(parse_world("Shape \"sphere\" \"flaot radius\" 1"), SceneError,
                      "t.pbrt:3:16: error: unknown parameter type \"flaot\" (expected integer, "
-                     "float, point2, vector2, point3, vector3, normal, rgb, spectrum, blackbody, "
-                     "bool, string, texture)");
+                     "float, point2, vector2, point3, vector3, normal, rgb, xyz, spectrum, "
+                     "blackbody, bool, string, texture)");
 }
 
 TEST(Parser, SingleValuesWithoutBrackets) {
@@ -278,6 +279,27 @@ TEST(Parser, SpectraConvertThroughTheTabulatedCieObserver) {
     EXPECT_NEAR(b[1] / b[2], 0.038 / 1.77211, 1e-4);
     EXPECT_NEAR(o[1] / o[0], 0.631 / 1.0622, 1e-4);
     EXPECT_NEAR(o[2] / o[0], 0.0008 / 1.0622, 1e-4);
+}
+
+// pbrt-v3's "xyz" colours become RGB through its XYZ-to-sRGB matrix: taken back to XYZ with the
+// sRGB primaries' matrix (its inverse, to the matrices' six digits) they are what was written,
+// D65's white is RGB 1, and a count that is not whole colours is a located error.
+TEST(Parser, XyzColoursConvertWithPbrtV3sMatrix) {
+    SceneDesc d = parse_world(
+        "LightSource \"point\" \"xyz I\" [0.3 0.5 0.2]\n"
+        "Material \"matte\" \"xyz Kd\" [0.950456 1 1.088754]\n"
+        "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"xyz Kd\" [1 2 3 4 5 6]");
+    const auto c = *d.lights[0].entity.params.get_rgb("I");
+    EXPECT_NEAR(0.412453 * c[0] + 0.357580 * c[1] + 0.180423 * c[2], 0.3, 1e-5);
+    EXPECT_NEAR(0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2], 0.5, 1e-5);
+    EXPECT_NEAR(0.019334 * c[0] + 0.119193 * c[1] + 0.950227 * c[2], 0.2, 1e-5);
+    EXPECT_NEAR(c[0], 3.240479 * 0.3 - 1.537150 * 0.5 - 0.498535 * 0.2, 1e-6);
+    const auto white = *d.materials[0].entity.params.get_rgb("Kd");
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(white[k], 1.0, 1e-3) << k;
+    EXPECT_EQ(d.shapes[0].entity.params.find("Kd")->numbers.size(), 6u);
+    EXPECT_THROW_MSG(parse_world("LightSource \"point\" \"xyz I\" [1 1]"), SceneError,
+                     "t.pbrt:3:21: error: xyz parameter \"I\" needs a multiple of 3 values, got "
+                     "2");
 }
 
 TEST(Parser, SpectrumFromAnSpdFileIsItsSamples) {

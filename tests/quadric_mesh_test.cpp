@@ -111,7 +111,7 @@ TEST(QuadricMesh, HyperboloidsDecideSidesWithPbrtV3sNormal) {
 }
 
 TEST(QuadricMesh, PartialSweepsAndUnsupportedShapes) {
-    const QuadricMesh m = tessellate("cylinder", QuadricParams{.phimax = 90}, 128);
+    const ShapeMesh m = tessellate("cylinder", QuadricParams{.phimax = 90}, 128);
     EXPECT_EQ(m.indices.size(), 32u * 6);  // a quarter of the segments, one row
     for (std::size_t i = 0; i < m.uvs.size(); i += 2) EXPECT_LE(m.uvs[i], 1.0f);
     std::vector<std::string> warnings;

@@ -233,6 +233,8 @@ class Builder {
     static double mesh_memory_need(const pbrt::PlyCounts& counts);
     bool triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim);
     bool curve(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool heightfield(const pbrt::ShapeDesc& s, Primitive& prim);
+    bool nurbs(const pbrt::ShapeDesc& s, Primitive& prim);
     bool subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                          const std::vector<int>& idx, Primitive& prim);
     void mesh_primitive(const pbrt::ShapeDesc& s, Primitive& prim);

@@ -9,6 +9,7 @@
 #include "pbrt/parser.h"
 #include "render/build/builder.h"
 #include "render/memory.h"
+#include "render/patches.h"
 
 namespace cmam::render::build_detail {
 
@@ -82,7 +83,7 @@ bool Builder::tessellated_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     prim.u_periodic = params.phimax >= 360;
     // pbrt-v3 decides sides with the hyperboloid's own normal, wherever it points (§15).
     prim.normals_geometric = e.type == "hyperboloid";
-    const QuadricMesh mesh = tessellate(e.type, params);
+    const ShapeMesh mesh = tessellate(e.type, params);
     e.params.check_unused("shape " + in_quotes(e.type), m_warn, {"alpha", "shadowalpha"});
     return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim,
                       NormalSide::Quadric);
@@ -379,6 +380,95 @@ bool Builder::triangle_mesh(const pbrt::ShapeDesc& s, Primitive& prim) {
     return place_mesh(s, P, N, UV, idx, prim);
 }
 
+// pbrt-v3's "heightfield" (algorithms.md §22): "nu" x "nv" heights "Pz" over the unit square,
+// a triangle mesh with (u,v) and no normals. pbrt-v3 stops on the errors here; it takes no
+// cut-out masks for it ("alpha" is unused).
+bool Builder::heightfield(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    prim.kind = Primitive::Kind::Triangles;
+    for (const char* name : {"nu", "nv"}) {
+        if (!e.params.find(name))
+            throw SceneError(
+                e.loc, std::string("\"heightfield\" needs an \"integer ") + name + "\" parameter");
+        if (e.params.get_int(name, 0) < 2)
+            throw SceneError(loc_of(e, name), std::string(name) + " must be at least 2, got " +
+                                                  std::to_string(e.params.get_int(name, 0)));
+    }
+    const int nu = e.params.get_int("nu", 2), nv = e.params.get_int("nv", 2);
+    const auto z = e.params.get_floats("Pz");
+    if (!z) throw SceneError(e.loc, "\"heightfield\" needs a \"float Pz\" parameter");
+    const std::size_t n = static_cast<std::size_t>(nu) * static_cast<std::size_t>(nv);
+    if (z->size() != n)
+        throw SceneError(loc_of(e, "Pz"), "Pz has " + std::to_string(z->size()) +
+                                              " heights; nu x nv = " + std::to_string(n));
+    const ShapeMesh mesh = heightfield_mesh(nu, nv, finite_values(e, "Pz", *z));
+    e.params.check_unused("shape \"heightfield\"", m_warn);
+    return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim);
+}
+
+// pbrt-v3's "nurbs" (algorithms.md §22): a NURBS surface of "nu" x "nv" control points ("P", or
+// homogeneous "Pw"), orders "uorder" and "vorder" and knot vectors "uknots" and "vknots", diced
+// over "u0".."u1" x "v0".."v1" (by default the knots' whole range) into a 30 x 30 grid with
+// the surface's normals and its parameters as (u,v), as pbrt-v3 makes it. What pbrt-v3 stops on
+// or reports and skips the shape for is an error here.
+bool Builder::nurbs(const pbrt::ShapeDesc& s, Primitive& prim) {
+    const Entity& e = s.entity;
+    prim.kind = Primitive::Kind::Triangles;
+    NurbsPatch p;
+    for (const char* name : {"nu", "nv", "uorder", "vorder"})
+        if (!e.params.find(name))
+            throw SceneError(e.loc,
+                             std::string("\"nurbs\" needs an \"integer ") + name + "\" parameter");
+    p.nu = e.params.get_int("nu", 0);
+    p.nv = e.params.get_int("nv", 0);
+    p.uorder = e.params.get_int("uorder", 0);
+    p.vorder = e.params.get_int("vorder", 0);
+    for (const char* name : {"uknots", "vknots"}) {
+        const auto k = e.params.get_floats(name);
+        if (!k)
+            throw SceneError(e.loc,
+                             std::string("\"nurbs\" needs a \"float ") + name + "\" parameter");
+        (name[0] == 'u' ? p.uknots : p.vknots) = finite_values(e, name, *k);
+    }
+    // The parameter ranges' defaults: knots order - 1 and n, the knots' whole range.
+    auto knot = [](const std::vector<double>& k, int i) {
+        return i >= 0 && static_cast<std::size_t>(i) < k.size() ? k[static_cast<std::size_t>(i)]
+                                                                : 0.0;
+    };
+    p.u0 = finite_float(e, "u0", knot(p.uknots, p.uorder - 1));
+    p.u1 = finite_float(e, "u1", knot(p.uknots, p.nu));
+    p.v0 = finite_float(e, "v0", knot(p.vknots, p.vorder - 1));
+    p.v1 = finite_float(e, "v1", knot(p.vknots, p.nv));
+    const char* points = e.params.find("P") ? "P" : "Pw";
+    if (const auto P = e.params.get_point3s("P")) {
+        for (std::size_t i = 0; i + 2 < P->size(); i += 3)
+            p.cp.push_back({(*P)[i], (*P)[i + 1], (*P)[i + 2], 1});
+    } else if (const auto Pw = e.params.get_floats("Pw")) {
+        if (Pw->size() % 4 != 0)
+            throw SceneError(loc_of(e, "Pw"),
+                             "Pw needs four numbers (x w, y w, z w, w) per "
+                             "control point, got " +
+                                 std::to_string(Pw->size()));
+        for (std::size_t i = 0; i + 3 < Pw->size(); i += 4)
+            p.cp.push_back({(*Pw)[i], (*Pw)[i + 1], (*Pw)[i + 2], (*Pw)[i + 3]});
+    } else {
+        throw SceneError(e.loc, "\"nurbs\" needs control points, \"point3 P\" or \"float Pw\"");
+    }
+    if (const auto err = nurbs_patch_error(p)) {
+        const std::string name = err->parameter == "P" ? points : err->parameter;
+        throw SceneError(e.params.find(name) ? e.params.find(name)->loc : e.loc,
+                         "\"nurbs\": " + err->message);
+    }
+    const ShapeMesh mesh = nurbs_mesh(p);
+    for (float x : mesh.positions)
+        if (!std::isfinite(x))
+            throw SceneError(e.params.find(points)->loc,
+                             "\"nurbs\": the surface is not finite where it is diced (a weight "
+                             "of 0 where the knots make it count alone)");
+    e.params.check_unused("shape \"nurbs\"", m_warn);
+    return place_mesh(s, mesh.positions, mesh.normals, mesh.uvs, mesh.indices, prim);
+}
+
 // pbrt-v3's "loopsubdiv" after its control mesh is read: "levels" (or "nlevels") of Loop
 // subdivision, then the limit surface with its normals and no (u,v), as pbrt-v3 makes it.
 bool Builder::subdivided_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
@@ -489,7 +579,9 @@ void Builder::shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primit
         {"trianglemesh", &Builder::triangle_mesh},
         {"plymesh", &Builder::ply_mesh},
         {"loopsubdiv", &Builder::triangle_mesh},
-        {"curve", &Builder::curve}};
+        {"curve", &Builder::curve},
+        {"heightfield", &Builder::heightfield},
+        {"nurbs", &Builder::nurbs}};
     const Entity& e = s.entity;
     auto prim = std::make_unique<Primitive>();
     prim->material = s.material;
