@@ -71,6 +71,62 @@ struct Tracer {
         return l;
     }
 
+    // pbrt-v3's "ambientocclusion" integrator at a hit seen along `dir` (algorithms.md §23):
+    // scene.ao_samples directions over the hemisphere of the geometric normal turned to the
+    // viewer, cosine-weighted or uniform, from pairs of numbers in a Latin hypercube (each
+    // number in its own of n strata, the strata paired at random), as pbrt-v3's stratified
+    // sampler makes a sample's arrays; each direction nothing occludes, however far, adds
+    // cos / (pdf n): pi / n for the cosine's, 2 pi cos / n for the uniform's. Traced in packets.
+    Rgb ambient_occlusion(const SurfaceHit& h, const Vec3& dir) {
+        const int n = scene.ao_samples;
+        if (n <= 0) return {};
+        const Vec3 ng = faceforward(h.ng, -dir);
+        const Frame frame = Frame::from_z(ng);
+        thread_local std::vector<uint32_t> strata;  // the second number's stratum per direction
+        strata.resize(static_cast<std::size_t>(n));
+        for (int i = 0; i < n; ++i) strata[static_cast<std::size_t>(i)] = static_cast<uint32_t>(i);
+        for (int i = n - 1; i > 0; --i)
+            std::swap(strata[static_cast<std::size_t>(i)],
+                      strata[static_cast<std::size_t>(rng.next_u64() % uint64_t(i + 1))]);
+        constexpr int N = Scene::kPacketSize;
+        Vec3 org[N], dirs[N];
+        float tmax[N], weight[N];
+        bool occluded[N];
+        int m = 0;
+        float sum = 0;
+        auto flush = [&] {
+            scene.occluded_packet(org, dirs, tmax, m, occluded);
+            for (int k = 0; k < m; ++k)
+                if (!occluded[k]) sum += weight[k];
+            if (counts) counts->shadow += static_cast<uint64_t>(m);
+            m = 0;
+        };
+        const float inv_n = 1.0f / float(n);
+        for (int i = 0; i < n; ++i) {
+            const float u1 = std::min((float(i) + rng.next_float()) * inv_n, 0x1.fffffep-1f),
+                        u2 = std::min(
+                            (float(strata[static_cast<std::size_t>(i)]) + rng.next_float()) * inv_n,
+                            0x1.fffffep-1f);
+            float z, r;
+            if (scene.ao_cosine) {
+                z = std::sqrt(std::max(0.0f, 1 - u1));
+                r = std::sqrt(u1);
+            } else {
+                z = u1;
+                r = std::sqrt(std::max(0.0f, 1 - z * z));
+            }
+            const float phi = 2 * kPi * u2;
+            const Vec3 wi = frame.to_world(Vec3(r * std::cos(phi), r * std::sin(phi), z));
+            org[m] = offset_origin(h, wi);
+            dirs[m] = wi;
+            tmax[m] = std::numeric_limits<float>::infinity();
+            weight[m] = scene.ao_cosine ? kPi : 2 * kPi * z;
+            if (++m == N) flush();
+        }
+        if (m > 0) flush();
+        return Rgb(sum * inv_n);
+    }
+
     // What an area light's surface emits towards w (pbrt-v3: along its oriented normal only,
     // unless two-sided).
     Rgb emitted(const SurfaceHit& h, const Vec3& w) const {
@@ -673,7 +729,10 @@ struct Tracer {
                 if (ms.scattered)
                     return through_media * scatter(ray.org + ms.t * ray.dir, -ray.dir, m, depth);
             }
-            if (!hit) return after_diffuse ? Rgb() : through_media * escaped(ray.dir, ray.fp.diff);
+            if (!hit)
+                return after_diffuse || scene.ambient_occlusion
+                           ? Rgb()
+                           : through_media * escaped(ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m = material_of(*h.prim);
             // A hit whose shading reads no texture needs no (u,v) (nor footprints in it below);
@@ -723,6 +782,7 @@ struct Tracer {
             }
             Bsdf& bsdf = *made;
             if (aov) record_aov(ctx, h, bsdf);
+            if (scene.ambient_occlusion) return ambient_occlusion(h, ray.dir);
             Rgb L = after_diffuse ? Rgb() : emitted(h, wo);
             if (deferred >= 0) {
                 // (Children add deferred hits: `d` is not kept across them.)
@@ -1044,7 +1104,9 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         t.made_count = &children;
         return t;
     };
-    if (scene.path_tracing) {  // each sample's path traced to its end, one ray at a time
+    // Each sample's path traced to its end, one ray at a time (ambient occlusion: its first hit,
+    // whose rays go in packets of their own).
+    if (scene.path_tracing || scene.ambient_occlusion) {
         for (int k = 0; k < n; ++k) {
             rng[k].emplace(paths[k].seed);
             if (paths[k].counts) ++paths[k].counts->camera;

@@ -464,6 +464,13 @@ class Scene {
     // (algorithms.md §18), continued past three bounces by Russian roulette below rr_threshold.
     bool path_tracing = false;
     float rr_threshold = 1;
+    // pbrt-v3's "ambientocclusion" integrator (algorithms.md §23): at each camera ray's first
+    // hit, `ao_samples` directions over the hemisphere of the geometric normal on the viewer's
+    // side, cosine-weighted (`ao_cosine`) or uniform; a pixel's value is pi times the weighted
+    // share that nothing occludes. Nothing else is rendered: no lights, no reflections.
+    bool ambient_occlusion = false;
+    int ao_samples = 64;
+    bool ao_cosine = true;
     // Participating media (pbrt-v3's volpath, bdpt and mlt integrators render them; the others
     // do not): `volumetric` when the integrator does and the scene has some.
     std::vector<Medium> media;

@@ -253,7 +253,7 @@ TEST(Eval, FailingSceneIsSkippedWarningsOnceAndReportsReplaceCleanly) {
     std::ofstream(dir / "good.pbrt")  // an integrator cmam renders as whitted: one warning
         << "LookAt 0 1 -3  0 0 0  0 1 0 Camera \"perspective\" \"float fov\" 50\n"
         << "Film \"image\" \"integer xresolution\" 12 \"integer yresolution\" 8\n"
-        << "Integrator \"ambientocclusion\"\nWorldBegin\n"
+        << "Integrator \"photonmap\"\nWorldBegin\n"
         << "LightSource \"distant\" \"point from\" [0 1 -1]\n"
         << "Texture \"g\" \"spectrum\" \"imagemap\" \"string filename\" \"" << tex << "\"\n"
         << "Material \"matte\" \"texture Kd\" \"g\"\n"

@@ -396,3 +396,72 @@ TEST(PathTracing, SceneIntegratorsChooseIt) {
             << other;
     }
 }
+
+// pbrt-v3's "ambientocclusion": the cosine-weighted share of the hemisphere above the first hit
+// that nothing occludes, times pi. A point on an endless floor a distance x from the foot of an
+// endless wall of height H sees the wall over a share (1 - x / sqrt(x^2 + H^2)) / 2 of the
+// cosine-weighted hemisphere (Nusselt's projection of the wall onto the base disc), so its value
+// is pi/2 (1 + x / sqrt(x^2 + H^2)); uniform directions have the same mean. Lights, materials
+// (but "none") and what lies beyond the first hit do not count; misses are black.
+TEST(AmbientOcclusion, IsTheUnoccludedCosineWeightedShare) {
+    auto render_ao = [](const std::string& integrator, const std::string& world) {
+        auto s = test::scene_from(
+            "LookAt 0 5 0  0 0 0  0 0 1 Camera \"orthographic\" \"float screenwindow\" [-0.001 "
+            "0.001 -0.001 0.001] Film \"image\" \"integer xresolution\" 1 \"integer yresolution\" "
+            "1 Sampler \"stratified\" \"integer xsamples\" 4 \"integer ysamples\" 4 " +
+            integrator + " WorldBegin " + world + " WorldEnd");
+        const Framebuffer fb = render::render(*s, {}, nullptr);
+        EXPECT_EQ(fb.rgb[0], fb.rgb[1]);
+        return fb.rgb[0];
+    };
+    const std::string floor =
+        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-1000 0 -1000 "
+        "1000 0 -1000 1000 0 1000 -1000 0 1000] ";
+    const std::string wall =  // at z = 1, 1 high
+        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-1000 0 1 1000 0 "
+        "1 1000 1 1 -1000 1 1] ";
+    const std::string cosine = "Integrator \"ambientocclusion\" \"integer nsamples\" 4096",
+                      uniform = cosine + " \"bool cossample\" \"false\"";
+    // Open: every cosine-weighted direction adds exactly pi / n.
+    EXPECT_NEAR(render_ao(cosine, floor), kPi, 1e-5);
+    EXPECT_NEAR(render_ao(uniform, floor), kPi, 0.01 * kPi);
+    // Beside the wall: pi/2 (1 + 1/sqrt(2)) = 2.6815.
+    const double want = kPi / 2 * (1 + 1 / std::sqrt(2.0));
+    EXPECT_NEAR(render_ao(cosine, floor + wall), want, 0.005 * want);
+    EXPECT_NEAR(render_ao(uniform, floor + wall), want, 0.01 * want);
+    // A mirror floor and a light change nothing; an invisible ("none") wall still occludes, as
+    // pbrt-v3's shadow rays meet it; a miss is black.
+    EXPECT_NEAR(render_ao(cosine, "LightSource \"point\" \"rgb I\" [5 5 5] Material \"mirror\" " +
+                                      floor + "Material \"none\" " + wall),
+                want, 0.005 * want);
+    EXPECT_EQ(render_ao(cosine,
+                        "LightSource \"infinite\" \"rgb L\" [1 1 1] Shape \"sphere\" "
+                        "\"float radius\" 0.1 \"float zmin\" 0.09"),
+              0);
+}
+
+TEST(AmbientOcclusion, IntegratorParameters) {
+    std::vector<std::string> warnings;
+    auto build = [&](const std::string& integrator) {
+        warnings.clear();
+        return build_scene(pbrt::parse_string("Camera \"perspective\" " + integrator +
+                                                  " WorldBegin Shape \"sphere\" WorldEnd",
+                                              "i.pbrt"),
+                           {}, [&](const std::string& w) { warnings.push_back(w); });
+    };
+    auto s = build("Integrator \"ambientocclusion\"");
+    EXPECT_TRUE(s->ambient_occlusion);
+    EXPECT_FALSE(s->path_tracing);
+    EXPECT_EQ(s->ao_samples, 64);  // pbrt-v3's defaults
+    EXPECT_TRUE(s->ao_cosine);
+    EXPECT_TRUE(warnings.empty()) << warnings[0];  // (not "no lights": it needs none)
+    s = build(
+        "Integrator \"ambientocclusion\" \"integer nsamples\" 5 \"bool cossample\" "
+        "\"false\" \"integer maxdepth\" 3");
+    EXPECT_EQ(s->ao_samples, 5);
+    EXPECT_FALSE(s->ao_cosine);
+    ASSERT_EQ(warnings.size(), 1u);  // pbrt-v3's integrator has no maxdepth
+    EXPECT_NE(warnings[0].find("\"maxdepth\""), std::string::npos) << warnings[0];
+    EXPECT_THROW(build("Integrator \"ambientocclusion\" \"integer nsamples\" -1"),
+                 pbrt::SceneError);
+}

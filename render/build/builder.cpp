@@ -70,7 +70,8 @@ std::unique_ptr<Scene> Builder::run() {
     attempt([&] { instances(); });
     for (const auto& l : m_desc.lights) attempt([&] { light(l); });
     if (!errors.empty()) throw SceneError(errors);
-    if (m_scene->lights.empty() && (!m_desc.shapes.empty() || !m_desc.instances.empty()) && m_warn)
+    if (m_scene->lights.empty() && !m_scene->ambient_occlusion &&  // (which needs none)
+        (!m_desc.shapes.empty() || !m_desc.instances.empty()) && m_warn)
         m_warn(pbrt::format_warning(m_desc.camera.loc,
                                     "the scene has no lights; it will render black"));
     m_scene->commit();

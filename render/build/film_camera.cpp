@@ -378,9 +378,27 @@ void Builder::integrator() {
                  "unknown direct lighting strategy " + in_quotes(strategy) +
                      " (expected \"all\" or \"one\"); \"all\" is used, as pbrt-v3 does");
         m_light_samples = strategy != "one";
+    } else if (e.type == "ambientocclusion") {
+        // pbrt-v3's: "nsamples" directions at each camera ray's first hit (0 renders black, as
+        // in pbrt-v3), "cossample" cosine-weighted or uniform.
+        m_scene->ambient_occlusion = true;
+        const int n = e.params.get_int("nsamples", 64);
+        if (n < 0)
+            throw SceneError(loc_of(e, "nsamples"),
+                             "nsamples must not be negative, got " + std::to_string(n));
+        if (n == 0)
+            warn(loc_of(e, "nsamples"),
+                 "nsamples 0: no direction is sampled and the image is black, as in pbrt-v3");
+        constexpr int kMaxAoSamples = 1 << 16;
+        if (n > kMaxAoSamples)
+            warn(loc_of(e, "nsamples"),
+                 "nsamples " + std::to_string(n) + " is above cmam's limit of " +
+                     std::to_string(kMaxAoSamples) + ", which is used instead");
+        m_scene->ao_samples = std::min(n, kMaxAoSamples);
+        m_scene->ao_cosine = e.params.get_bool("cossample", true);
     } else if (e.type != "whitted")
         warn(e.loc, "Integrator " + in_quotes(e.type) + " is rendered as \"whitted\"");
-    if (const auto* p = e.params.find("maxdepth")) {
+    if (const auto* p = !m_scene->ambient_occlusion ? e.params.find("maxdepth") : nullptr) {
         const int depth = e.params.get_int("maxdepth", 5);
         m_scene->max_depth = std::min(depth, kMaxDepthLimit);
         if (depth > kMaxDepthLimit)
@@ -388,7 +406,8 @@ void Builder::integrator() {
                              std::to_string(kMaxDepthLimit) + ", which is used instead");
     }
     e.params.check_unused("Integrator " + in_quotes(e.type), m_warn,
-                          e.type == "whitted" || direct || e.type == "path" || e.type == "volpath"
+                          e.type == "whitted" || direct || e.type == "path" ||
+                                  e.type == "volpath" || e.type == "ambientocclusion"
                               ? std::vector<std::string>{"pixelbounds", "lightsamplestrategy"}
                               : names_of(e));
 }
