@@ -140,8 +140,9 @@ void BM_BareEmbreeDemo(benchmark::State& state) {
                 for (int py = r.begin(); py < r.end(); ++py)
                     for (int px = film.x0; px < film.x1; ++px)
                         for (int s = 0; s < nx * ny; ++s) {
-                            const auto [o, d] = scene->camera.generate_ray(
+                            const render::CameraRay ray = scene->camera.generate_ray(
                                 px + (s % nx + 0.5f) / nx, py + (s / nx + 0.5f) / ny);
+                            const render::Vec3 &o = ray.org, &d = ray.dir;
                             RTCRayHit rh{};
                             rh.ray.org_x = o.x;
                             rh.ray.org_y = o.y;

@@ -2,6 +2,7 @@
 // cameras).
 #include <cmath>
 
+#include "render/lens.h"
 #include "render/scene.h"
 
 namespace cmam::render {
@@ -39,6 +40,22 @@ void concentric_disc(float u, float v, float& x, float& y) {
 
 CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
     if (!has_lens()) return generate_ray(px, py);
+    if (realistic) {
+        // The lens system's ray in camera space, taken to the world (algorithms.md §7.3).
+        const auto& m = world_from_camera;
+        RealisticLens::Ray r;
+        const double w = realistic->generate(px, py, lu, lv, r);
+        if (w == 0) return {Vec3(m[3], m[7], m[11]), normalize(Vec3(m[2], m[6], m[10])), 0};
+        const Vec3 o(float(r.o.x), float(r.o.y), float(r.o.z)),
+            d(float(r.d.x), float(r.d.y), float(r.d.z));
+        return {Vec3(m[0] * o.x + m[1] * o.y + m[2] * o.z + m[3],
+                     m[4] * o.x + m[5] * o.y + m[6] * o.z + m[7],
+                     m[8] * o.x + m[9] * o.y + m[10] * o.z + m[11]),
+                normalize(Vec3(m[0] * d.x + m[1] * d.y + m[2] * d.z,
+                               m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                               m[8] * d.x + m[9] * d.y + m[10] * d.z)),
+                static_cast<float>(w)};
+    }
     // In camera space the pinhole ray's direction is d = (sx tan, sy tan, 1): it meets the plane
     // of focus z = focal_distance at focal_distance d; the ray leaves the lens point towards it
     // (algorithms.md §7), along d - lens / focal_distance (the same direction, without the
@@ -70,6 +87,7 @@ void Camera::environment_directions(float px, float py, Vec3 (&dirs)[3]) const {
 }
 
 CameraRay Camera::generate_ray(float px, float py) const {
+    if (realistic) return generate_ray(px, py, 0.5f, 0.5f);
     const auto& m = world_from_camera;
     if (environment) {
         const float theta = kPi * py / yres, phi = 2 * kPi * px / xres;

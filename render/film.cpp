@@ -411,15 +411,22 @@ class FilmTracer {
             p.ray.dir = dirs[0];
             m_footprints.start_environment_ray(p.ray.fp, dirs, 0.5f - j[0], 0.5f - j[1]);
         } else if (m_scene.camera.has_lens()) {
-            // A thin lens: the sample's point on the lens, stratified over the pixel's samples.
+            // A thin lens (or a realistic camera's exit pupil): the sample's point on it,
+            // stratified over the pixel's samples.
             float lu, lv;
             lens_sample(sp.seeds[i], sample, m_nx, m_ny, lu, lv);
             const CameraRay ray = m_scene.camera.generate_ray(fx, fy, lu, lv);
             p.ray.org = ray.org;
             p.ray.dir = ray.dir;
-            m_footprints.start_lens_ray(p.ray.fp, fx, fy, lu, lv, p.ray.dir, 0.5f - j[0],
-                                        0.5f - j[1]);
-        } else {  // orthographic and environment cameras, one ray at a time
+            p.weight = ray.weight;
+            if (!m_scene.camera.realistic)
+                m_footprints.start_lens_ray(p.ray.fp, fx, fy, lu, lv, p.ray.dir, 0.5f - j[0],
+                                            0.5f - j[1]);
+            else if (ray.weight == 0 ||
+                     !m_footprints.start_realistic_ray(p.ray.fp, fx, fy, lu, lv, ray, 0.5f - j[0],
+                                                       0.5f - j[1]))
+                p.weight = 0;  // blocked (or dropped as pbrt-v3 drops it): not traced
+        } else {               // orthographic and environment cameras, one ray at a time
             const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
             p.ray.org = ray.org;
             p.ray.dir = ray.dir;
@@ -443,7 +450,28 @@ class FilmTracer {
             }
         }
         Rgb radiance[Scene::kPacketSize];
-        trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.scratch, radiance);
+        if (!m_scene.camera.realistic) {
+            trace_packet(m_scene, m_footprints, packet.paths, packet.n, &cmam, sp.scratch,
+                         radiance);
+        } else {
+            // A realistic camera's samples: those the lens blocks are 0 (and their AOV), the
+            // others traced together and weighted (pbrt-v3 multiplies the radiance by the
+            // camera's weight, not the film's sum of weights).
+            CameraPath traced[Scene::kPacketSize];
+            int index[Scene::kPacketSize], m = 0;
+            for (int k = 0; k < packet.n; ++k) {
+                index[k] = -1;
+                if (packet.paths[k].weight == 0) continue;
+                index[k] = m;
+                traced[m++] = packet.paths[k];
+            }
+            Rgb got[Scene::kPacketSize];
+            trace_packet(m_scene, m_footprints, traced, m, &cmam, sp.scratch, got);
+            for (int k = 0; k < packet.n; ++k) {
+                radiance[k] = index[k] < 0 ? Rgb() : got[index[k]] * packet.paths[k].weight;
+                if (index[k] < 0) packet.aov[k] = Aov{m_options.aov};
+            }
+        }
         if (tile) {  // a packet's samples summed in single precision, then added to the tile
             int x0 = std::numeric_limits<int>::max(), x1 = std::numeric_limits<int>::min();
             for (int k = 0; k < packet.n; ++k) {

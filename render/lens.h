@@ -1,13 +1,16 @@
-// render — the first-order (paraxial) optics of a pbrt-v3 "realistic" camera's lens system: its
-// lens file, its effective focal length and principal planes from ray-transfer matrices, and the
-// film distance that focuses it (algorithms.md §7.2). The scene builder renders the camera as
-// the pinhole these give.
+// render — a pbrt-v3 "realistic" camera's lens system: its lens file, its first-order
+// (paraxial) optics from ray-transfer matrices (algorithms.md §7.2), and the camera itself, rays
+// traced from the film through the lens's spherical interfaces and aperture stop as pbrt-v3's
+// RealisticCamera traces them (algorithms.md §7.3).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "render/math.h"
 
 namespace cmam::render {
 
@@ -52,5 +55,66 @@ ParaxialLens paraxial_lens(const std::vector<LensInterface>& lens);
 /// the principal planes' frame, the root nearer the focal length. Throws RenderError when the
 /// system cannot focus that near.
 double image_distance(const ParaxialLens& lens, double focus_distance);
+
+/// pbrt-v3's realistic camera (algorithms.md §7.3), in its units (metres) and its camera space
+/// (left-handed, looking along +z, the film at z = 0 and the lens in front of it). The lens
+/// system is focused as pbrt-v3 focuses it (its thick-lens approximation moves the last
+/// interface), and the exit pupil is bounded, as pbrt-v3 bounds it, at 64 distances from the
+/// film's centre by 2^20 rays each.
+class RealisticLens {
+  public:
+    struct Settings {
+        std::vector<LensInterface> interfaces;  // as the lens file lists them (mm)
+        double aperture_diameter = 1;           // mm: the stop's, at most the file's
+        double focus_distance = 10;             // m, in front of the film
+        double film_diagonal = 35;              // mm
+        int xres = 1, yres = 1;                 // the film's full resolution
+        bool simple_weighting = true;
+        int pupil_rays = 1 << 20;  // per bound (pbrt-v3's); fewer only for tests
+    };
+    /// Throws RenderError when the lens cannot be focused at that distance or a ray parallel to
+    /// the axis does not pass (the stop too small).
+    explicit RealisticLens(const Settings& s);
+
+    using V3 = Vec3d;
+    struct Ray {
+        V3 o, d;
+    };
+    /// The ray through raster position (px, py) of the full film from the exit-pupil sample
+    /// (lu, lv) in [0,1)^2, in camera space (d not normalised), and its weight: pbrt-v3's
+    /// cos^4 theta times the pupil bound's area over the central one's ("simpleweighting"), or
+    /// over the rear element's distance squared. 0 when the lens blocks it (`ray` is then
+    /// unspecified).
+    double generate(double px, double py, double lu, double lv, Ray& ray) const;
+    /// A ray from the film side (camera space) through the interfaces; false when an aperture
+    /// or total internal reflection stops it.
+    bool trace_from_film(const Ray& in, Ray* out) const;
+    bool trace_from_scene(const Ray& in, Ray* out) const;
+
+    struct Bounds {
+        double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+        double area() const { return (x1 - x0) * (y1 - y0); }
+    };
+    static constexpr int kPupilBounds = 64;
+    const std::array<Bounds, kPupilBounds>& pupil_bounds() const { return m_pupil; }
+    double rear_z() const { return m_el.back().thickness; }  // the film's distance to the lens
+    double front_z() const;                                  // to its front interface
+    double film_diagonal() const { return m_diagonal; }      // m
+    /// What the aperture stop's diameter was clamped to (the file's), or 0.
+    double clamped_aperture() const { return m_clamped; }
+
+  private:
+    struct Element {
+        double radius, thickness, eta, aperture_radius;  // m; eta 0 is air
+    };
+    std::vector<Element> m_el;
+    std::array<Bounds, kPupilBounds> m_pupil{};
+    double m_diagonal = 0.035, m_half_x = 0, m_half_y = 0;
+    int m_xres = 1, m_yres = 1;
+    bool m_simple = true;
+    double m_clamped = 0;
+    Bounds bound_exit_pupil(double x0, double x1, int rays) const;
+    static bool pass(const Element& e, double z, double eta_i, double eta_t, Ray& r);
+};
 
 }  // namespace cmam::render

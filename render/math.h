@@ -10,6 +10,27 @@ namespace cmam::render {
 constexpr float kPi = std::numbers::pi_v<float>;
 constexpr float kInvPi = 1.0f / kPi;
 
+/// A point or vector in double precision, for what is computed once per scene (subdivision,
+/// lens systems) where float's rounding would accumulate.
+struct Vec3d {
+    double x = 0, y = 0, z = 0;
+};
+inline Vec3d operator+(Vec3d a, Vec3d b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline Vec3d operator-(Vec3d a, Vec3d b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline Vec3d operator*(double s, Vec3d a) {
+    return {s * a.x, s * a.y, s * a.z};
+}
+inline Vec3d cross(Vec3d a, Vec3d b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double dot(Vec3d a, Vec3d b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
 struct Vec3 {
     float x = 0, y = 0, z = 0;
     Vec3() = default;

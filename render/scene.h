@@ -27,10 +27,15 @@
 
 namespace cmam::render {
 
-/// A camera ray: its origin and unit direction.
+/// A camera ray: its origin and unit direction, and the weight of its sample (a realistic
+/// camera's: 0 where the lens blocks the ray, whose origin and direction are then the camera's
+/// position and axis).
 struct CameraRay {
     Vec3 org, dir;
+    float weight = 1;
 };
+
+class RealisticLens;
 
 /// A Film's resolution where the scene gives none: pbrt-v3's (its CreateFilm), 1280x720.
 constexpr int kDefaultFilmWidth = 1280, kDefaultFilmHeight = 720;
@@ -51,10 +56,16 @@ struct Camera {
     // of focus. Radius 0 is the pinhole; the scene builder gives a lens to perspective cameras
     // only, so a camera with one is a perspective camera.
     float lens_radius = 0, focal_distance = 1e6f;
+    // pbrt-v3's realistic camera (lens.h): rays traced through its lens system from a point of
+    // its exit pupil, each with a weight. Its tan_half_fov is the paraxial one (ray cones' spread).
+    std::shared_ptr<const RealisticLens> realistic;
 
-    bool has_lens() const { return lens_radius > 0 && !orthographic && !environment; }
+    bool has_lens() const {
+        return realistic || (lens_radius > 0 && !orthographic && !environment);
+    }
     /// Primary ray through raster position (px, py) (pixels, y down). Direction is unit length.
-    /// The pinhole's: with a lens, the ray from the lens's centre.
+    /// The pinhole's: with a lens, the ray from the lens's centre (a realistic camera's from
+    /// the middle of its exit pupil's bound, which may be blocked: weight 0).
     CameraRay generate_ray(float px, float py) const;
     /// The ray through (px, py) from the lens point that the sample (lu, lv) in [0,1)^2 maps to
     /// (pbrt-v3's concentric mapping of the square onto the disc); generate_ray's without a lens.

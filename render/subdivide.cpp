@@ -6,29 +6,15 @@
 #include <cstdint>
 #include <numbers>
 #include <unordered_map>
+#include <vector>
+
+#include "render/math.h"
 
 namespace cmam::render {
 
 namespace {
 
-struct P3 {
-    double x = 0, y = 0, z = 0;
-};
-P3 operator+(P3 a, P3 b) {
-    return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-P3 operator-(P3 a, P3 b) {
-    return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-P3 operator*(double s, P3 a) {
-    return {s * a.x, s * a.y, s * a.z};
-}
-P3 cross(P3 a, P3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double dot(P3 a, P3 b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
+using P3 = Vec3d;
 
 uint64_t edge_key(int a, int b) {
     const auto lo = static_cast<uint32_t>(std::min(a, b)),

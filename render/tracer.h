@@ -207,6 +207,9 @@ struct CameraPath {
     uint32_t sample = 0, samples = 1, samples_x = 1;  // (samples_x: the strata along x)
     RayCounts* counts = nullptr;
     Aov* aov = nullptr;
+    // The sample's weight (a realistic camera's, CameraRay::weight); 0: blocked by the lens, not
+    // traced, its radiance 0.
+    float weight = 1;
 };
 
 /// What trace_one gives for each of n <= Scene::kPacketSize camera samples, into radiance[i],

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -113,7 +114,9 @@ TEST(Camera, LookAtPlacesTheCamera) {
         "LookAt 1 2 3  1 2 -7  0 1 0 Camera \"perspective\" Film \"image\" \"integer xresolution\" "
         "10 "
         "\"integer yresolution\" 10 WorldBegin WorldEnd");
-    auto [o, d] = s->camera.generate_ray(5, 5);
+    const render::CameraRay ray = s->camera.generate_ray(5, 5);
+    const render::Vec3& o = ray.org;
+    render::Vec3 d = ray.dir;
     EXPECT_NEAR(o.x, 1, 1e-6);
     EXPECT_NEAR(o.y, 2, 1e-6);
     EXPECT_NEAR(o.z, 3, 1e-6);
@@ -158,8 +161,8 @@ TEST(Camera, ScreenWindowAndCrop) {
     EXPECT_EQ(s->film.y1, 3);
 }
 
-// pbrt-v3's realistic camera is rendered as a pinhole whose fov is the paraxial one of its lens
-// system (algorithms.md §7.2). The lenses are written to lens files in a temporary folder.
+// pbrt-v3's realistic camera (algorithms.md §7.2, §7.3): its lens system's paraxial optics, and
+// rays traced through it. The lenses are written to lens files in a temporary folder.
 namespace {
 
 // A single glass element: front radius r1, back radius r2, thickness d and index n (mm), its
@@ -194,11 +197,6 @@ struct LensScene {
 // and bottom edges.
 const std::string kFilm100 =
     "\"integer xresolution\" 400 \"integer yresolution\" 300 \"float diagonal\" 100";
-
-// Lensmaker's equation for a thin lens in air.
-double lensmaker(double r1, double r2, double n) {
-    return 1 / ((n - 1) * (1 / r1 - 1 / r2));
-}
 
 }  // namespace
 
@@ -332,38 +330,117 @@ TEST(Camera, ThinLensBlursOnlyWhatIsOffThePlaneOfFocus) {
     EXPECT_GE(blurred_pixels(10), 4);
 }
 
-TEST(RealisticCamera, ThinLensFramesTheFilmFromItsImageDistance) {
-    LensScene s;
-    s.write("thin.dat", element(50, -50, 0, 1.5));
-    ASSERT_DOUBLE_EQ(lensmaker(50, -50, 1.5), 50);
-    // Focused 225 mm in front of the film, 1/s + 1/s' = 1/50 with s + s' = 225: s' = 75 mm.
-    auto sc = s.build(
-        "\"string lensfile\" \"thin.dat\" \"float focusdistance\" 0.225 \"float aperturediameter\" "
-        "2",
-        kFilm100);
-    const float t = 30.0f / 75;  // the half fov's tangent
-    EXPECT_NEAR(sc->camera.tan_half_fov, t, 1e-6);
-    expect_dir(sc->camera.generate_ray(200, 150).dir, Vec3(0, 0, 1));
-    expect_dir(sc->camera.generate_ray(200, 0).dir, Vec3(0, t, 1));  // the top row looks up
-    expect_dir(sc->camera.generate_ray(0, 150).dir, Vec3(-40.0f / 75, 0, 1));  // left: -x
-    expect_dir(sc->camera.generate_ray(400, 300).dir, Vec3(40.0f / 75, -t, 1));
+// A thick biconvex singlet (radii 60 and -40 mm, 12 mm of index 1.6) with a stop 8 mm behind
+// it, its film 60 mm further (a distance focusing replaces).
+const std::string kSinglet =
+    "# radius thickness eta aperture\n60 12 1.6 30\n-40 8 1 30\n0 60 0 12\n";
+
+// The lens of kSinglet as pbrt-v3's realistic camera makes it (fewer rays bound its pupil).
+render::RealisticLens singlet(double focus, double aperture = 12, int pupil_rays = 1 << 14) {
+    render::RealisticLens::Settings rs;
+    rs.interfaces = render::parse_lens(kSinglet, "lens");
+    rs.aperture_diameter = aperture;
+    rs.focus_distance = focus;
+    rs.film_diagonal = 35;
+    rs.xres = 300;
+    rs.yres = 200;
+    rs.pupil_rays = pupil_rays;
+    return render::RealisticLens(rs);
 }
 
-TEST(RealisticCamera, FocusDistanceMovesTheFilmAsTheThinLensEquationSays) {
-    LensScene s;
-    s.write("thin.dat", element(50, -50, 0, 1.5));
-    const double f = 50;
-    for (double focus : {0.2001, 0.225, 0.5, 10.0, 1e4}) {
-        const double F = 1000 * focus;
-        const double image = (F - std::sqrt(F * F - 4 * f * F)) / 2;  // s + s' = F, s s' = f F
-        auto sc = s.build(
-            "\"string lensfile\" \"thin.dat\" \"float focusdistance\" " + std::to_string(focus),
-            kFilm100);
-        EXPECT_NEAR(sc->camera.tan_half_fov, 30 / image, 1e-6 * 30 / image) << focus;
+// Focused at a distance, rays from the film's centre through a small aperture leave the lens
+// towards one point on the axis at that distance in front of the film (pbrt-v3's thick-lens
+// focusing: the film at the paraxial image distance behind the rear principal plane).
+TEST(RealisticCamera, RaysFromTheFilmsCentreMeetAtTheFocusDistance) {
+    for (double focus : {0.5, 2.0, 10.0}) {
+        const render::RealisticLens lens = singlet(focus, 2);
+        int passed = 0;
+        // Near the pupil's middle (spherical aberration moves the marginal rays' crossing).
+        for (auto [lu, lv] : {std::pair{0.48, 0.5}, {0.52, 0.5}, {0.5, 0.47}, {0.5, 0.53}}) {
+            render::RealisticLens::Ray r;
+            if (lens.generate(150, 100, lu, lv, r) == 0) continue;
+            ++passed;
+            // Where the ray crosses the axis (it lies in a plane through it).
+            const double t = std::abs(r.d.x) > std::abs(r.d.y) ? -r.o.x / r.d.x : -r.o.y / r.d.y;
+            EXPECT_NEAR(r.o.z + t * r.d.z, focus, 2e-3 * focus) << focus << " " << lu << " " << lv;
+        }
+        EXPECT_GE(passed, 4) << focus;
     }
-    // The default focus distance is 10 m.
-    auto sc = s.build("\"string lensfile\" \"thin.dat\"", kFilm100);
-    EXPECT_NEAR(sc->camera.tan_half_fov, 30 / ((1e4 - std::sqrt(1e8 - 4 * f * 1e4)) / 2), 1e-6);
+    // The film distance: the paraxial image distance from the rear principal plane.
+    const render::ParaxialLens p = render::paraxial_lens(render::parse_lens(kSinglet, "lens"));
+    const double image = render::image_distance(p, 2000);
+    EXPECT_NEAR(1000 * singlet(2).rear_z(), p.rear_principal + image - 20, 1e-3);
+}
+
+// pbrt-v3's exit pupil bounds hold every ray that leaves the lens: film points at random radii,
+// rear-element points at random on its disc; each that passes lies within the bound of its
+// radius (rotated to the film point's direction: here the film's x axis).
+TEST(RealisticCamera, ExitPupilBoundsHoldEveryRayThatPasses) {
+    const render::RealisticLens lens = singlet(1.0, 12, 1 << 16);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> U(0, 1);
+    const double rear_radius = 0.015, half_diagonal = lens.film_diagonal() / 2;
+    int passed = 0;
+    for (int k = 0; k < 20000; ++k) {
+        const double x = U(rng) * half_diagonal;
+        const double a = 2 * render::kPi * U(rng), rr = rear_radius * std::sqrt(U(rng));
+        const render::RealisticLens::V3 film{x, 0, 0},
+            rear{rr * std::cos(a), rr * std::sin(a), lens.rear_z()};
+        if (!lens.trace_from_film({film, {rear.x - x, rear.y, rear.z}}, nullptr)) continue;
+        ++passed;
+        const int i = std::min(63, static_cast<int>(x / half_diagonal * 64));
+        const auto& b = lens.pupil_bounds()[static_cast<std::size_t>(i)];
+        EXPECT_TRUE(rear.x >= b.x0 && rear.x <= b.x1 && rear.y >= b.y0 && rear.y <= b.y1)
+            << x << " " << rear.x << " " << rear.y;
+    }
+    EXPECT_GT(passed, 1000);
+}
+
+// The weight of a sample is cos^4 theta times its pupil bound's area over the central bound's
+// (pbrt-v3's "simpleweighting"): 1 at the centre of the film and pupil; a blocked ray has 0.
+TEST(RealisticCamera, SamplesAreWeightedAndBlockedRaysAreZero) {
+    const render::RealisticLens lens = singlet(1.0);
+    render::RealisticLens::Ray r;
+    EXPECT_NEAR(lens.generate(150, 100, 0.5, 0.5, r), 1.0, 1e-6);
+    // A corner of the film through its bound's corners: the lens blocks it.
+    EXPECT_EQ(lens.generate(0, 0, 0.0, 0.0, r), 0.0);
+    // Elsewhere: cos^4 of the ray from the film point to its rear point, times the areas' ratio.
+    const double w = lens.generate(40, 30, 0.5, 0.5, r);
+    ASSERT_GT(w, 0);
+    EXPECT_LT(w, 1);
+}
+
+// The camera in the scene: the image the same way up as the perspective camera's (pbrt-v3
+// mirrors the film's x so that its lens's inverted image comes out upright), rays leaving the
+// front of the lens, and the aperture stop clamped to the file's with pbrt-v3's warning.
+TEST(RealisticCamera, FramesTheSceneAsThePerspectiveCamera) {
+    LensScene s;
+    s.write("singlet.dat", kSinglet);
+    std::vector<std::string> warnings;
+    auto sc = s.build(
+        "\"string lensfile\" \"singlet.dat\" \"float focusdistance\" 1 "
+        "\"float aperturediameter\" 4",
+        "\"integer xresolution\" 300 \"integer yresolution\" 200", &warnings);
+    EXPECT_TRUE(warnings.empty());
+    ASSERT_TRUE(sc->camera.realistic);
+    const render::CameraRay centre = sc->camera.generate_ray(150, 100);
+    EXPECT_NEAR(centre.weight, 1, 1e-5);
+    expect_dir(centre.dir, Vec3(0, 0, 1), 1e-4f);
+    EXPECT_NEAR(centre.org.z, sc->camera.realistic->front_z(), 1e-6);  // the lens's front
+    EXPECT_GT(sc->camera.generate_ray(150, 20).dir.y, 0.05f);          // the top row looks up
+    EXPECT_LT(sc->camera.generate_ray(20, 100).dir.x, -0.05f);         // the left column looks left
+    // Near the axis, where distortion is small, the perspective camera of the paraxial field.
+    const float t = sc->camera.tan_half_fov;
+    const render::CameraRay off = sc->camera.generate_ray(170, 110);
+    expect_dir(off.dir, Vec3(20.0f / 100 * t, -10.0f / 100 * t, 1), 2e-3f);
+    warnings.clear();
+    s.build("\"string lensfile\" \"singlet.dat\" \"float aperturediameter\" 20", kFilm100,
+            &warnings);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("aperturediameter 20 mm is wider than the lens's aperture stop; "
+                               "its 12 mm is used"),
+              std::string::npos)
+        << warnings[0];
 }
 
 // A thick biconvex lens (Hecht's formulas): 1/f = (n-1) (1/R1 - 1/R2 + (n-1) d / (n R1 R2)),
@@ -387,59 +464,6 @@ TEST(RealisticCamera, ThickLensFocusesFromItsPrincipalPlanes) {
     const double image = (sum - std::sqrt(sum * sum - 4 * f * sum)) / 2;
     auto sc = s.build("\"string lensfile\" \"thick.dat\" \"float focusdistance\" 0.3", kFilm100);
     EXPECT_NEAR(sc->camera.tan_half_fov, 30 / image, 1e-6);
-}
-
-TEST(RealisticCamera, FramesTheSceneAsThePerspectiveCameraOfItsFov) {
-    LensScene s;
-    s.write("thin.dat", element(50, -50, 0, 1.5));
-    const std::string look = "LookAt 1 2 3  4 -2 -5  0 1 0\n";
-    auto real = render::build_scene(
-        pbrt::parse_string(
-            look + LensScene::text("\"string lensfile\" \"thin.dat\" \"float focusdistance\" "
-                                   "0.225",
-                                   kFilm100),
-            s.scene),
-        {}, {});
-    auto persp = test::scene_from(
-        look + "Camera \"perspective\" \"float fov\" " + std::to_string(2 * std::atan(0.4) / kDeg) +
-        " Film \"image\" \"integer xresolution\" 400 \"integer yresolution\" 300 WorldBegin "
-        "WorldEnd");
-    for (auto [x, y] : {std::pair{0.0f, 0.0f}, {400.0f, 0.0f}, {0.0f, 300.0f}, {123.0f, 45.0f}}) {
-        const auto [o, d] = real->camera.generate_ray(x, y);
-        EXPECT_NEAR(o.x, 1, 1e-6);
-        EXPECT_NEAR(o.y, 2, 1e-6);
-        EXPECT_NEAR(o.z, 3, 1e-6);
-        expect_dir(d, persp->camera.generate_ray(x, y).dir);
-    }
-}
-
-TEST(RealisticCamera, WarnsThatItIsRenderedAsAPinhole) {
-    LensScene s;
-    s.write("thin.dat", element(50, -50, 0, 1.5));
-    std::vector<std::string> warnings;
-    s.build("\"string lensfile\" \"thin.dat\" \"float focusdistance\" 0.225", kFilm100, &warnings);
-    // 2 atan(30 / 75) = 43.6028 degrees.
-    EXPECT_EQ(warnings,
-              std::vector<std::string>{
-                  s.scene + ":1:1: warning: Camera \"realistic\" is rendered as a pinhole of fov "
-                            "43.6 degrees; depth of field, lens distortion and vignetting are not "
-                            "simulated"});
-}
-
-// A 1 mm lens behind a 35 mm film's square: 2 atan(12.37 / 1.0001) = 170.8 degrees.
-TEST(RealisticCamera, AFieldWiderThan170DegreesIsClamped) {
-    LensScene s;
-    s.write("short.dat", element(1, -1, 0, 1.5));
-    std::vector<std::string> warnings;
-    auto sc = s.build("\"string lensfile\" \"short.dat\"",
-                      "\"integer xresolution\" 64 \"integer yresolution\" 64", &warnings);
-    EXPECT_NEAR(sc->camera.tan_half_fov, std::tan(85 * kDeg), 1e-3);
-    ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_EQ(warnings[0],
-              s.scene +
-                  ":1:1: warning: Camera \"realistic\" is rendered as a pinhole of fov 170 "
-                  "degrees (the lens's 170.8 degrees, clamped: a fisheye cannot be rendered as a "
-                  "pinhole); depth of field, lens distortion and vignetting are not simulated");
 }
 
 TEST(RealisticCamera, AMissingLensFileIsALocatedError) {

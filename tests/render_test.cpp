@@ -44,7 +44,8 @@ TEST(Analytic, LambertianPlaneUnderAPointLight) {
     double worst = 0;
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 32; ++x) {
-            const auto [org, dir] = s->camera.generate_ray(x + 0.5f, y + 0.5f);
+            const CameraRay ray = s->camera.generate_ray(x + 0.5f, y + 0.5f);
+            const Vec3 &org = ray.org, &dir = ray.dir;
             Vec3 p = org + dir * (-org.z / dir.z);
             Vec3 d = Vec3(1, 2, 3) - p;
             float d2 = dot(d, d);
@@ -654,7 +655,8 @@ int expect_packets_match_single_rays(const Scene& s, std::initializer_list<int> 
             CameraPath paths[N];
             for (int k = 0; k < N; ++k) {
                 const float fx = x + k + 0.37f, fy = py + 0.61f;
-                const auto [o, d] = s.camera.generate_ray(fx, fy);
+                const CameraRay ray = s.camera.generate_ray(fx, fy);
+                const Vec3 &o = ray.org, &d = ray.dir;
                 texture::RayTag tag;
                 tag.id = static_cast<uint32_t>(py);
                 tag.seq = static_cast<uint32_t>(x + k);

@@ -154,7 +154,7 @@ class Builder {
     // --- film, camera, sampler, pixel filter, integrator (film_camera.cpp) -----------------
     void film();
     void camera();
-    float realistic_tan_half_fov(const Entity& e);
+    void realistic_camera(const Entity& e, Camera& c);
     static void check_camera_rays(const Camera& c, const pbrt::FileLoc& loc);
     void sampler();
     void filter();

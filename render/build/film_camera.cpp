@@ -123,7 +123,7 @@ void Builder::camera() {
         }
     }
     if (realistic) {
-        c.tan_half_fov = realistic_tan_half_fov(e);
+        realistic_camera(e, c);
     } else {
         double fov = c.orthographic ? 90 : e.params.get_float("fov", 90);
         double halffov = c.orthographic ? -1 : e.params.get_float("halffov", -1);
@@ -157,11 +157,11 @@ void Builder::camera() {
     e.params.check_unused("Camera " + in_quotes(e.type), m_warn, {"shutteropen", "shutterclose"});
 }
 
-// pbrt-v3's realistic camera as a pinhole: its field of view spans the film's shorter side seen
-// from the rear principal plane of the lens system focused at "focusdistance" (paraxial optics,
-// algorithms.md §7.2). The image is the same way up as pbrt-v3's, which flips the lens's
-// inverted image back to the perspective camera's orientation.
-float Builder::realistic_tan_half_fov(const Entity& e) {
+// pbrt-v3's realistic camera (algorithms.md §7.3): rays traced through the lens system of its
+// "lensfile", focused at "focusdistance" with the aperture stop "aperturediameter" wide, from
+// the film's physical extent (Film "diagonal"). Its paraxial field of view (§7.2) is kept for
+// what ray cones spread by.
+void Builder::realistic_camera(const Entity& e, Camera& c) {
     const pbrt::Param* file = e.params.find("lensfile");
     const std::string name = e.params.get_string("lensfile", "");
     if (name.empty())
@@ -169,8 +169,7 @@ float Builder::realistic_tan_half_fov(const Entity& e) {
                          "Camera \"realistic\" needs a \"string lensfile\" parameter");
     const std::string path = pbrt::resolve_path(m_desc.base_dir, file->loc, name);
     const double focus = finite_float(e, "focusdistance", 10, true);
-    finite_float(e, "aperturediameter", 1, true);
-    e.params.get_bool("simpleweighting", true);
+    const double aperture = finite_float(e, "aperturediameter", 1, true);
     // Each step's RenderError becomes a SceneError at `loc`, its message after `prefix`.
     const auto at = [](const pbrt::FileLoc& loc, const std::string& prefix, auto step) {
         try {
@@ -184,18 +183,25 @@ float Builder::realistic_tan_half_fov(const Entity& e) {
     const ParaxialLens lens = at(file->loc, in_file, [&] { return paraxial_lens(interfaces); });
     const double image =
         at(loc_of(e, "focusdistance"), in_file, [&] { return image_distance(lens, 1000 * focus); });
-    const int shorter = std::min(m_scene->camera.xres, m_scene->camera.yres);
-    const double half_side =
-        m_film_diagonal / 2 * shorter / std::hypot(m_scene->camera.xres, m_scene->camera.yres);
+    const int shorter = std::min(c.xres, c.yres);
+    const double half_side = m_film_diagonal / 2 * shorter / std::hypot(c.xres, c.yres);
     const double fov = 360 / std::numbers::pi * std::atan(half_side / image);
-    std::string rendered = "a pinhole of fov " + pbrt::number_text(fov, 4) + " degrees";
-    if (fov > kMaxRealisticFov)
-        rendered = "a pinhole of fov " + pbrt::number_text(kMaxRealisticFov, 4) +
-                   " degrees (the lens's " + pbrt::number_text(fov, 4) +
-                   " degrees, clamped: a fisheye cannot be rendered as a pinhole)";
-    warn(e.loc, "Camera \"realistic\" is rendered as " + rendered +
-                    "; depth of field, lens distortion and vignetting are not simulated");
-    return float(std::tan(std::min(fov, kMaxRealisticFov) * std::numbers::pi / 360));
+    c.tan_half_fov = float(std::tan(std::min(fov, kMaxRealisticFov) * std::numbers::pi / 360));
+    RealisticLens::Settings rs;
+    rs.interfaces = interfaces;
+    rs.aperture_diameter = aperture;
+    rs.focus_distance = focus;
+    rs.film_diagonal = m_film_diagonal;
+    rs.xres = c.xres;
+    rs.yres = c.yres;
+    rs.simple_weighting = e.params.get_bool("simpleweighting", true);
+    c.realistic = at(loc_of(e, "focusdistance"), in_file,
+                     [&] { return std::make_shared<const RealisticLens>(rs); });
+    if (c.realistic->clamped_aperture() > 0)
+        warn(loc_of(e, "aperturediameter"), "aperturediameter " + pbrt::number_text(aperture) +
+                                                " mm is wider than the lens's aperture stop; its " +
+                                                pbrt::number_text(c.realistic->clamped_aperture()) +
+                                                " mm is used, as pbrt-v3 clamps it");
 }
 
 // Embree takes rays whose origin and direction are finite and within kMaxRayCoordinate.
@@ -213,7 +219,8 @@ void Builder::check_camera_rays(const Camera& c, const pbrt::FileLoc& loc) {
     for (int corner = 0; corner < 4; ++corner)
         for (int k = 0; k < (c.has_lens() ? 5 : 1); ++k) {
             const float px = corner & 1 ? float(c.xres) : 0, py = corner & 2 ? float(c.yres) : 0;
-            const auto [org, dir] = c.generate_ray(px, py, lens[k][0], lens[k][1]);
+            const CameraRay ray = c.generate_ray(px, py, lens[k][0], lens[k][1]);
+            const Vec3 &org = ray.org, &dir = ray.dir;
             const std::string at = " at raster position (" + pbrt::number_text(px) + ", " +
                                    pbrt::number_text(py) + ")";
             for (float x : {org.x, org.y, org.z})

@@ -103,6 +103,35 @@ void FootprintProducers::start_lens_ray(RayFootprint& r, float fx, float fy, flo
     start_camera_state(r, to_stratum_x, to_stratum_y);
 }
 
+bool FootprintProducers::start_realistic_ray(RayFootprint& r, float fx, float fy, float lu,
+                                             float lv, const CameraRay& ray, float to_stratum_x,
+                                             float to_stratum_y) const {
+    r.diff = {};
+    Vec3 d_o[2], d_d[2];
+    for (int axis = 0; axis < 2; ++axis) {
+        bool found = false;
+        for (const float eps : {0.05f, -0.05f}) {
+            const CameraRay s = m_camera.generate_ray(fx + (axis == 0 ? eps : 0),
+                                                      fy + (axis == 1 ? eps : 0), lu, lv);
+            if (s.weight == 0) continue;
+            d_o[axis] = (s.org - ray.org) / eps;
+            d_d[axis] = (s.dir - ray.dir) / eps;
+            found = true;
+            break;
+        }
+        if (!found) return false;
+    }
+    if (m_camera_differentials) {
+        r.diff.valid = true;
+        r.diff.dodx = d_o[0] * m_scale;
+        r.diff.dody = d_o[1] * m_scale;
+        r.diff.dddx = d_d[0] * m_scale;
+        r.diff.dddy = d_d[1] * m_scale;
+    }
+    start_camera_state(r, to_stratum_x, to_stratum_y);
+    return true;
+}
+
 void FootprintProducers::start_environment_ray(RayFootprint& r, const Vec3 (&dirs)[3],
                                                float to_stratum_x, float to_stratum_y) const {
     r.diff = {};

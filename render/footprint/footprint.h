@@ -116,6 +116,13 @@ class FootprintProducers {
     /// own points on the plane of focus: no origin offset).
     void start_lens_ray(RayFootprint& r, float fx, float fy, float lu, float lv, const Vec3& dir,
                         float to_stratum_x, float to_stratum_y) const;
+    /// The same for a ray of a realistic camera (`ray`, from exit-pupil sample (lu, lv)): its
+    /// differential is pbrt-v3's, the rays through raster positions 0.05 pixels away along x
+    /// and y from the same pupil sample (the other side where one is blocked), their origins'
+    /// and directions' differences over 0.05. False where both rays along x or both along y are
+    /// blocked: pbrt-v3 then drops the sample (weight 0), whatever the footprints.
+    bool start_realistic_ray(RayFootprint& r, float fx, float fy, float lu, float lv,
+                             const CameraRay& ray, float to_stratum_x, float to_stratum_y) const;
     /// Whether camera rays can be made together (camera_rays): the perspective pinhole's.
     bool batches_camera_rays() const {
         return !m_camera.orthographic && !m_camera.environment && !m_camera.has_lens();
