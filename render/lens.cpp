@@ -346,7 +346,17 @@ bool RealisticLens::trace_from_scene(const Ray& in, Ray* out) const {
 // root of their number (pbrt-v3's BoundExitPupil). A point already within the bounds needs no
 // ray: it cannot widen them.
 RealisticLens::Bounds RealisticLens::bound_exit_pupil(double x0, double x1, int rays) const {
-    const double r = m_el.back().aperture_radius, rear = rear_z();
+    const Element& last = m_el.back();
+    const double r = last.aperture_radius, rear = rear_z();
+    // Rays the rear element's aperture stops, known without tracing them: where a ray passes
+    // that aperture it meets the element within `sag` of its vertex plane along the axis (the
+    // cap of the vertex's side, the side the trace takes), so at least |q| - |q - film| sag / rear
+    // from the axis; beyond the aperture radius (with a margin for rounding) the trace would stop
+    // it there. (No such bound for an element whose aperture is wider than its sphere: sag -1.)
+    const double radius = std::abs(last.radius);
+    const double sag = last.radius == 0 ? 0
+                       : r < radius     ? radius - std::sqrt(radius * radius - r * r)
+                                        : -1;
     Bounds b{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
              std::numeric_limits<double>::lowest(), std::numeric_limits<double>::lowest()};
     bool any = false;
@@ -356,6 +366,11 @@ RealisticLens::Bounds RealisticLens::bound_exit_pupil(double x0, double x1, int 
                      v = radical_inverse_3(static_cast<uint32_t>(i));
         const V3 q{-1.5 * r + u * 3 * r, -1.5 * r + v * 3 * r, rear};
         const bool inside = q.x >= b.x0 && q.x <= b.x1 && q.y >= b.y0 && q.y <= b.y1;
+        if (!inside && sag >= 0 &&
+            std::sqrt(q.x * q.x + q.y * q.y) -
+                    std::sqrt((q.x - film.x) * (q.x - film.x) + q.y * q.y) * sag / rear >
+                r * (1 + 1e-9))
+            continue;
         if (inside || trace_from_film({film, q - film}, nullptr)) {
             b.x0 = std::min(b.x0, q.x);
             b.y0 = std::min(b.y0, q.y);
