@@ -213,14 +213,16 @@ void Builder::hair_material(const pbrt::MaterialDesc& d, Material& m) {
 }
 
 // pbrt-v3 renders a material it does not know as matte, with a warning; so does
-// cmam with the one it does not render (subsurface scattering).
+// cmam with the ones it does not render (subsurface scattering, and pbrt-v3's "disney", as matte
+// of its base "color", which is what its diffuse lobe's albedo nearly is).
 Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     const Entity& e = d.entity;
     Material m;
     m.type = Material::Type::Matte;
-    m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
+    const char* colour = e.type == "disney" ? "color" : "Kd";
+    m.kd = spectrum_input(e, d.scope, colour, Rgb(0.5f));
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
-                    (e.params.find("Kd") ? " with its Kd" : "") +
+                    (e.params.find(colour) ? std::string(" with its ") + colour : "") +
                     " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
                     "translucent, fourier, hair and mix)");
     return m;  // its other parameters are not read: no warning for each
