@@ -65,6 +65,10 @@ std::vector<LensInterface> parse_lens(std::string_view text, const std::string& 
                           " numbers, not a multiple of 4 (each interface is a curvature radius, "
                           "a thickness, an index of refraction and an aperture diameter)");
     if (values.empty()) throw RenderError(subject + " lists no lens interfaces");
+    if (values.size() / 4 > RealisticLens::kMaxInterfaces)
+        throw RenderError(subject + " lists " + std::to_string(values.size() / 4) +
+                          " interfaces; cmam traces lens systems of at most " +
+                          std::to_string(RealisticLens::kMaxInterfaces));
     std::vector<LensInterface> lens(values.size() / 4);
     for (std::size_t k = 0; k < lens.size(); ++k)
         lens[k] = {values[4 * k], values[4 * k + 1], values[4 * k + 2], values[4 * k + 3]};
@@ -237,6 +241,11 @@ RealisticLens::RealisticLens(const Settings& s)
         m_el.push_back({li.radius * 0.001, li.thickness * 0.001, li.eta, aperture * 0.001 / 2});
     }
     if (m_el.empty()) throw RenderError("the lens system has no interfaces");
+    // (Its exit pupil is bounded by 2^26 rays through every interface: a real lens has a few
+    // dozen, and a file of thousands would take hours.)
+    if (m_el.size() > kMaxInterfaces)
+        throw RenderError("the lens system has " + std::to_string(m_el.size()) +
+                          " interfaces; cmam traces at most " + std::to_string(kMaxInterfaces));
     // The film's physical extent: the diagonal, at the image's aspect ratio.
     const double aspect = double(m_yres) / m_xres;
     const double x = std::sqrt(m_diagonal * m_diagonal / (1 + aspect * aspect));
@@ -271,7 +280,10 @@ RealisticLens::RealisticLens(const Settings& s)
         throw RenderError("the lens system cannot focus " + pbrt::number_text(s.focus_distance) +
                           " m in front of the film (too near for its focal length of " +
                           pbrt::number_text(f * 1000, 4) + " mm)");
-    const double delta = 0.5 * (pz[1] - z + pz[0] - std::sqrt(c));
+    // pbrt-v3's delta = (pz1 - z + pz0 - sqrt(c)) / 2, in a form that does not cancel for a
+    // distant focus: with A = pz1 - z - pz0, delta = pz0 + 2 f A / (A + sqrt(A (A - 4 f))).
+    const double A = pz[1] - z - pz[0];
+    const double delta = pz[0] + 2 * f * A / (A + std::sqrt(c));
     m_el.back().thickness += delta;
     if (!(m_el.back().thickness > 0 && std::isfinite(m_el.back().thickness)))
         throw RenderError("focused " + pbrt::number_text(s.focus_distance) +

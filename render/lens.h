@@ -96,6 +96,7 @@ class RealisticLens {
         double area() const { return (x1 - x0) * (y1 - y0); }
     };
     static constexpr int kPupilBounds = 64;
+    static constexpr std::size_t kMaxInterfaces = 256;
     const std::array<Bounds, kPupilBounds>& pupil_bounds() const { return m_pupil; }
     double rear_z() const { return m_el.back().thickness; }  // the film's distance to the lens
     double front_z() const;                                  // to its front interface

@@ -366,10 +366,13 @@ TEST(RealisticCamera, RaysFromTheFilmsCentreMeetAtTheFocusDistance) {
         }
         EXPECT_GE(passed, 4) << focus;
     }
-    // The film distance: the paraxial image distance from the rear principal plane.
+    // The film distance: the paraxial image distance from the rear principal plane, also for a
+    // focus 10^12 m away (where pbrt-v3's formula cancels to nothing).
     const render::ParaxialLens p = render::paraxial_lens(render::parse_lens(kSinglet, "lens"));
-    const double image = render::image_distance(p, 2000);
-    EXPECT_NEAR(1000 * singlet(2).rear_z(), p.rear_principal + image - 20, 1e-3);
+    for (double focus : {2.0, 1e12}) {
+        const double image = render::image_distance(p, 1000 * focus);
+        EXPECT_NEAR(1000 * singlet(focus).rear_z(), p.rear_principal + image - 20, 1e-3) << focus;
+    }
 }
 
 // pbrt-v3's exit pupil bounds hold every ray that leaves the lens: film points at random radii,
@@ -497,6 +500,10 @@ TEST(RealisticCamera, MalformedLensFilesAreLocatedErrorsWithTheReason) {
     EXPECT_EQ(error_for("50 0 1.5 20\n-50 50 0 nan\n"),
               at + "\", line 2: \"nan\" is not a finite number");
     EXPECT_EQ(error_for("# nothing\n"), at + "\" lists no lens interfaces");
+    std::string many;
+    for (int k = 0; k < 257; ++k) many += "50 1 1.5 20\n";
+    EXPECT_EQ(error_for(many),
+              at + "\" lists 257 interfaces; cmam traces lens systems of at most 256");
     // A meniscus of equal radii and no thickness bends no ray.
     EXPECT_EQ(error_for(element(50, 50, 0, 1.5)),
               at + "\": the lens system has no focusing power (its ray-transfer matrix's C is 0): "
