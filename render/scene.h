@@ -169,6 +169,7 @@ struct Material {
         Translucent,
         Fourier,
         Hair,
+        Disney,
         None,
         Mix
     };
@@ -193,6 +194,11 @@ struct Material {
     HairAbsorption hair_absorption = HairAbsorption::Concentration;
     TexInput hair_sigma_a, hair_colour, eumelanin{-1, Rgb(1.3f)}, pheomelanin;
     TexInput beta_m{-1, Rgb(0.3f)}, beta_n{-1, Rgb(0.3f)}, hair_alpha{-1, Rgb(2)};
+    // Disney (pbrt-v3's "disney"): its base colour in `kd`, roughness in `roughness`, index in
+    // `eta`, and the rest here (pbrt-v3's names and defaults); `thin` its thin-surface form.
+    TexInput metallic, specular_tint, disney_anisotropic, sheen, sheen_tint{-1, Rgb(0.5f)},
+        clearcoat, clearcoat_gloss{-1, Rgb(1)}, flatness, diff_trans{-1, Rgb(1)};
+    bool thin = false;
     // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
     // node -1 and a constant: none (a constant displacement leaves the normal as it is here).
     TexInput bump;
@@ -201,9 +207,33 @@ struct Material {
     /// materials): only then does a hit need its footprints in (u,v).
     bool reads_textures() const {
         if (type == Type::Mix || type == Type::Hair) return true;  // (hair reads v, too)
-        for (const TexInput* in :
-             {&kd, &ks, &kr, &kt, &sigma, &roughness, &vroughness, &eta, &k, &amount, &bump,
-              &hair_sigma_a, &hair_colour, &eumelanin, &pheomelanin, &beta_m, &beta_n, &hair_alpha})
+        for (const TexInput* in : {&kd,
+                                   &ks,
+                                   &kr,
+                                   &kt,
+                                   &sigma,
+                                   &roughness,
+                                   &vroughness,
+                                   &eta,
+                                   &k,
+                                   &amount,
+                                   &bump,
+                                   &hair_sigma_a,
+                                   &hair_colour,
+                                   &eumelanin,
+                                   &pheomelanin,
+                                   &beta_m,
+                                   &beta_n,
+                                   &hair_alpha,
+                                   &metallic,
+                                   &specular_tint,
+                                   &disney_anisotropic,
+                                   &sheen,
+                                   &sheen_tint,
+                                   &clearcoat,
+                                   &clearcoat_gloss,
+                                   &flatness,
+                                   &diff_trans})
             if (in->node >= 0) return true;
         return false;
     }

@@ -475,6 +475,7 @@ void Bsdf::scale(const Rgb& w) {
     kt_diffuse = kt_diffuse * w;
     fourier_scale = fourier_scale * w;
     hair_scale = hair_scale * w;
+    disney_scale = disney_scale * w;
     if (layer) layer->scale(w);
 }
 
@@ -512,6 +513,7 @@ bool Bsdf::fits(const Bsdf& o) const {
     // A Fourier BSDF takes no other non-specular lobe beside it.
     if ((fourier && o.own_lobes() > 0) || (o.fourier && own_lobes() > 0)) return false;
     if ((hair && o.own_lobes() > 0) || (o.hair && own_lobes() > 0)) return false;  // the same
+    if ((disney && o.own_lobes() > 0) || (o.disney && own_lobes() > 0)) return false;
     if (microfacet(*this) && microfacet(o) &&
         (alpha != o.alpha || alpha_y != o.alpha_y || anisotropic != o.anisotropic ||
          lobe_eta_i != o.lobe_eta_i || lobe_eta_t != o.lobe_eta_t || conductor != o.conductor ||
@@ -567,6 +569,10 @@ void Bsdf::add(const Bsdf& o, std::forward_list<Bsdf>& layers) {
             hair_model = o.hair_model;
             hair_scale = o.hair_scale;
         }
+        if (o.disney) {
+            disney = o.disney;
+            disney_scale = o.disney_scale;
+        }
         if (o.fourier) {
             fourier = o.fourier;
             fourier_scale = o.fourier_scale;
@@ -594,7 +600,8 @@ Rgb Bsdf::f(const Vec3& wo_w, const Vec3& wi_w) const {
 
 int Bsdf::own_lobes() const {
     return int(has_glossy()) + int(has_diffuse()) + int(has_transmission()) +
-           int(has_diffuse_transmission()) + int(fourier != nullptr) + int(hair);
+           int(has_diffuse_transmission()) + int(fourier != nullptr) + int(hair) +
+           (disney ? disney->components() : 0);
 }
 
 // The layers' lobes are evaluated in their own frames, from wo in the world.
@@ -612,6 +619,7 @@ Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
     if (fourier) return fourier_f(*fourier, wo, frame.to_local(wi_w)) * fourier_scale;
     if (hair) return hair_f(hair_model, o.hair, frame.to_local(wi_w)) * hair_scale;
     bool reflect = dot(wi_w, ng) * o.w_ng > 0;
+    if (disney) return disney_f(*disney, wo, frame.to_local(wi_w), reflect) * disney_scale;
     if (!reflect) {
         Rgb out = has_transmission() ? transmission_f(o, frame.to_local(wi_w)) : Rgb{};
         if (has_diffuse_transmission()) out += kt_diffuse * kInvPi;
@@ -692,6 +700,7 @@ float Bsdf::pdf_local(const Outgoing& o, const Vec3& wi) const {
     if (wo.z == 0) return 0;
     if (fourier) return fourier_pdf(*fourier, wo, wi);
     if (hair) return hair_pdf(hair_model, o.hair, wi);
+    if (disney) return disney_pdf(*disney, wo, wi);
     // The visible normals' density is D(h) G1(wo) |wo . h| / |cos theta_o|; G1 = 1 / (1 +
     // Lambda(wo)).
     // Lambda(wo) = (r_o / |cos_o| - 1) / 2 (smith_r).
@@ -796,6 +805,18 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
         out.f = s->f * hair_scale;
         return out;
     }
+    if (disney) {  // the direction from its own components, the value and density from all
+        const std::optional<Vec3> wi = disney_sample(*disney, wo, u0, u1, u2);
+        if (!wi) return out;
+        out.wi = frame.to_world(*wi);
+        out.pdf = disney_pdf(*disney, wo, *wi);
+        if (!(out.pdf > 0)) {
+            out.pdf = 0;
+            return out;
+        }
+        out.f = own_f(o, out.wi);
+        return out;
+    }
     // The lobe: glossy (0), diffuse (1), transmission (2), diffuse transmission (3), evenly
     // among those there are.
     const bool present[4] = {has_glossy(), has_diffuse(), has_transmission(),
@@ -835,6 +856,129 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
     }
     out.f = own_f(o, out.wi);
     return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// pbrt-v3's Disney BSDF (algorithms.md §24), in the shading frame.
+
+namespace {
+float schlick_weight(float cos_theta) {
+    const float m = std::clamp(1 - cos_theta, 0.0f, 1.0f);
+    return (m * m) * (m * m) * m;
+}
+// GTR1 (the clearcoat's distribution) and its masking term as Burley writes them.
+float gtr1(float cos_theta, float alpha) {
+    const float a2 = alpha * alpha;
+    return (a2 - 1) / (kPi * std::log(a2) * (1 + (a2 - 1) * cos_theta * cos_theta));
+}
+float smith_g_ggx(float cos_theta, float alpha) {
+    const float a2 = alpha * alpha, c2 = cos_theta * cos_theta;
+    return 1 / (cos_theta + std::sqrt(a2 + c2 - a2 * c2));
+}
+// The specular lobe's uncorrelated masking-shadowing G1(wo) G1(wi), G1 = 2 |cos| / (|cos| + r).
+float disney_g1(const DisneyModel& m, const Vec3& w) {
+    const float c = std::abs(w.z);
+    return 2 * c / (c + smith_r(w, m.ax, m.ay));
+}
+Vec3 reflect_about(const Vec3& wo, const Vec3& wh) {
+    return -wo + 2 * dot(wo, wh) * wh;
+}
+}  // namespace
+
+Rgb disney_f(const DisneyModel& m, const Vec3& wo, const Vec3& wi, bool reflect) {
+    if (!reflect) return m.thin ? m.lambert_t * kInvPi : Rgb();
+    const float co = std::abs(wo.z), ci = std::abs(wi.z);
+    const Vec3 h = wi + wo;
+    const bool has_h = !(h.x == 0 && h.y == 0 && h.z == 0);
+    const Vec3 wh = has_h ? normalize(h) : Vec3();
+    const float cos_d = dot(wi, wh);
+    Rgb out{};
+    if (m.diffuse_group) {
+        const float fo = schlick_weight(co), fi = schlick_weight(ci);
+        out += m.diffuse * (kInvPi * (1 - fo / 2) * (1 - fi / 2));
+        if (has_h) {
+            if (m.thin) {
+                const float fss90 = cos_d * cos_d * m.roughness;
+                const float fss = (1 + fo * (fss90 - 1)) * (1 + fi * (fss90 - 1));
+                const float ss = 1.25f * (fss * (1 / (co + ci) - 0.5f) + 0.5f);
+                out += m.fake_ss * (kInvPi * ss);
+            }
+            const float rr = 2 * m.roughness * cos_d * cos_d;
+            out += m.retro * (kInvPi * rr * (fo + fi + fo * fi * (rr - 1)));
+            if (m.has_sheen) out += m.sheen * schlick_weight(cos_d);
+        }
+    }
+    if (has_h && ci != 0 && co != 0) {
+        // The specular lobe: Trowbridge-Reitz with G1 G1 and the Disney Fresnel term, a blend by
+        // metallic of the dielectric's from air to eta and Schlick's of cspec0.
+        const float c = dot(wi, wh.z < 0 ? -wh : wh);
+        const float dielectric = fresnel_dielectric(c, 1, m.eta), w = schlick_weight(c);
+        const Rgb schlick = m.cspec0 + (Rgb(1) - m.cspec0) * w;
+        const Rgb fresnel = Rgb(dielectric) * (1 - m.metallic) + schlick * m.metallic;
+        const float d = tr_d(wh, 1, m.ax, m.ay);
+        out += fresnel * (d * disney_g1(m, wo) * disney_g1(m, wi) / (4 * ci * co));
+        if (m.has_clearcoat) {
+            const float dr = gtr1(std::abs(wh.z), m.gloss);
+            const float fr = 0.04f + (1 - 0.04f) * schlick_weight(dot(wo, wh));
+            const float gr = smith_g_ggx(co, 0.25f) * smith_g_ggx(ci, 0.25f);
+            out += Rgb(m.clearcoat * gr * fr * dr / 4);
+        }
+    }
+    return out;
+}
+
+float disney_pdf(const DisneyModel& m, const Vec3& wo, const Vec3& wi) {
+    const bool same_side = wo.z * wi.z > 0;
+    const float cosine = std::abs(wi.z) * kInvPi;
+    float sum = 0;
+    if (m.diffuse_group && same_side)  // each diffuse-type component's cosine density
+        sum += float((m.thin ? 2 : 1) + 1 + int(m.has_sheen)) * cosine;
+    if (m.thin && !same_side) sum += cosine;
+    const Vec3 h = wo + wi;
+    if (same_side && !(h.x == 0 && h.y == 0 && h.z == 0) && wo.z != 0) {
+        const Vec3 wh = normalize(h);
+        const float oh = dot(wo, wh);
+        // The visible normals' density D G1(wo) |wo . h| / |cos theta_o|, over 4 wo . h.
+        sum +=
+            tr_d(wh, 1, m.ax, m.ay) * disney_g1(m, wo) * std::abs(oh) / (std::abs(wo.z) * 4 * oh);
+        if (m.has_clearcoat) sum += gtr1(std::abs(wh.z), m.gloss) * std::abs(wh.z) / (4 * oh);
+    }
+    return sum / float(m.components());
+}
+
+std::optional<Vec3> disney_sample(const DisneyModel& m, const Vec3& wo, float u0, float u1,
+                                  float u2) {
+    if (wo.z == 0) return std::nullopt;
+    const int n = m.components();
+    int k = std::min(static_cast<int>(u0 * float(n)), n - 1);
+    const int diffuse = m.diffuse_group ? (m.thin ? 2 : 1) + 1 + int(m.has_sheen) : 0;
+    auto cosine = [&](bool through) {
+        const float r = std::sqrt(u1), phi = 2 * kPi * u2, z = std::sqrt(std::max(0.0f, 1 - u1));
+        return Vec3(r * std::cos(phi), r * std::sin(phi), (wo.z < 0) != through ? -z : z);
+    };
+    if (k < diffuse) return cosine(false);
+    k -= diffuse;
+    if (k == 0) {  // the specular lobe: a visible normal on wo's side, reflected about
+        const std::optional<Vec3> h =
+            sample_visible_normal(wo.z < 0 ? -wo : wo, m.ax, m.ay, u1, u2);
+        if (!h) return std::nullopt;
+        const Vec3 wh = wo.z < 0 ? -*h : *h;
+        if (dot(wo, wh) < 0) return std::nullopt;
+        const Vec3 wi = reflect_about(wo, wh);
+        if (wi.z * wo.z <= 0) return std::nullopt;
+        return wi;
+    }
+    if (m.has_clearcoat && k == 1) {  // GTR1's normal, reflected about
+        const float a2 = m.gloss * m.gloss;
+        const float cos_t = std::sqrt(std::max(0.0f, (1 - std::pow(a2, 1 - u1)) / (1 - a2)));
+        const float sin_t = std::sqrt(std::max(0.0f, 1 - cos_t * cos_t)), phi = 2 * kPi * u2;
+        Vec3 wh(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
+        if (wh.z * wo.z < 0) wh = -wh;
+        const Vec3 wi = reflect_about(wo, wh);
+        if (wi.z * wo.z <= 0) return std::nullopt;
+        return wi;
+    }
+    return cosine(true);  // a thin surface's diffuse transmission
 }
 
 // pbrt-v3's FresnelBlend: the diffuse base under the coat, 28 / (23 pi) kd (1 - ks) times
@@ -1029,6 +1173,59 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
         case Material::Type::Fourier:
             b.fourier = m.fourier.get();
             break;
+        case Material::Type::Disney: {
+            // pbrt-v3's DisneyMaterial (algorithms.md §24): the lobes' weights from the base
+            // colour c, metallic and (for a thin surface) flatness and difftrans.
+            auto d = std::make_shared<DisneyModel>();
+            const Rgb c = clamp0(eval_texture(scene, m.kd, ctx));
+            const float metallic = eval_texture(scene, m.metallic, ctx).r;
+            const float e = eval_texture(scene, m.eta, ctx).r;
+            const float diffuse_weight = 1 - metallic;  // (times 1 - spectrans, not rendered)
+            const float dt = eval_texture(scene, m.diff_trans, ctx).r / 2;
+            const float rough = eval_texture(scene, m.roughness, ctx).r;
+            const float lum = 0.212671f * c.r + 0.715160f * c.g + 0.072169f * c.b;
+            const Rgb tint = lum > 0 ? c / lum : Rgb(1);
+            const float sheen = eval_texture(scene, m.sheen, ctx).r;
+            d->thin = m.thin;
+            d->roughness = rough;
+            if (diffuse_weight > 0) {
+                d->diffuse_group = true;
+                if (m.thin) {
+                    const float flat = eval_texture(scene, m.flatness, ctx).r;
+                    d->diffuse = c * (diffuse_weight * (1 - flat) * (1 - dt));
+                    d->fake_ss = c * (diffuse_weight * flat * (1 - dt));
+                } else {
+                    d->diffuse = c * diffuse_weight;
+                }
+                d->retro = c * diffuse_weight;
+                if (sheen > 0) {
+                    const float st = eval_texture(scene, m.sheen_tint, ctx).r;
+                    d->has_sheen = true;
+                    d->sheen = (Rgb(1) * (1 - st) + tint * st) * (diffuse_weight * sheen);
+                }
+            }
+            const float aspect =
+                std::sqrt(1 - eval_texture(scene, m.disney_anisotropic, ctx).r * 0.9f);
+            d->ax = std::max(0.001f, rough * rough / aspect);
+            d->ay = std::max(0.001f, rough * rough * aspect);
+            const float spec_tint = eval_texture(scene, m.specular_tint, ctx).r;
+            const float r0 = (e - 1) * (e - 1) / ((e + 1) * (e + 1));
+            d->cspec0 = (Rgb(1) * (1 - spec_tint) + tint * spec_tint) * (r0 * (1 - metallic)) +
+                        c * metallic;
+            d->metallic = metallic;
+            d->eta = e;
+            const float cc = eval_texture(scene, m.clearcoat, ctx).r;
+            if (cc > 0) {
+                const float gloss = eval_texture(scene, m.clearcoat_gloss, ctx).r;
+                d->has_clearcoat = true;
+                d->clearcoat = cc;
+                d->gloss = 0.1f * (1 - gloss) + 0.001f * gloss;
+            }
+            if (m.thin) d->lambert_t = c * dt;
+            b.anisotropic = d->ax != d->ay;  // (the frame along dp/du, below)
+            b.disney = std::move(d);
+            break;
+        }
         case Material::Type::Hair: {
             // pbrt-v3's hair: h = -1 + 2v across the fibre (a curve's v), roughnesses in [0, 1]
             // (from 0.001: at 0 its lobes' variances are 0, and its values not finite).

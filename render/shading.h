@@ -4,6 +4,8 @@
 #pragma once
 
 #include <forward_list>
+#include <memory>
+#include <optional>
 
 #include "render/footprint/cmam_caches.h"
 #include "render/footprint/footprint.h"
@@ -70,6 +72,32 @@ inline Rgb eval_texture(const Scene& scene, const TexInput& in, const TexContext
 Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit,
                  const TexContext& ctx, float du, float dv);
 
+/// pbrt-v3's Disney BSDF at a shading point (algorithms.md §24): its lobes' colours and
+/// parameters in the shading frame. The lobes present are pbrt-v3's components, whatever their
+/// weights: the diffuse group (diffuse, a thin surface's fake subsurface, retro-reflection,
+/// sheen) where the diffuse weight is positive, the specular reflection always, the clearcoat
+/// where it is positive, a thin surface's diffuse transmission.
+struct DisneyModel {
+    bool diffuse_group = false, thin = false, has_sheen = false, has_clearcoat = false;
+    Rgb diffuse, fake_ss, retro, sheen, lambert_t;
+    float roughness = 0.5f, ax = 0.25f, ay = 0.25f;  // the specular lobe's distribution
+    Rgb cspec0;  // its Fresnel term's colour at normal incidence
+    float metallic = 0, eta = 1.5f;
+    float clearcoat = 0, gloss = 0.1f;
+    int components() const {
+        return (diffuse_group ? (thin ? 2 : 1) + 1 + int(has_sheen) : 0) + 1 + int(has_clearcoat) +
+               int(thin);
+    }
+};
+/// Its value for directions wo, wi in the shading frame: the reflection lobes where `reflect`
+/// (the two on one side of the geometric normal), the transmission lobe otherwise.
+Rgb disney_f(const DisneyModel& m, const Vec3& wo, const Vec3& wi, bool reflect);
+/// pbrt-v3's density: the mean of its components' densities.
+float disney_pdf(const DisneyModel& m, const Vec3& wo, const Vec3& wi);
+/// A direction drawn from one component chosen evenly by u0, with (u1, u2); none where it fails.
+std::optional<Vec3> disney_sample(const DisneyModel& m, const Vec3& wo, float u0, float u1,
+                                  float u2);
+
 /// A BSDF instantiated at a hit (pbrt-v3 BxDF combinations of the supported materials).
 struct Bsdf {
     Frame frame;  // shading frame, z = shading normal (s along dp/du when anisotropic)
@@ -113,6 +141,10 @@ struct Bsdf {
     bool hair = false;
     HairModel hair_model;
     Rgb hair_scale{1, 1, 1};
+    // pbrt-v3's Disney BSDF in place of the other non-specular lobes (its model, made per shading
+    // point), its value times disney_scale (a mix's weight).
+    std::shared_ptr<const DisneyModel> disney;
+    Rgb disney_scale{1, 1, 1};
     // Non-specular lobes of a mix's other material that do not fit this Bsdf (add), each Bsdf of
     // the chain in its own frame about the same shading normal: f, pdf and sample take the whole
     // chain, as pbrt-v3's BSDF takes all its components. Null for a single material.
@@ -124,7 +156,7 @@ struct Bsdf {
     bool has_diffuse_transmission() const { return !kt_diffuse.is_black(); }
     bool has_nonspecular() const {
         return has_diffuse() || has_glossy() || has_transmission() || has_diffuse_transmission() ||
-               fourier || hair || (layer && layer->has_nonspecular());
+               fourier || hair || disney || (layer && layer->has_nonspecular());
     }
 
     /// Every lobe times w, the layers' too (a mix material's weight for one of its materials).

@@ -78,7 +78,42 @@ std::vector<Bsdf> test_bsdfs() {
     Bsdf mix = metal;
     mix.add(under, layers);
     EXPECT_NE(mix.layer, nullptr);
-    return {lambert, glossy, both, glass, substrate, substrate_aniso, translucent, mix};
+    // pbrt-v3's Disney BSDF: a rough dielectric with sheen and a clearcoat; an anisotropic metal;
+    // a thin surface with fake subsurface and diffuse transmission.
+    Bsdf disney = base, disney_metal = base, disney_thin = base;
+    auto model = [](auto set) {
+        auto d = std::make_shared<DisneyModel>();
+        set(*d);
+        return d;
+    };
+    disney.disney = model([](DisneyModel& d) {
+        d.diffuse_group = d.has_sheen = d.has_clearcoat = true;
+        d.diffuse = d.retro = Rgb(0.6f, 0.4f, 0.3f);
+        d.sheen = Rgb(0.3f);
+        d.roughness = 0.4f;
+        d.ax = d.ay = 0.16f;
+        d.cspec0 = Rgb(0.04f);
+        d.clearcoat = 0.7f;
+        d.gloss = 0.03f;
+    });
+    disney_metal.disney = model([](DisneyModel& d) {
+        d.ax = 0.05f;
+        d.ay = 0.3f;
+        d.cspec0 = Rgb(0.9f, 0.6f, 0.3f);
+        d.metallic = 1;
+    });
+    disney_metal.anisotropic = true;
+    disney_thin.disney = model([](DisneyModel& d) {
+        d.diffuse_group = d.thin = true;
+        d.diffuse = Rgb(0.2f);
+        d.fake_ss = d.retro = Rgb(0.3f);
+        d.lambert_t = Rgb(0.25f);
+        d.roughness = 0.7f;
+        d.ax = d.ay = 0.49f;
+        d.cspec0 = Rgb(0.04f);
+    });
+    return {lambert,     glossy, both,   glass,        substrate,  substrate_aniso,
+            translucent, mix,    disney, disney_metal, disney_thin};
 }
 
 }  // namespace
@@ -464,4 +499,119 @@ TEST(AmbientOcclusion, IntegratorParameters) {
     EXPECT_NE(warnings[0].find("\"maxdepth\""), std::string::npos) << warnings[0];
     EXPECT_THROW(build("Integrator \"ambientocclusion\" \"integer nsamples\" -1"),
                  pbrt::SceneError);
+}
+
+// pbrt-v3's Disney BSDF at normal incidence (wo = wi = n), from its lobes' definitions: the
+// Schlick weights vanish, so the diffuse lobe is c / pi, retro-reflection and sheen 0; the
+// specular lobe's half vector is n, where D = 1 / (pi ax ay), G1 = 1 and the Fresnel term is
+// (1 - metallic) ((eta - 1) / (eta + 1))^2 + metallic cspec0, over 4; the clearcoat's GTR1 is
+// (a^2 - 1) / (pi ln(a^2) a^2), its Fresnel term 0.04 and its masking (1 / 2)^2, over 4. A
+// thin surface transmits lambert_t / pi and reflects nothing the other way.
+TEST(Disney, LobesAtNormalIncidence) {
+    DisneyModel d;
+    d.diffuse_group = d.has_sheen = d.has_clearcoat = true;
+    d.diffuse = d.retro = Rgb(0.6f, 0.4f, 0.3f);
+    d.sheen = Rgb(0.5f);
+    d.ax = 0.2f;
+    d.ay = 0.1f;
+    d.metallic = 0.25f;
+    d.eta = 1.6f;
+    d.cspec0 = Rgb(0.5f, 0.3f, 0.2f);
+    d.clearcoat = 0.8f;
+    d.gloss = 0.05f;
+    const Vec3 n(0, 0, 1);
+    const Rgb f = disney_f(d, n, n, true);
+    const double r0 = std::pow((1.6 - 1) / (1.6 + 1), 2), dspec = 1 / (kPi * 0.2 * 0.1);
+    const double a2 = 0.05 * 0.05, dr = (a2 - 1) / (kPi * std::log(a2) * a2);
+    const double coat = 0.8 * 0.25 * 0.04 * dr / 4;
+    const double want_r = 0.6 / kPi + (0.75 * r0 + 0.25 * 0.5) * dspec / 4 + coat;
+    const double want_b = 0.3 / kPi + (0.75 * r0 + 0.25 * 0.2) * dspec / 4 + coat;
+    EXPECT_NEAR(f.r, want_r, 1e-4 * want_r);
+    EXPECT_NEAR(f.b, want_b, 1e-4 * want_b);
+    // The density: the mean of the components' (diffuse, retro, sheen: cos / pi each; specular:
+    // D G1 / 4; clearcoat: GTR1 / 4) at this direction.
+    const double want_pdf = (3 / kPi + dspec / 4 + dr / 4) / 5;
+    EXPECT_NEAR(disney_pdf(d, n, n), want_pdf, 1e-4 * want_pdf);
+    DisneyModel thin;
+    thin.diffuse_group = thin.thin = true;
+    thin.lambert_t = Rgb(0.4f);
+    EXPECT_NEAR(disney_f(thin, n, -n, false).g, 0.4 / kPi, 1e-6);
+    EXPECT_EQ(thin.components(), 5);  // diffuse, fake subsurface, retro, specular, transmission
+}
+
+// The material in a scene: pbrt-v3's parameters give the lobes' weights (metallic takes the
+// diffuse group away; the specular colour is a blend of the dielectric's and the base colour).
+TEST(Disney, MaterialParametersMakeItsLobes) {
+    auto bsdf_at = [](const std::string& material) {
+        auto s = test::scene_from(
+            "LookAt 0 0 5  0 0 0  0 1 0 Camera \"perspective\" Film \"image\" \"integer "
+            "xresolution\" 4 \"integer yresolution\" 4 WorldBegin " +
+            material +
+            " Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-1 -1 0 1 -1 "
+            "0 1 1 0 -1 1 0] WorldEnd");
+        const std::optional<SurfaceHit> h = s->intersect(Vec3(0, 0, 5), Vec3(0, 0, -1), 0, 10);
+        EXPECT_TRUE(h.has_value());
+        TexContext ctx{};
+        ctx.u = h->u;
+        ctx.v = h->v;
+        ctx.p = h->p;
+        const std::optional<Bsdf> b = make_bsdf(*s, s->materials.at(0), *h, ctx);
+        EXPECT_TRUE(b && b->disney);
+        return *b->disney;
+    };
+    const DisneyModel plain = bsdf_at("Material \"disney\" \"rgb color\" [0.8 0.4 0.2]");
+    EXPECT_TRUE(plain.diffuse_group);
+    EXPECT_FALSE(plain.has_sheen || plain.has_clearcoat || plain.thin);
+    EXPECT_FLOAT_EQ(plain.diffuse.r, 0.8f);
+    EXPECT_FLOAT_EQ(plain.ax, 0.25f);          // roughness 0.5 squared
+    EXPECT_NEAR(plain.cspec0.g, 0.04f, 1e-6);  // ((1.5 - 1) / (1.5 + 1))^2, untinted
+    const DisneyModel metal = bsdf_at(
+        "Material \"disney\" \"rgb color\" [0.8 0.4 0.2] \"float metallic\" 1 \"float "
+        "roughness\" 0.2 \"float anisotropic\" 0.5 \"float clearcoat\" 1");
+    EXPECT_FALSE(metal.diffuse_group);
+    EXPECT_FLOAT_EQ(metal.cspec0.b, 0.2f);
+    EXPECT_NEAR(metal.ax, 0.04f / std::sqrt(0.55f), 1e-6);
+    EXPECT_NEAR(metal.ay, 0.04f * std::sqrt(0.55f), 1e-6);
+    EXPECT_TRUE(metal.has_clearcoat);
+    EXPECT_NEAR(metal.gloss, 0.001f, 1e-7);  // clearcoatgloss 1
+    const DisneyModel thin = bsdf_at(
+        "Material \"disney\" \"rgb color\" [0.5 0.5 0.5] \"bool thin\" \"true\" \"float "
+        "flatness\" 0.25 \"float difftrans\" 0.5 \"float sheen\" 1");
+    EXPECT_NEAR(thin.diffuse.r, 0.5f * 0.75f * 0.75f, 1e-6);  // (1 - flat) (1 - difftrans / 2)
+    EXPECT_NEAR(thin.fake_ss.r, 0.5f * 0.25f * 0.75f, 1e-6);
+    EXPECT_NEAR(thin.lambert_t.r, 0.5f * 0.25f, 1e-6);  // difftrans / 2 of the colour
+    EXPECT_NEAR(thin.sheen.r, 1.0f, 1e-6);              // sheentint 0.5 of a grey: white
+}
+
+// The specular lobe away from the normal, against the microfacet model written out: a metal's
+// (metallic 1: Schlick's Fresnel term of cspec0), D of the anisotropic Trowbridge-Reitz
+// distribution in angles, and G1 = 1 / (1 + Lambda) for each direction separately (pbrt-v3's
+// Disney distribution), with Lambda = (sqrt(1 + alpha^2 tan^2 theta) - 1) / 2.
+TEST(Disney, SpecularLobeIsTheUncorrelatedMicrofacetModel) {
+    DisneyModel d;
+    d.ax = 0.15f;
+    d.ay = 0.35f;
+    d.metallic = 1;
+    d.cspec0 = Rgb(0.9f, 0.6f, 0.3f);
+    auto dir = [](double theta, double phi) {
+        return Vec3(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)),
+                    float(std::cos(theta)));
+    };
+    const Vec3 wo = dir(0.7, 0.3), wi = dir(0.5, 2.6);
+    const Vec3 h = normalize(wo + wi);
+    const double ax = 0.15, ay = 0.35;
+    auto lambda = [&](const Vec3& w) {
+        const double c2 = double(w.z) * w.z, s2 = 1 - c2, phi = std::atan2(w.y, w.x);
+        const double a2 =
+            ax * ax * std::cos(phi) * std::cos(phi) + ay * ay * std::sin(phi) * std::sin(phi);
+        return (std::sqrt(1 + a2 * s2 / c2) - 1) / 2;
+    };
+    const double ct = h.z, tan2 = (1 - ct * ct) / (ct * ct), phi_h = std::atan2(h.y, h.x);
+    const double e = tan2 * (std::pow(std::cos(phi_h) / ax, 2) + std::pow(std::sin(phi_h) / ay, 2));
+    const double D = 1 / (kPi * ax * ay * std::pow(ct, 4) * (1 + e) * (1 + e));
+    const double G = 1 / (1 + lambda(wo)) / (1 + lambda(wi));
+    const double w5 = std::pow(1 - double(dot(wi, h)), 5);
+    const double F = 0.6 + w5 * (1 - 0.6);  // the green channel
+    const double want = D * G * F / (4 * wo.z * wi.z);
+    EXPECT_NEAR(disney_f(d, wo, wi, true).g, want, 1e-4 * want);
 }

@@ -217,6 +217,7 @@ class Builder {
     void mix_material(const pbrt::MaterialDesc& d, Material& m);
     void fourier_material(const pbrt::MaterialDesc& d, Material& m);
     void hair_material(const pbrt::MaterialDesc& d, Material& m);
+    void disney_material(const pbrt::MaterialDesc& d, Material& m);
     Material unrendered_material(const pbrt::MaterialDesc& d);
 
     // --- shapes, instances and area lights (shapes.cpp) -----------------------------------

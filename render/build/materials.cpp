@@ -212,19 +212,55 @@ void Builder::hair_material(const pbrt::MaterialDesc& d, Material& m) {
     m.hair_alpha = float_input(e, s, "alpha", 2);
 }
 
+// pbrt-v3's "disney" (algorithms.md §24): "color", "metallic", "eta", "roughness",
+// "speculartint", "anisotropic", "sheen", "sheentint", "clearcoat", "clearcoatgloss", "thin",
+// "flatness", "difftrans", with pbrt-v3's defaults. Its transmission through the surface
+// ("spectrans") and subsurface scattering ("scatterdistance") are not rendered: with a warning,
+// the one left out, the other as its diffuse lobe.
+void Builder::disney_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Disney;
+    m.kd = spectrum_input(e, s, "color", Rgb(0.5f));
+    m.metallic = float_input(e, s, "metallic", 0);
+    m.eta = float_input(e, s, "eta", 1.5f);
+    m.roughness = float_input(e, s, "roughness", 0.5f);
+    m.specular_tint = float_input(e, s, "speculartint", 0);
+    m.disney_anisotropic = float_input(e, s, "anisotropic", 0);
+    m.sheen = float_input(e, s, "sheen", 0);
+    m.sheen_tint = float_input(e, s, "sheentint", 0.5f);
+    m.clearcoat = float_input(e, s, "clearcoat", 0);
+    m.clearcoat_gloss = float_input(e, s, "clearcoatgloss", 1);
+    m.thin = e.params.get_bool("thin", false);
+    m.flatness = float_input(e, s, "flatness", 0);
+    m.diff_trans = float_input(e, s, "difftrans", 1);
+    if (e.params.find("spectrans")) {
+        const TexInput t = float_input(e, s, "spectrans", 0);
+        if (t.node >= 0 || t.value.r != 0)
+            warn(loc_of(e, "spectrans"),
+                 "material \"disney\": its transmission (\"spectrans\") is not rendered; the "
+                 "lobe is left out");
+    }
+    if (e.params.find("scatterdistance")) {
+        const TexInput sd = spectrum_input(e, s, "scatterdistance", Rgb(0));
+        if (sd.node >= 0 || !sd.value.is_black())
+            warn(loc_of(e, "scatterdistance"),
+                 "material \"disney\": subsurface scattering (\"scatterdistance\") is "
+                 "rendered as its diffuse lobe");
+    }
+}
+
 // pbrt-v3 renders a material it does not know as matte, with a warning; so does
-// cmam with the ones it does not render (subsurface scattering, and pbrt-v3's "disney", as matte
-// of its base "color", which is what its diffuse lobe's albedo nearly is).
+// cmam with the ones it does not render (subsurface scattering).
 Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     const Entity& e = d.entity;
     Material m;
     m.type = Material::Type::Matte;
-    const char* colour = e.type == "disney" ? "color" : "Kd";
-    m.kd = spectrum_input(e, d.scope, colour, Rgb(0.5f));
+    m.kd = spectrum_input(e, d.scope, "Kd", Rgb(0.5f));
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
-                    (e.params.find(colour) ? std::string(" with its ") + colour : "") +
+                    (e.params.find("Kd") ? " with its Kd" : "") +
                     " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-                    "translucent, fourier, hair and mix)");
+                    "translucent, fourier, hair, disney and mix)");
     return m;  // its other parameters are not read: no warning for each
 }
 
@@ -240,6 +276,7 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
         {"metal", &Builder::metal_material},
         {"fourier", &Builder::fourier_material},
         {"hair", &Builder::hair_material},
+        {"disney", &Builder::disney_material},
         {"none", &Builder::no_material},
         {"", &Builder::no_material},
         {"mix", &Builder::mix_material}};
