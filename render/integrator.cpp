@@ -986,8 +986,10 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
     if (aov->kind == AovKind::Texture) {
         // The Kd the BSDF was built with: the same lookup (a second one would disturb the
         // CMAM's cache); a mix's, its layers' too.
-        Rgb k = bsdf.kd;
-        for (const Bsdf* l = bsdf.layer; l; l = l->layer) k += l->kd;
+        // (A Disney BSDF's: its base colour.)
+        auto kd_of = [](const Bsdf& b) { return b.disney ? b.disney->base : b.kd; };
+        Rgb k = kd_of(bsdf);
+        for (const Bsdf* l = bsdf.layer; l; l = l->layer) k += kd_of(*l);
         aov->v[0] = k.r;
         aov->v[1] = k.g;
         aov->v[2] = k.b;

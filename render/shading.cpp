@@ -1186,6 +1186,7 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             const float lum = 0.212671f * c.r + 0.715160f * c.g + 0.072169f * c.b;
             const Rgb tint = lum > 0 ? c / lum : Rgb(1);
             const float sheen = eval_texture(scene, m.sheen, ctx).r;
+            d->base = c;
             d->thin = m.thin;
             d->roughness = rough;
             if (diffuse_weight > 0) {

@@ -79,6 +79,7 @@ Vec3 bump_normal(const Scene& scene, const TexInput& bump, const SurfaceHit& hit
 /// where it is positive, a thin surface's diffuse transmission.
 struct DisneyModel {
     bool diffuse_group = false, thin = false, has_sheen = false, has_clearcoat = false;
+    Rgb base;  // the base colour (the texture AOV's)
     Rgb diffuse, fake_ss, retro, sheen, lambert_t;
     float roughness = 0.5f, ax = 0.25f, ay = 0.25f;  // the specular lobe's distribution
     Rgb cspec0;  // its Fresnel term's colour at normal incidence

@@ -563,6 +563,7 @@ TEST(Disney, MaterialParametersMakeItsLobes) {
     EXPECT_TRUE(plain.diffuse_group);
     EXPECT_FALSE(plain.has_sheen || plain.has_clearcoat || plain.thin);
     EXPECT_FLOAT_EQ(plain.diffuse.r, 0.8f);
+    EXPECT_FLOAT_EQ(plain.base.g, 0.4f);
     EXPECT_FLOAT_EQ(plain.ax, 0.25f);          // roughness 0.5 squared
     EXPECT_NEAR(plain.cspec0.g, 0.04f, 1e-6);  // ((1.5 - 1) / (1.5 + 1))^2, untinted
     const DisneyModel metal = bsdf_at(
