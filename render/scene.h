@@ -197,7 +197,7 @@ struct Material {
     // Disney (pbrt-v3's "disney"): its base colour in `kd`, roughness in `roughness`, index in
     // `eta`, and the rest here (pbrt-v3's names and defaults); `thin` its thin-surface form.
     TexInput metallic, specular_tint, disney_anisotropic, sheen, sheen_tint{-1, Rgb(0.5f)},
-        clearcoat, clearcoat_gloss{-1, Rgb(1)}, flatness, diff_trans{-1, Rgb(1)};
+        clearcoat, clearcoat_gloss{-1, Rgb(1)}, flatness, diff_trans{-1, Rgb(1)}, spec_trans;
     bool thin = false;
     // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
     // node -1 and a constant: none (a constant displacement leaves the normal as it is here).
@@ -233,7 +233,8 @@ struct Material {
                                    &clearcoat,
                                    &clearcoat_gloss,
                                    &flatness,
-                                   &diff_trans})
+                                   &diff_trans,
+                                   &spec_trans})
             if (in->node >= 0) return true;
         return false;
     }

@@ -883,10 +883,55 @@ float disney_g1(const DisneyModel& m, const Vec3& w) {
 Vec3 reflect_about(const Vec3& wo, const Vec3& wh) {
     return -wo + 2 * dot(wo, wh) * wh;
 }
+// The rough transmission (pbrt-v3's MicrofacetTransmission from air into eta, for radiance): with
+// eta' the index on wi's side over wo's and h = normalize(wo + eta' wi), (1 - F(wo . h)) D G
+// |wi . h| |wo . h| / (|cos_i cos_o| (wo . h + eta' wi . h)^2) times `transmit`; G uncorrelated
+// (the Disney distribution's) or, on a thin surface, correlated (pbrt-v3's Trowbridge-Reitz).
+// Its density: the visible normal's times |dh/dwi| = eta'^2 |wi . h| / (wo . h + eta' wi . h)^2.
+struct Refraction {
+    Vec3 h;
+    float eta = 1, oh = 0, ih = 0, denom = 0;
+};
+std::optional<Refraction> refraction_of(const DisneyModel& m, const Vec3& wo, const Vec3& wi) {
+    if (!(wo.z * wi.z < 0)) return std::nullopt;
+    Refraction r;
+    r.eta = wo.z > 0 ? m.eta : 1 / m.eta;
+    const Vec3 h = wo + wi * r.eta;
+    if (h.x == 0 && h.y == 0 && h.z == 0) return std::nullopt;
+    r.h = normalize(h);
+    r.oh = dot(wo, r.h);
+    r.ih = dot(wi, r.h);
+    if (r.oh * r.ih > 0) return std::nullopt;  // one side of the microfacet: no refraction
+    r.denom = r.oh + r.eta * r.ih;
+    return r;
+}
+Rgb disney_transmission_f(const DisneyModel& m, const Vec3& wo, const Vec3& wi) {
+    const std::optional<Refraction> r = refraction_of(m, wo, wi);
+    if (!r) return {};
+    const float co = std::abs(wo.z), ci = std::abs(wi.z);
+    const float ro = smith_r(wo, m.tax, m.tay), ri = smith_r(wi, m.tax, m.tay);
+    const float g =
+        m.thin ? 2 * co * ci / (ro * ci + ri * co) : (2 * co / (co + ro)) * (2 * ci / (ci + ri));
+    const float f = fresnel_dielectric(r->oh * (r->h.z < 0 ? -1.0f : 1.0f), 1, m.eta);
+    const float d = tr_d(r->h, 1, m.tax, m.tay);
+    return m.transmit *
+           ((1 - f) * std::abs(d * g * r->ih * r->oh / (ci * co * r->denom * r->denom)));
+}
+float disney_transmission_pdf(const DisneyModel& m, const Vec3& wo, const Vec3& wi) {
+    const std::optional<Refraction> r = refraction_of(m, wo, wi);
+    if (!r) return 0;
+    const float co = std::abs(wo.z), g1 = 2 * co / (co + smith_r(wo, m.tax, m.tay));
+    return tr_d(r->h, 1, m.tax, m.tay) * g1 * std::abs(r->oh) / co *
+           std::abs(r->eta * r->eta * r->ih / (r->denom * r->denom));
+}
 }  // namespace
 
 Rgb disney_f(const DisneyModel& m, const Vec3& wo, const Vec3& wi, bool reflect) {
-    if (!reflect) return m.thin ? m.lambert_t * kInvPi : Rgb();
+    if (!reflect) {
+        Rgb out = m.thin ? m.lambert_t * kInvPi : Rgb();
+        if (m.has_transmission) out += disney_transmission_f(m, wo, wi);
+        return out;
+    }
     const float co = std::abs(wo.z), ci = std::abs(wi.z);
     const Vec3 h = wi + wo;
     const bool has_h = !(h.x == 0 && h.y == 0 && h.z == 0);
@@ -934,6 +979,7 @@ float disney_pdf(const DisneyModel& m, const Vec3& wo, const Vec3& wi) {
     if (m.diffuse_group && same_side)  // each diffuse-type component's cosine density
         sum += float((m.thin ? 2 : 1) + 1 + int(m.has_sheen)) * cosine;
     if (m.thin && !same_side) sum += cosine;
+    if (m.has_transmission) sum += disney_transmission_pdf(m, wo, wi);
     const Vec3 h = wo + wi;
     if (same_side && !(h.x == 0 && h.y == 0 && h.z == 0) && wo.z != 0) {
         const Vec3 wh = normalize(h);
@@ -977,6 +1023,15 @@ std::optional<Vec3> disney_sample(const DisneyModel& m, const Vec3& wo, float u0
         const Vec3 wi = reflect_about(wo, wh);
         if (wi.z * wo.z <= 0) return std::nullopt;
         return wi;
+    }
+    if (m.has_transmission && k == 1 + int(m.has_clearcoat)) {
+        // A visible normal of the transmission's distribution on wo's side, refracted through.
+        const std::optional<Vec3> h =
+            sample_visible_normal(wo.z < 0 ? -wo : wo, m.tax, m.tay, u1, u2);
+        if (!h) return std::nullopt;
+        const Vec3 wh = wo.z < 0 ? -*h : *h;
+        if (dot(wo, wh) < 0) return std::nullopt;
+        return refract(wo, wh, wo.z > 0 ? 1 / m.eta : m.eta);
     }
     return cosine(true);  // a thin surface's diffuse transmission
 }
@@ -1180,7 +1235,8 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             const Rgb c = clamp0(eval_texture(scene, m.kd, ctx));
             const float metallic = eval_texture(scene, m.metallic, ctx).r;
             const float e = eval_texture(scene, m.eta, ctx).r;
-            const float diffuse_weight = 1 - metallic;  // (times 1 - spectrans, not rendered)
+            const float strans = eval_texture(scene, m.spec_trans, ctx).r;
+            const float diffuse_weight = (1 - metallic) * (1 - strans);
             const float dt = eval_texture(scene, m.diff_trans, ctx).r / 2;
             const float rough = eval_texture(scene, m.roughness, ctx).r;
             const float lum = 0.212671f * c.r + 0.715160f * c.g + 0.072169f * c.b;
@@ -1221,6 +1277,15 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
                 d->has_clearcoat = true;
                 d->clearcoat = cc;
                 d->gloss = 0.1f * (1 - gloss) + 0.001f * gloss;
+            }
+            if (strans > 0) {
+                // Walter et al.'s transmission, its weight strans sqrt(c) (two refractions give c
+                // back); a thin surface's roughness scaled by its index (Burley 2015).
+                d->has_transmission = true;
+                d->transmit = Rgb(std::sqrt(c.r), std::sqrt(c.g), std::sqrt(c.b)) * strans;
+                const float rs = m.thin ? (0.65f * e - 0.35f) * rough : rough;
+                d->tax = std::max(0.001f, rs * rs / aspect);
+                d->tay = std::max(0.001f, rs * rs * aspect);
             }
             if (m.thin) d->lambert_t = c * dt;
             b.anisotropic = d->ax != d->ay;  // (the frame along dp/du, below)

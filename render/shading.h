@@ -85,9 +85,15 @@ struct DisneyModel {
     Rgb cspec0;  // its Fresnel term's colour at normal incidence
     float metallic = 0, eta = 1.5f;
     float clearcoat = 0, gloss = 0.1f;
+    // Rough transmission ("spectrans" > 0): weight `transmit`, from air into `eta`, its
+    // distribution tax, tay (a thin surface's from the roughness scaled by its index, with
+    // pbrt-v3's correlated masking; otherwise the specular lobe's, uncorrelated).
+    bool has_transmission = false;
+    Rgb transmit;
+    float tax = 0.25f, tay = 0.25f;
     int components() const {
         return (diffuse_group ? (thin ? 2 : 1) + 1 + int(has_sheen) : 0) + 1 + int(has_clearcoat) +
-               int(thin);
+               int(has_transmission) + int(thin);
     }
 };
 /// Its value for directions wo, wi in the shading frame: the reflection lobes where `reflect`

@@ -112,8 +112,17 @@ std::vector<Bsdf> test_bsdfs() {
         d.ax = d.ay = 0.49f;
         d.cspec0 = Rgb(0.04f);
     });
-    return {lambert,     glossy, both,   glass,        substrate,  substrate_aniso,
-            translucent, mix,    disney, disney_metal, disney_thin};
+    Bsdf disney_glass = base;  // spectrans 1: specular reflection and rough transmission
+    disney_glass.disney = model([](DisneyModel& d) {
+        d.ax = d.ay = 0.09f;
+        d.tax = d.tay = 0.09f;
+        d.cspec0 = Rgb(0.04f);
+        d.eta = 1.5f;
+        d.has_transmission = true;
+        d.transmit = Rgb(0.9f);
+    });
+    return {lambert,     glossy, both,   glass,        substrate,   substrate_aniso,
+            translucent, mix,    disney, disney_metal, disney_thin, disney_glass};
 }
 
 }  // namespace
@@ -156,7 +165,9 @@ TEST(PathTracing, BsdfSamplesHaveTheDensityTheyReport) {
                         const float eta = wo.z > 0 ? 1.5f : 1 / 1.5f;  // (both have 1.5)
                         const Vec3 h = wo + wi * eta;
                         const Vec3 m = dot(wo, h) > 0 ? h : -h;
-                        if (m.z * wo.z <= 0 && bsdf.has_transmission()) {
+                        const bool refracts = bsdf.has_transmission() ||
+                                              (bsdf.disney && bsdf.disney->has_transmission);
+                        if (m.z * wo.z <= 0 && refracts) {
                             // Only a Lambertian transmission reaches such a pair.
                             if (bsdf.has_diffuse_transmission()) {
                                 integral += std::abs(z) * kInvPi / lobes * w;
@@ -615,4 +626,22 @@ TEST(Disney, SpecularLobeIsTheUncorrelatedMicrofacetModel) {
     const double F = 0.6 + w5 * (1 - 0.6);  // the green channel
     const double want = D * G * F / (4 * wo.z * wi.z);
     EXPECT_NEAR(disney_f(d, wo, wi, true).g, want, 1e-4 * want);
+}
+
+// The rough transmission straight through (wo = n, wi = -n): the half vector is the axis, D =
+// 1 / (pi ax ay), both masking terms 1, the dielectric's Fresnel term ((eta - 1) / (eta + 1))^2,
+// and wo . h + eta wi . h = eta - 1: T (1 - F) D / (eta - 1)^2; the density is D times
+// eta^2 / (eta - 1)^2 over the components.
+TEST(Disney, TransmissionStraightThrough) {
+    DisneyModel d;
+    d.ax = d.ay = 0.2f;
+    d.tax = 0.1f;
+    d.tay = 0.3f;
+    d.eta = 1.5f;
+    d.has_transmission = true;
+    d.transmit = Rgb(0.8f);
+    const Vec3 n(0, 0, 1);
+    const double D = 1 / (kPi * 0.1 * 0.3), F = 0.04, want = 0.8 * (1 - F) * D / 0.25;
+    EXPECT_NEAR(disney_f(d, n, -n, false).g, want, 1e-4 * want);
+    EXPECT_NEAR(disney_pdf(d, n, -n), D * 2.25 / 0.25 / 2, 1e-4 * D * 2.25 / 0.25 / 2);
 }

@@ -213,10 +213,9 @@ void Builder::hair_material(const pbrt::MaterialDesc& d, Material& m) {
 }
 
 // pbrt-v3's "disney" (algorithms.md §24): "color", "metallic", "eta", "roughness",
-// "speculartint", "anisotropic", "sheen", "sheentint", "clearcoat", "clearcoatgloss", "thin",
-// "flatness", "difftrans", with pbrt-v3's defaults. Its transmission through the surface
-// ("spectrans") and subsurface scattering ("scatterdistance") are not rendered: with a warning,
-// the one left out, the other as its diffuse lobe.
+// "speculartint", "anisotropic", "sheen", "sheentint", "clearcoat", "clearcoatgloss",
+// "spectrans", "thin", "flatness", "difftrans", with pbrt-v3's defaults. Its subsurface
+// scattering ("scatterdistance") is not rendered: with a warning, it is its diffuse lobe.
 void Builder::disney_material(const pbrt::MaterialDesc& d, Material& m) {
     const Entity& e = d.entity;
     const TextureScope& s = d.scope;
@@ -234,13 +233,7 @@ void Builder::disney_material(const pbrt::MaterialDesc& d, Material& m) {
     m.thin = e.params.get_bool("thin", false);
     m.flatness = float_input(e, s, "flatness", 0);
     m.diff_trans = float_input(e, s, "difftrans", 1);
-    if (e.params.find("spectrans")) {
-        const TexInput t = float_input(e, s, "spectrans", 0);
-        if (t.node >= 0 || t.value.r != 0)
-            warn(loc_of(e, "spectrans"),
-                 "material \"disney\": its transmission (\"spectrans\") is not rendered; the "
-                 "lobe is left out");
-    }
+    m.spec_trans = float_input(e, s, "spectrans", 0);
     if (e.params.find("scatterdistance")) {
         const TexInput sd = spectrum_input(e, s, "scatterdistance", Rgb(0));
         if (sd.node >= 0 || !sd.value.is_black())
