@@ -107,20 +107,12 @@ struct Tracer {
                         u2 = std::min(
                             (float(strata[static_cast<std::size_t>(i)]) + rng.next_float()) * inv_n,
                             0x1.fffffep-1f);
-            float z, r;
-            if (scene.ao_cosine) {
-                z = std::sqrt(std::max(0.0f, 1 - u1));
-                r = std::sqrt(u1);
-            } else {
-                z = u1;
-                r = std::sqrt(std::max(0.0f, 1 - z * z));
-            }
-            const float phi = 2 * kPi * u2;
-            const Vec3 wi = frame.to_world(Vec3(r * std::cos(phi), r * std::sin(phi), z));
+            const Vec3 local = hemisphere_direction(u1, u2, !scene.ao_cosine),
+                       wi = frame.to_world(local);
             org[m] = offset_origin(h, wi);
             dirs[m] = wi;
             tmax[m] = std::numeric_limits<float>::infinity();
-            weight[m] = scene.ao_cosine ? kPi : 2 * kPi * z;
+            weight[m] = scene.ao_cosine ? kPi : 2 * kPi * local.z;
             if (++m == N) flush();
         }
         if (m > 0) flush();
@@ -201,16 +193,7 @@ struct Tracer {
         const float share = mixture ? uniform_share(ng, ns) : 0.0f;
         const bool uniform = u1 < share;
         if (mixture) u1 = uniform ? u1 / share : (u1 - share) / (1 - share);
-        const float phi = 2 * kPi * u2;
-        float z, r;
-        if (uniform) {
-            z = u1;
-            r = std::sqrt(std::max(0.0f, 1 - z * z));
-        } else {
-            z = std::sqrt(std::max(0.0f, 1 - u1));
-            r = std::sqrt(u1);
-        }
-        const Vec3 local(r * std::cos(phi), r * std::sin(phi), z);
+        const Vec3 local = hemisphere_direction(u1, u2, uniform);
         ls.wi = Frame::from_z(uniform || !mixture ? ng : ns).to_world(local);
         ls.pdf = !mixture ? local.z * kInvPi : mixture_pdf(ng, ns, share, ls.wi);
         if (ls.pdf == 0) return std::nullopt;

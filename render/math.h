@@ -120,6 +120,15 @@ struct Frame {
 
 /// A direction drawn from a scattering function (a BSDF or one of its lobes): the direction,
 /// the function's value there and the density it was drawn with (0: nothing drawn).
+/// A direction about +z from two uniform numbers in [0,1): cosine-weighted (density cos / pi),
+/// or with `uniform` uniform over the hemisphere (density 1 / 2 pi). z >= 0.
+inline Vec3 hemisphere_direction(float u1, float u2, bool uniform = false) {
+    const float phi = 2 * kPi * u2;
+    const float z = uniform ? u1 : std::sqrt(std::max(0.0f, 1 - u1));
+    const float r = uniform ? std::sqrt(std::max(0.0f, 1 - z * z)) : std::sqrt(u1);
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
 struct DirectionSample {
     Vec3 wi;
     Rgb f;

@@ -827,9 +827,8 @@ Bsdf::Sample Bsdf::own_sample(const Outgoing& o, float u0, float u1, float u2) c
     Vec3 wi;
     if (lobe == 1 || lobe == 3) {
         // Cosine-weighted on wo's side of the shading normal, or the other side.
-        const float r = std::sqrt(u1), phi = 2 * kPi * u2;
-        const float z = std::sqrt(std::max(0.0f, 1 - u1));
-        wi = Vec3(r * std::cos(phi), r * std::sin(phi), (wo.z < 0) == (lobe == 1) ? -z : z);
+        wi = hemisphere_direction(u1, u2);
+        if ((wo.z < 0) == (lobe == 1)) wi.z = -wi.z;
     } else {
         const float ay = anisotropic ? alpha_y : alpha;
         const Vec3 up = wo.z < 0 ? -wo : wo;  // (the normals are drawn on wo's side)
@@ -977,7 +976,7 @@ float disney_pdf(const DisneyModel& m, const Vec3& wo, const Vec3& wi) {
     const float cosine = std::abs(wi.z) * kInvPi;
     float sum = 0;
     if (m.diffuse_group && same_side)  // each diffuse-type component's cosine density
-        sum += float((m.thin ? 2 : 1) + 1 + int(m.has_sheen)) * cosine;
+        sum += float(m.diffuse_components()) * cosine;
     if (m.thin && !same_side) sum += cosine;
     if (m.has_transmission) sum += disney_transmission_pdf(m, wo, wi);
     const Vec3 h = wo + wi;
@@ -997,10 +996,11 @@ std::optional<Vec3> disney_sample(const DisneyModel& m, const Vec3& wo, float u0
     if (wo.z == 0) return std::nullopt;
     const int n = m.components();
     int k = std::min(static_cast<int>(u0 * float(n)), n - 1);
-    const int diffuse = m.diffuse_group ? (m.thin ? 2 : 1) + 1 + int(m.has_sheen) : 0;
+    const int diffuse = m.diffuse_components();
     auto cosine = [&](bool through) {
-        const float r = std::sqrt(u1), phi = 2 * kPi * u2, z = std::sqrt(std::max(0.0f, 1 - u1));
-        return Vec3(r * std::cos(phi), r * std::sin(phi), (wo.z < 0) != through ? -z : z);
+        Vec3 wi = hemisphere_direction(u1, u2);
+        if ((wo.z < 0) != through) wi.z = -wi.z;
+        return wi;
     };
     if (k < diffuse) return cosine(false);
     k -= diffuse;

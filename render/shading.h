@@ -91,9 +91,12 @@ struct DisneyModel {
     bool has_transmission = false;
     Rgb transmit;
     float tax = 0.25f, tay = 0.25f;
+    /// The diffuse-type components (diffuse, a thin surface's fake subsurface, retro, sheen).
+    int diffuse_components() const {
+        return diffuse_group ? (thin ? 2 : 1) + 1 + int(has_sheen) : 0;
+    }
     int components() const {
-        return (diffuse_group ? (thin ? 2 : 1) + 1 + int(has_sheen) : 0) + 1 + int(has_clearcoat) +
-               int(has_transmission) + int(thin);
+        return diffuse_components() + 1 + int(has_clearcoat) + int(has_transmission) + int(thin);
     }
 };
 /// Its value for directions wo, wi in the shading frame: the reflection lobes where `reflect`
