@@ -57,9 +57,10 @@ int run_check(const CheckArgs& a) {
     std::printf(
         "%s: ok: %dx%d film, %d spp, %zu triangles, %zu quadrics%s%s, %zu lights, %zu materials, "
         "%zu textures%s\n",
-        a.scene.c_str(), scene->film.width(), scene->film.height(), scene->sampler.spp(), tris,
-        quadrics, curve_text.c_str(), instances.c_str(), scene->lights.size(),
-        scene->materials.size(), scene->textures.size(), media.c_str());
+        a.scene.c_str(), scene->film.width(), scene->film.height(),
+        scene->sppm.on ? scene->sppm.iterations : scene->sampler.spp(), tris, quadrics,
+        curve_text.c_str(), instances.c_str(), scene->lights.size(), scene->materials.size(),
+        scene->textures.size(), media.c_str());
     return 0;
 }
 

@@ -200,7 +200,9 @@ int run_render(const RenderArgs& a) {
         const auto seconds = [](auto from, auto to) {
             return std::chrono::duration<double>(to - from).count();
         };
-        print_summary(out, fb, scene->sampler.spp(), stats,
+        // (An sppm scene's AOVs are traced by the path tracer, at the sampler's count.)
+        const bool sppm = scene->sppm.on && ro.aov == render::AovKind::None;
+        print_summary(out, fb, sppm ? scene->sppm.iterations : scene->sampler.spp(), stats,
                       seconds(t0, std::chrono::steady_clock::now()), seconds(t0, t1),
                       seconds(t1, t2));
     }

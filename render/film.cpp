@@ -25,6 +25,7 @@
 #include "render/integrator.h"
 #include "render/memory.h"
 #include "render/parallel.h"
+#include "render/sppm.h"
 #include "render/tracer.h"
 
 namespace cmam::render {
@@ -229,6 +230,52 @@ class SplatFilm {
     int m_next = 0;                 // the next tile to add
 };
 
+}  // namespace
+
+FootprintProducers film_footprints(const Scene& scene, int spp) {
+    return FootprintProducers(scene.footprint_methods, scene.camera, spp, cones_read_by_area(scene),
+                              cones_read_by_mapping(scene));
+}
+
+float camera_ray(const Scene& scene, const FootprintProducers& footprints, float fx, float fy,
+                 uint64_t pixel_seed, int sample, int nx, int ny, float to_stratum_x,
+                 float to_stratum_y, TracedRay& r) {
+    const Camera& camera = scene.camera;
+    if (camera.environment && footprints.differentials()) {
+        // The ray and its neighbours' directions together (they share sines and cosines).
+        Vec3 dirs[3];
+        camera.environment_directions(fx, fy, dirs);
+        const auto& m = camera.world_from_camera;
+        r.org = Vec3(m[3], m[7], m[11]);
+        r.dir = dirs[0];
+        footprints.start_environment_ray(r.fp, dirs, to_stratum_x, to_stratum_y);
+        return 1;
+    }
+    if (camera.has_lens()) {
+        // A thin lens (or a realistic camera's exit pupil): the sample's point on it, stratified
+        // over the pixel's samples.
+        float lu, lv;
+        lens_sample(pixel_seed, sample, nx, ny, lu, lv);
+        const CameraRay ray = camera.generate_ray(fx, fy, lu, lv);
+        r.org = ray.org;
+        r.dir = ray.dir;
+        if (!camera.realistic)
+            footprints.start_lens_ray(r.fp, fx, fy, lu, lv, r.dir, to_stratum_x, to_stratum_y);
+        else if (ray.weight == 0 || !footprints.start_realistic_ray(r.fp, fx, fy, lu, lv, ray,
+                                                                    to_stratum_x, to_stratum_y))
+            return 0;  // blocked (or dropped as pbrt-v3 drops it): not traced
+        return ray.weight;
+    }
+    // Pinhole, orthographic and environment cameras, one ray at a time.
+    const CameraRay ray = camera.generate_ray(fx, fy);
+    r.org = ray.org;
+    r.dir = ray.dir;
+    footprints.start_camera_ray(r.fp, fx, fy, r.dir, to_stratum_x, to_stratum_y);
+    return 1;
+}
+
+namespace {
+
 // Traces the film's samples into a framebuffer, a span of one row at a time.
 //
 // Scanline tags with several samples per pixel: the paper's scanline is a row of sample
@@ -259,8 +306,7 @@ class FilmTracer {
           m_limit_luminance(options.aov == AovKind::None &&
                             scene.film.max_sample_luminance <
                                 std::numeric_limits<float>::infinity()),
-          m_footprints(scene.footprint_methods, scene.camera, m_spp, cones_read_by_area(scene),
-                       cones_read_by_mapping(scene)),
+          m_footprints(film_footprints(scene, m_spp)),
           m_splat(splat),
           m_traced(splat ? splat->traced() : Traced{0, m_film.width(), 0, m_film.height()}) {}
 
@@ -402,35 +448,9 @@ class FilmTracer {
         if (m_footprints.batches_camera_rays()) {  // made with the packet's others (trace)
             packet.to_stratum_x[k] = 0.5f - j[0];
             packet.to_stratum_y[k] = 0.5f - j[1];
-        } else if (m_scene.camera.environment && m_footprints.differentials()) {
-            // The ray and its neighbours' directions together (they share sines and cosines).
-            Vec3 dirs[3];
-            m_scene.camera.environment_directions(fx, fy, dirs);
-            const auto& m = m_scene.camera.world_from_camera;
-            p.ray.org = Vec3(m[3], m[7], m[11]);
-            p.ray.dir = dirs[0];
-            m_footprints.start_environment_ray(p.ray.fp, dirs, 0.5f - j[0], 0.5f - j[1]);
-        } else if (m_scene.camera.has_lens()) {
-            // A thin lens (or a realistic camera's exit pupil): the sample's point on it,
-            // stratified over the pixel's samples.
-            float lu, lv;
-            lens_sample(sp.seeds[i], sample, m_nx, m_ny, lu, lv);
-            const CameraRay ray = m_scene.camera.generate_ray(fx, fy, lu, lv);
-            p.ray.org = ray.org;
-            p.ray.dir = ray.dir;
-            p.weight = ray.weight;
-            if (!m_scene.camera.realistic)
-                m_footprints.start_lens_ray(p.ray.fp, fx, fy, lu, lv, p.ray.dir, 0.5f - j[0],
-                                            0.5f - j[1]);
-            else if (ray.weight == 0 ||
-                     !m_footprints.start_realistic_ray(p.ray.fp, fx, fy, lu, lv, ray, 0.5f - j[0],
-                                                       0.5f - j[1]))
-                p.weight = 0;  // blocked (or dropped as pbrt-v3 drops it): not traced
-        } else {               // orthographic and environment cameras, one ray at a time
-            const CameraRay ray = m_scene.camera.generate_ray(fx, fy);
-            p.ray.org = ray.org;
-            p.ray.dir = ray.dir;
-            m_footprints.start_camera_ray(p.ray.fp, fx, fy, p.ray.dir, 0.5f - j[0], 0.5f - j[1]);
+        } else {
+            p.weight = camera_ray(m_scene, m_footprints, fx, fy, sp.seeds[i], sample, m_nx, m_ny,
+                                  0.5f - j[0], 0.5f - j[1], p.ray);
         }
         tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
         p.counts = i < sp.prime ? nullptr : &sp.counts;
@@ -666,6 +686,7 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                       options.threads);
     build_texture_tables(scene, options.threads);
+    if (scene.sppm.on && options.aov == AovKind::None) return render_sppm(scene, options, stats);
     // A pixel filter reaching beyond the pixel splats its samples; AOVs are each pixel's own.
     std::unique_ptr<SplatFilm> splat;
     if (!scene.film.filter.own_pixel() && options.pixel_filter && options.aov == AovKind::None)

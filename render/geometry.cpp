@@ -504,7 +504,9 @@ void Scene::commit() {
     RTCBounds b;
     rtcGetSceneBounds(m_scene, &b);
     const Vec3 lo(b.lower_x, b.lower_y, b.lower_z), hi(b.upper_x, b.upper_y, b.upper_z);
-    world_radius = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z ? 0.5f * length(hi - lo) : 0.0f;
+    const bool bounded = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z;
+    world_radius = bounded ? 0.5f * length(hi - lo) : 0.0f;
+    world_center = bounded ? 0.5f * (lo + hi) : Vec3();
 }
 
 bool Scene::occluded(const Vec3& org, const Vec3& dir, float tmin, float tmax) const {

@@ -9,6 +9,19 @@
 
 namespace cmam::render {
 
+Rgb positional_intensity(const Light& light, const Vec3& w, Rgb i) {
+    if (light.image) i = i * light.image->scale(w);
+    if (light.type == Light::Type::Spot) {
+        const float c = dot(w, light.direction);
+        if (c < light.cos_total) return {};
+        if (c < light.cos_falloff_start) {
+            const float delta = (c - light.cos_total) / (light.cos_falloff_start - light.cos_total);
+            i = i * ((delta * delta) * (delta * delta));
+        }
+    }
+    return i;
+}
+
 namespace {
 
 float ray_epsilon(const Vec3& p) {
@@ -145,16 +158,9 @@ struct Tracer {
         float d2 = dot(d, d);
         ls.dist = std::sqrt(d2);
         ls.wi = d / ls.dist;
-        ls.li = light.intensity / d2;
-        if (light.image) ls.li = ls.li * light.image->scale(-ls.wi);
-        if (light.type == Light::Type::Spot) {
-            float c = dot(-ls.wi, light.direction);
-            if (c < light.cos_total) return std::nullopt;
-            if (c < light.cos_falloff_start) {
-                float delta = (c - light.cos_total) / (light.cos_falloff_start - light.cos_total);
-                ls.li = ls.li * ((delta * delta) * (delta * delta));
-            }
-        }
+        if (light.type == Light::Type::Spot && dot(-ls.wi, light.direction) < light.cos_total)
+            return std::nullopt;
+        ls.li = positional_intensity(light, -ls.wi, light.intensity / d2);
         return ls;
     }
 
@@ -663,6 +669,36 @@ struct Tracer {
 
     using Ray = TracedRay;
 
+    // The texture context at hit h of `ray`: h's (u,v) (computed first) and the footprint
+    // producers' footprints in it where `uv`, otherwise only what the ray's children need.
+    TexContext context_at(const Ray& ray, SurfaceHit& h, bool uv) const {
+        if (uv) h.ensure_uv();
+        TexContext ctx{h.u,
+                       h.v,
+                       h.p,
+                       {},
+                       counts && counts->count_lookups ? &counts->lookups : nullptr,
+                       h.object_id,
+                       cmam,
+                       nullptr,
+                       h.prim->u_periodic,
+                       h.prim->v_periodic};
+        footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, uv);
+        ctx.footprints.tag.patch = h.prim->uv_chart(h.triangle);  // the CMAM's (u,v) chart
+        return ctx;
+    }
+
+    // pbrt-v3's bump map of m (a mix's: its first material's) on h's shading normal, its
+    // derivatives over half the ray differentials' (u,v) extent.
+    void bump(const Material& m, SurfaceHit& h, const TexContext& ctx) const {
+        const Material& framed = frame_material(m);
+        if (framed.bump.node < 0) return;
+        const HitDifferential& hd = ctx.footprints.diff;
+        h.ns =
+            bump_normal(scene, framed.bump, h, ctx, 0.5f * (std::abs(hd.dudx) + std::abs(hd.dudy)),
+                        0.5f * (std::abs(hd.dvdx) + std::abs(hd.dvdy)));
+    }
+
     // Deferred hits (trace_packet): where they are kept, where a deferred hit's reflected and
     // transmitted rays are made and left untraced (two slots), and a count of those made.
     std::vector<DeferredHit>* deferred_hits = nullptr;
@@ -720,22 +756,8 @@ struct Tracer {
             const Material& m = material_of(*h.prim);
             // A hit whose shading reads no texture needs no (u,v) (nor footprints in it below);
             // the footprint AOV records it wherever it is.
-            const bool uv = aov || m.reads_textures();
-            if (uv) h.ensure_uv();
-            TexContext ctx{h.u,
-                           h.v,
-                           h.p,
-                           {},
-                           counts && counts->count_lookups ? &counts->lookups : nullptr,
-                           h.object_id,
-                           cmam,
-                           nullptr,
-                           h.prim->u_periodic,
-                           h.prim->v_periodic};
-            footprints.at_hit(ctx.footprints, ray.fp, ray.dir, h, uv);
-            ctx.footprints.tag.patch = h.prim->uv_chart(h.triangle);  // the CMAM's (u,v) chart
+            TexContext ctx = context_at(ray, h, aov || m.reads_textures());
             const HitFootprint& at = ctx.footprints;
-            const HitDifferential& hd = at.diff;
             if (counts && at.dropped) ++counts->dropped_differentials;
             // The footprint AOV of a CMAM texture, made only then (an empty std::optional of the
             // record, which GCC clears whole, cost every hit 232 bytes of stores).
@@ -746,11 +768,7 @@ struct Tracer {
                 ctx.cmam_record = record_cmam_of(m, cmam_record.get());
             }
             Vec3 wo = -ray.dir;
-            const Material& framed = frame_material(m);
-            if (framed.bump.node >= 0)  // pbrt-v3's bump map: the shading normal only
-                h.ns = bump_normal(scene, framed.bump, h, ctx,
-                                   0.5f * (std::abs(hd.dudx) + std::abs(hd.dudy)),
-                                   0.5f * (std::abs(hd.dvdx) + std::abs(hd.dvdy)));
+            bump(m, h, ctx);
             std::forward_list<Bsdf> layers;  // a mix's (material_bsdf), mostly none
             std::optional<Bsdf> made = material_bsdf(m, h, ctx, layers);
             if (!made) {
@@ -946,6 +964,190 @@ struct Tracer {
     Aov* aov = nullptr;
     void record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& bsdf);
     CmamRecord* record_cmam_of(const Material& m, CmamRecord* record) const;
+
+    // --- stochastic progressive photon mapping's paths (sppm.cpp; algorithms.md §25) ---
+
+    // The BSDF of h's material seen along `ray` (none: material "none"), textures filtered over
+    // the ray's footprints (a photon's ray carries none), its layers in `layers`; `at` gets the
+    // footprints at h.
+    std::optional<Bsdf> shade(const Ray& ray, SurfaceHit& h, HitFootprint& at,
+                              std::forward_list<Bsdf>& layers) {
+        const Material& m = material_of(*h.prim);
+        const TexContext ctx = context_at(ray, h, m.reads_textures());
+        bump(m, h, ctx);
+        at = ctx.footprints;
+        return material_bsdf(m, h, ctx, layers);
+    }
+
+    // Whether b has a diffuse lobe (pbrt-v3's BSDF_DIFFUSE components: Lambert, Oren-Nayar,
+    // diffuse transmission, the Disney BSDF's diffuse group and thin transmission), where a
+    // camera path of SPPM stops at a visible point. FresnelBlend, microfacet, Fourier and hair
+    // lobes are glossy.
+    static bool has_diffuse_lobe(const Bsdf& b) {
+        for (const Bsdf* l = &b; l; l = l->layer)
+            if ((!l->fresnel_blend && !l->kd.is_black()) || l->has_diffuse_transmission() ||
+                (l->disney && (l->disney->diffuse_components() > 0 || l->disney->thin)))
+                return true;
+        return false;
+    }
+
+    // One scattering of an SPPM path at h, chosen as continue_path chooses (a specular lobe or
+    // the non-specular ones, evenly where there are both; reflection or transmission by the
+    // Fresnel term): the next ray (with the footprints of a specular child when `footprinted`,
+    // none otherwise), its weight f |cos| / pdf, and whether it was specular. A photon's weight
+    // (`importance`) is pbrt-v3's for importance: refraction does not scale it by
+    // (eta_i / eta_t)^2, and a rough dielectric's transmission is scaled by eta^2 where
+    // radiance's is not (algorithms.md §25).
+    bool scatter(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
+                 const Vec3& wo, const Bsdf::Outgoing& o, bool footprinted, bool importance,
+                 Ray& next, Rgb& weight, bool& specular) {
+        const bool reflect = !b.kr.is_black(), transmit = !b.kt.is_black();
+        const bool any_specular = reflect || transmit, other = b.has_nonspecular();
+        if (!any_specular && !other) return false;
+        const float p_specular = any_specular && other ? 0.5f : any_specular ? 1.0f : 0.0f;
+        specular = this->next() < p_specular;
+        next.fp = RayFootprint{};
+        if (!specular) {
+            const float u0 = this->next();
+            float u1, u2;
+            next2(u1, u2);
+            const Bsdf::Sample smp = b.sample(o, u0, u1, u2);
+            if (smp.pdf == 0 || smp.f.is_black() || !finite(smp.wi)) return false;
+            weight = smp.f * (absdot(smp.wi, h.ns) / (smp.pdf * (1 - p_specular)));
+            const float side_o = dot(wo, b.frame.n), side_i = dot(smp.wi, b.frame.n);
+            if (importance && b.has_transmission() && side_o * side_i < 0) {
+                const float eta =
+                    side_o > 0 ? b.lobe_eta_t / b.lobe_eta_i : b.lobe_eta_i / b.lobe_eta_t;
+                weight = weight * (eta * eta);
+            }
+            next.dir = smp.wi;
+            next.org = offset_origin(h, smp.wi);
+            return true;
+        }
+        const Vec3& n = h.ns;
+        const float cos_o = dot(wo, n);
+        float p_reflect = reflect ? 1.0f : 0.0f;
+        if (reflect && transmit)
+            p_reflect = b.fresnel_noop ? 0.5f : fresnel_dielectric(cos_o, 1.0f, b.eta);
+        if (this->next() < p_reflect) {
+            next.dir = -wo + 2 * cos_o * n;
+            if (dot(next.dir, n) == 0) return false;
+            const float fr = b.fresnel_noop ? 1.0f : fresnel_dielectric(cos_o, 1.0f, b.eta);
+            weight = b.kr * (fr / (p_reflect * p_specular));
+            if (footprinted) footprints.reflected(next.fp, ray.fp, at, ray.dir, h);
+        } else {
+            const bool entering = cos_o > 0;
+            const float eta_i = entering ? 1.0f : b.eta, eta_t = entering ? b.eta : 1.0f;
+            const std::optional<Vec3> wt = render::refract(wo, faceforward(n, wo), eta_i / eta_t);
+            if (!wt || dot(*wt, n) == 0) return false;
+            float ft = 1 - fresnel_dielectric(dot(*wt, n), 1.0f, b.eta);
+            if (!importance) ft *= (eta_i * eta_i) / (eta_t * eta_t);
+            next.dir = *wt;
+            weight = b.kt * (ft / ((1 - p_reflect) * p_specular));
+            if (footprinted) footprints.refracted(next.fp, ray.fp, at, ray.dir, h, eta_i / eta_t);
+        }
+        if (weight.is_black()) return false;
+        next.org = offset_origin(h, next.dir);
+        return true;
+    }
+
+    // SPPM's camera path (pbrt-v3's, algorithms.md §25): from the camera through specular (and,
+    // before the last depth, glossy) bounces, adding at each hit what it emits (first hits and
+    // after specular bounces) and its direct light, up to the first hit with a diffuse lobe (or a
+    // glossy one at the last depth): the visible point, which keeps its BSDF. The path goes on
+    // past a throughput of luminance 1/4 by Russian roulette.
+    void visible_point(Ray ray, SppmVisiblePoint& vp) {
+        Rgb beta(1);
+        bool specular = false;
+        int passes = 0;
+        for (int depth = 0; depth < scene.max_depth;) {
+            std::optional<SurfaceHit> hit =
+                scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), false);
+            if (!hit) {
+                if (depth == 0 || specular) vp.ld += beta * escaped(ray.dir, ray.fp.diff);
+                break;
+            }
+            SurfaceHit& h = *hit;
+            HitFootprint at;
+            vp.layers.clear();
+            vp.bsdf = shade(ray, h, at, vp.layers);
+            if (!vp.bsdf) {  // material "none": on through it, at the same depth
+                if (++passes > 256) break;
+                ray.fp = footprints.passed_through(ray.fp, at, h);
+                ray.org = offset_origin(h, ray.dir);
+                continue;
+            }
+            const Bsdf& bsdf = *vp.bsdf;
+            const Vec3 wo = -ray.dir;
+            if (depth == 0 || specular) vp.ld += beta * emitted(h, wo);
+            const bool other = bsdf.has_nonspecular();
+            const Bsdf::Outgoing o = other ? bsdf.outgoing(wo) : Bsdf::Outgoing{};
+            if (other) vp.ld += beta * direct(h, bsdf, wo, o);
+            if (has_diffuse_lobe(bsdf) || (other && depth == scene.max_depth - 1)) {
+                vp.found = true;
+                vp.p = h.p;
+                vp.wo = o;
+                vp.beta = beta;
+                return;
+            }
+            if (depth == scene.max_depth - 1) break;
+            Ray next_ray;
+            Rgb weight;
+            if (!scatter(ray, h, at, bsdf, wo, o, true, false, next_ray, weight, specular)) break;
+            if (!specular) cmam = nullptr;  // (the CMAM's caches hold specular chains only)
+            if (counts) ++counts->secondary;
+            beta = beta * weight;
+            const float y = beta.luminance();
+            if (y < 0.25f) {
+                const float p = std::min(1.0f, y);
+                if (this->next() > p) break;
+                beta = beta / p;
+            }
+            ray = next_ray;
+            ++depth;
+        }
+        vp.bsdf.reset();
+        vp.layers.clear();
+    }
+
+    // A photon's path from the light (pbrt-v3's, algorithms.md §25): at each hit after the first
+    // (the direct light is the camera paths'), `deposit` gets the hit point, the direction the
+    // photon came from and its weight; then it scatters (importance's weights), and goes on with
+    // the probability that keeps its weight's luminance.
+    void photon(Ray ray, Rgb beta, const PhotonDeposit& deposit) {
+        int passes = 0;
+        for (int depth = 0; depth < scene.max_depth;) {
+            if (counts) ++counts->secondary;
+            std::optional<SurfaceHit> hit =
+                scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), false);
+            if (!hit) return;
+            SurfaceHit& h = *hit;
+            const Vec3 wo = -ray.dir;
+            if (depth > 0) deposit(h.p, wo, beta);
+            HitFootprint at;
+            std::forward_list<Bsdf> layers;
+            const std::optional<Bsdf> bsdf = shade(ray, h, at, layers);
+            if (!bsdf) {
+                if (++passes > 256) return;
+                ray.org = offset_origin(h, ray.dir);
+                continue;
+            }
+            const Bsdf::Outgoing o =
+                bsdf->has_nonspecular() ? bsdf->outgoing(wo) : Bsdf::Outgoing{};
+            Ray next_ray;
+            Rgb weight;
+            bool specular;
+            if (!scatter(ray, h, at, *bsdf, wo, o, false, true, next_ray, weight, specular)) return;
+            const Rgb after = beta * weight;
+            const float y = beta.luminance();
+            if (!(y > 0)) return;
+            const float q = std::max(0.0f, 1 - after.luminance() / y);
+            if (this->next() < q) return;
+            beta = after / (1 - q);
+            ray = next_ray;
+            ++depth;
+        }
+    }
 };
 
 // The first image texture feeding a material's diffuse (or reflective) input.
@@ -1017,6 +1219,27 @@ CmamRecord* Tracer::record_cmam_of(const Material& m, CmamRecord* record) const 
 }
 
 }  // namespace
+
+void sppm_visible_point(const Scene& scene, const FootprintProducers& footprints,
+                        const TracedRay& ray, uint64_t seed, RayCounts* counts, CmamRowState* cmam,
+                        SppmVisiblePoint& vp) {
+    Rng rng(seed);
+    thread_local std::vector<ShadowRay> shadow;
+    Tracer t{scene, footprints, counts, rng, cmam, shadow};
+    vp.found = false;
+    vp.ld = Rgb();
+    if (counts) ++counts->camera;
+    if (finite(ray.org) && finite(ray.dir)) t.visible_point(ray, vp);
+}
+
+void sppm_photon(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
+                 const Vec3& dir, const Rgb& beta, uint64_t seed, RayCounts* counts,
+                 const PhotonDeposit& deposit) {
+    Rng rng(seed);
+    thread_local std::vector<ShadowRay> shadow;
+    Tracer t{scene, footprints, counts, rng, nullptr, shadow};
+    if (finite(org) && finite(dir)) t.photon({org, dir, RayFootprint{}}, beta, deposit);
+}
 
 Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
               const Vec3& dir, const RayFootprint& fp, uint64_t seed, RayCounts* counts,

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "render/error.h"
+#include "render/sppm.h"
 
 namespace cmam::render {
 
@@ -74,6 +75,9 @@ MemoryNeed render_memory_need(const Scene& scene) {
     // The framebuffer, plus per-row buffers of each worker (small beside it).
     need.film =
         static_cast<std::size_t>(scene.film.width()) * scene.film.height() * 3 * sizeof(float);
+    if (scene.sppm.on)  // each pixel's state across the iterations
+        need.film +=
+            static_cast<std::size_t>(scene.film.width()) * scene.film.height() * sppm_pixel_bytes();
     for (const auto& [tex, u] : texture_uses(scene)) {
         const texture::Image& im = tex->image();
         const double texels = double(im.width()) * im.height(), c = im.channels();

@@ -513,6 +513,17 @@ class Scene {
     bool ambient_occlusion = false;
     int ao_samples = 64;
     bool ao_cosine = true;
+    // pbrt-v3's "sppm" integrator, stochastic progressive photon mapping (sppm.h, algorithms.md
+    // §25): `iterations` passes, each a visible point per pixel and `photons` photons (0: one
+    // per pixel of the cropped film), gathered within a radius per pixel that starts at
+    // `radius` and shrinks as photons arrive. path_tracing stays set: an AOV render, which
+    // reads no photons, traces paths.
+    struct Sppm {
+        bool on = false;
+        int iterations = 64;
+        long long photons = 0;
+        float radius = 1;
+    } sppm;
     // Participating media (pbrt-v3's volpath, bdpt and mlt integrators render them; the others
     // do not): `volumetric` when the integrator does and the scene has some.
     std::vector<Medium> media;
@@ -522,6 +533,7 @@ class Scene {
     // commit(): a distant or infinite light's shadow ray through media ends 2 world_radius away,
     // where pbrt-v3 puts the light's point.
     float world_radius = 0;
+    Vec3 world_center{};  // that sphere's centre (pbrt-v3's worldCenter)
     std::vector<TextureNode> textures;
     std::vector<Material> materials;
     std::vector<Light> lights;

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <forward_list>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -220,6 +222,52 @@ struct CameraPath {
 /// tests between them).
 void trace_packet(const Scene& scene, const FootprintProducers& footprints, const CameraPath* paths,
                   int n, CmamRowState* cmam, PacketScratch& scratch, Rgb* radiance);
+
+/// The footprint producers of the film's camera rays at `spp` samples per pixel.
+FootprintProducers film_footprints(const Scene& scene, int spp);
+
+/// The camera ray of raster position (fx, fy), one ray at a time, into `ray` (every member but
+/// the footprint's tag): a lens's sample is stratum `sample` of the pixel's nx x ny (pixel seed
+/// `pixel_seed`), (to_stratum_x, to_stratum_y) the offset to the sample's stratum's centre. Its
+/// weight: 1, or a realistic camera's (0: blocked by the lens, or dropped, and not to be traced).
+float camera_ray(const Scene& scene, const FootprintProducers& footprints, float fx, float fy,
+                 uint64_t pixel_seed, int sample, int nx, int ny, float to_stratum_x,
+                 float to_stratum_y, TracedRay& ray);
+
+/// What SPPM's camera path of one pixel found in one iteration (sppm.cpp): the light it gathered
+/// on the way (`ld`: emitted and direct), and, where it reached a diffuse (or, at its last depth,
+/// a glossy) surface, the visible point: its position, its BSDF (whose mix layers `layers` holds)
+/// and the outgoing direction's terms, and the path's weight up to it.
+struct SppmVisiblePoint {
+    Rgb ld;
+    bool found = false;
+    Vec3 p;
+    Rgb beta;
+    std::optional<Bsdf> bsdf;
+    std::forward_list<Bsdf> layers;
+    Bsdf::Outgoing wo;
+};
+
+/// SPPM's camera path along `ray` (its footprints those of `footprints`), random numbers from
+/// `seed`, into `vp`; `counts` and `cmam` (the CMAM's caches) may be null.
+void sppm_visible_point(const Scene& scene, const FootprintProducers& footprints,
+                        const TracedRay& ray, uint64_t seed, RayCounts* counts, CmamRowState* cmam,
+                        SppmVisiblePoint& vp);
+
+/// Where a photon arrives: the hit point, the direction it came from (towards where it was), and
+/// its weight.
+using PhotonDeposit = std::function<void(const Vec3& p, const Vec3& wi, const Rgb& beta)>;
+
+/// A photon's path from org along dir with weight `beta`, its random numbers from `seed`: each
+/// hit after the first goes to `deposit`.
+void sppm_photon(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
+                 const Vec3& dir, const Rgb& beta, uint64_t seed, RayCounts* counts,
+                 const PhotonDeposit& deposit);
+
+/// A point, spot, goniometric or projection light's intensity towards the unit direction w (away
+/// from the light), `i` (its intensity, or that over a distance squared) times its image and
+/// spot falloff: 0 outside a spot's cone.
+Rgb positional_intensity(const Light& light, const Vec3& w, Rgb i);
 
 /// Radiance (or, with `aov`, the AOV sample) along one camera ray with footprint state `fp`;
 /// `counts` and `cmam` may be null.

@@ -159,6 +159,7 @@ class Builder {
     void sampler();
     void filter();
     void integrator();
+    void sppm_integrator(const Entity& e);
 
     // --- participating media (media.cpp) -------------------------------------------------
     void media();

@@ -367,17 +367,18 @@ void Builder::integrator() {
     // once, the same expectation).
     const bool direct = e.type == "directlighting";
     // pbrt-v3's path integrator, and volpath, which adds participating media (media()); its
-    // other global-illumination integrators compute the same light transport (bdpt and mlt with
-    // media, sppm without), so they are path traced too.
-    const bool path = e.type == "path" || e.type == "volpath" || e.type == "bdpt" ||
-                      e.type == "mlt" || e.type == "sppm";
+    // bdpt and mlt compute the same light transport with media, so they are path traced too.
+    const bool path =
+        e.type == "path" || e.type == "volpath" || e.type == "bdpt" || e.type == "mlt";
     if (path) {
         m_scene->path_tracing = true;
         m_scene->rr_threshold = static_cast<float>(finite_float(e, "rrthreshold", 1));
         if (e.type != "path" && e.type != "volpath")
-            warn(e.loc, "Integrator " + in_quotes(e.type) + " is rendered as " +
-                            (e.type == "sppm" ? "\"path\"" : "\"volpath\"") +
-                            " (the same light transport, sampled by a path tracer)");
+            warn(e.loc, "Integrator " + in_quotes(e.type) +
+                            " is rendered as \"volpath\" (the same light transport, sampled by a "
+                            "path tracer)");
+    } else if (e.type == "sppm") {
+        sppm_integrator(e);
     } else if (direct) {
         const std::string strategy = e.params.get_string("strategy", "all");
         if (strategy != "all" && strategy != "one")
@@ -414,9 +415,41 @@ void Builder::integrator() {
     }
     e.params.check_unused("Integrator " + in_quotes(e.type), m_warn,
                           e.type == "whitted" || direct || e.type == "path" ||
-                                  e.type == "volpath" || e.type == "ambientocclusion"
+                                  e.type == "volpath" || e.type == "ambientocclusion" ||
+                                  e.type == "sppm"
                               ? std::vector<std::string>{"pixelbounds", "lightsamplestrategy"}
                               : names_of(e));
+}
+
+// pbrt-v3's "sppm" (Scene::sppm): its parameters, those it would fail on an error here (no
+// iteration: pbrt-v3 writes no image; no radius: a black or NaN one).
+void Builder::sppm_integrator(const Entity& e) {
+    m_scene->sppm.on = true;
+    m_scene->path_tracing = true;  // (an AOV render's paths, and MIS in the direct light)
+    // "iterations" is pbrt-v3's other name for numiterations, and wins where both are given.
+    const char* iterations_name = e.params.find("iterations") ? "iterations" : "numiterations";
+    const int iterations = e.params.get_int(iterations_name, 64);
+    if (iterations < 1)
+        throw SceneError(loc_of(e, iterations_name), std::string(iterations_name) +
+                                                         " must be at least 1, got " +
+                                                         std::to_string(iterations));
+    m_scene->sppm.iterations = iterations;
+    // --spp sets the iterations (each a camera sample per pixel), rounded as for the samplers.
+    if (m_opts.spp_override > 0) {
+        const int k =
+            std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
+        m_scene->sppm.iterations = k * k;
+    }
+    // (0 or negative: one photon per pixel of the cropped film, as in pbrt-v3.)
+    const int photons = e.params.get_int("photonsperiteration", -1);
+    m_scene->sppm.photons = photons > 0 ? photons : 0;
+    const double radius = finite_float(e, "radius", 1);
+    if (!(radius > 0))
+        throw SceneError(loc_of(e, "radius"),
+                         "radius must be positive, got " + pbrt::number_text(radius));
+    m_scene->sppm.radius = static_cast<float>(radius);
+    // Only the progress images pbrt-v3 writes depend on it: the final image is the same.
+    (void)e.params.get_int("imagewritefrequency", 0);
 }
 
 }  // namespace cmam::render::build_detail
