@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "render/error.h"
+#include "render/spline.h"
 
 namespace cmam::render {
 
@@ -26,60 +27,6 @@ float float_at(const unsigned char* p) {
     float f;
     std::memcpy(&f, &w, sizeof f);
     return f;
-}
-
-// The largest i in [0, size - 2] with below(i) true (0 if none): below must be true up to some
-// index and false after it.
-template <class Pred>
-int last_below(int size, const Pred& below) {
-    int first = 0, len = size;
-    while (len > 0) {
-        const int half = len >> 1, middle = first + half;
-        if (below(middle)) {
-            first = middle + 1;
-            len -= half + 1;
-        } else {
-            len = half;
-        }
-    }
-    return std::clamp(first - 1, 0, size - 2);
-}
-
-// The weights of the four nodes offset..offset+3 whose Catmull-Rom spline through `nodes` gives
-// the value at x (a cubic Hermite segment whose end derivatives are the neighbours' finite
-// differences, one-sided at the ends: a weight of a node outside the table is 0). False when x
-// is outside [nodes[0], nodes[size - 1]]. Repeated nodes (published tables have -0 and 0) can
-// make the interval found one of no width (at the table's end, where the search stops): x there
-// is its node, and a difference over no width is taken one-sided.
-bool spline_weights(int size, const float* nodes, float x, int* offset, float w[4]) {
-    if (!(x >= nodes[0] && x <= nodes[size - 1])) return false;
-    const int i = last_below(size, [&](int k) { return nodes[k] <= x; });
-    *offset = i - 1;
-    const float x0 = nodes[i], x1 = nodes[i + 1];
-    const float t = x1 > x0 ? (x - x0) / (x1 - x0) : 0.0f, t2 = t * t, t3 = t2 * t;
-    // Hermite basis: values at t = 0 and 1, then the derivatives' terms.
-    w[0] = 0;
-    w[1] = 2 * t3 - 3 * t2 + 1;
-    w[2] = -2 * t3 + 3 * t2;
-    w[3] = 0;
-    const float d0 = t3 - 2 * t2 + t, d1 = t3 - t2;  // times the derivative at x0, at x1
-    if (i > 0 && x1 > nodes[i - 1]) {  // derivative at x0: (f(x1) - f(x_{-1})) / (x1 - x_{-1})
-        const float s = d0 * (x1 - x0) / (x1 - nodes[i - 1]);
-        w[0] -= s;
-        w[2] += s;
-    } else {  // one-sided: f(x1) - f(x0)
-        w[1] -= d0;
-        w[2] += d0;
-    }
-    if (i + 2 < size && nodes[i + 2] > x0) {  // derivative at x1: (f(x2) - f(x0)) / (x2 - x0)
-        const float s = d1 * (x1 - x0) / (nodes[i + 2] - x0);
-        w[1] -= s;
-        w[3] += s;
-    } else {
-        w[1] -= d1;
-        w[2] += d1;
-    }
-    return true;
 }
 
 // The cosine of the azimuth between a and b (1 where either has none).
@@ -259,49 +206,8 @@ namespace {
 // segment's cubic integral (Newton's method, bisection where a step leaves the bracket). `pdf`:
 // the density in mu_i. `so` places mu_o.
 float sample_elevation(const FourierTable& t, const Spline& so, float u, float* pdf) {
-    *pdf = 0;
-    const int oo = so.offset;
-    const float* w = so.w;
-    const int n = t.n_mu;
-    auto at = [&](const std::vector<float>& table, int i) {
-        float v = 0;
-        for (int k = 0; k < 4; ++k)
-            if (w[k] != 0) v += table[std::size_t(oo + k) * n + i] * w[k];
-        return v;
-    };
-    const float total = at(t.cdf, n - 1);
-    if (!(total > 0)) return 0;
-    u *= total;
-    const int i = last_below(n, [&](int k) { return at(t.cdf, k) <= u; });
-    const float f0 = at(t.a0, i), f1 = at(t.a0, i + 1);
-    const float x0 = t.mu[i], x1 = t.mu[i + 1], width = x1 - x0;
-    if (!(width > 0)) return 0;
-    u = (u - at(t.cdf, i)) / width;
-    // The segment's end derivatives (per unit t), by finite differences as the spline's.
-    const float d0 =
-        i > 0 && x1 > t.mu[i - 1] ? width * (f1 - at(t.a0, i - 1)) / (x1 - t.mu[i - 1]) : f1 - f0;
-    const float d1 = i + 2 < n && t.mu[i + 2] > x0
-                         ? width * (at(t.a0, i + 2) - f0) / (t.mu[i + 2] - x0)
-                         : f1 - f0;
-    // The first guess: the same inversion for the linear interpolant.
-    float s = f0 != f1 ? (f0 - std::sqrt(std::max(0.0f, f0 * f0 + 2 * u * (f1 - f0)))) / (f0 - f1)
-                       : u / f0;
-    float lo = 0, hi = 1, F = 0, f = 0;
-    for (int iter = 0; iter < 100; ++iter) {
-        if (!(s >= lo && s <= hi)) s = 0.5f * (lo + hi);
-        // The cubic and its integral from 0, in Horner form.
-        F = s * (f0 + s * (0.5f * d0 + s * ((1.0f / 3) * (-2 * d0 - d1) + f1 - f0 +
-                                            s * (0.25f * (d0 + d1) + 0.5f * (f0 - f1)))));
-        f = f0 + s * (d0 + s * (-2 * d0 - d1 + 3 * (f1 - f0) + s * (d0 + d1 + 2 * (f0 - f1))));
-        if (std::abs(F - u) < 1e-6f || hi - lo < 1e-6f) break;
-        if (F - u < 0)
-            lo = s;
-        else
-            hi = s;
-        s -= (F - u) / f;
-    }
-    *pdf = f / total;
-    return x0 + width * s;
+    return sample_spline(t.n_mu, t.mu.data(), t.a0.data(), t.cdf.data(), so.offset, so.w, u,
+                         nullptr, pdf);
 }
 
 // phi drawn from the series a (its constant term a[0] > 0) on [0, 2 pi): a half chosen by u,

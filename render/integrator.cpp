@@ -2,9 +2,11 @@
 
 #include <bit>
 #include <memory>
+#include <utility>
 
 #include "render/footprint/footprint.h"
 #include "render/shading.h"
+#include "render/subsurface.h"
 #include "render/tracer.h"
 
 namespace cmam::render {
@@ -55,12 +57,12 @@ struct Tracer {
     uint64_t strata_key = 0;
     uint32_t stratum = 0, strata = 0, strata_x = 1;
     int dim1 = 0, dim2 = 0;
-    float next() {
+    [[gnu::always_inline]] float next() {
         if (strata > 1 && dim1 < kStratified1D)
             return stratified(strata_key, stratum, strata, dim1++, rng.next_float());
         return rng.next_float();
     }
-    void next2(float& u, float& v) {
+    [[gnu::always_inline]] void next2(float& u, float& v) {
         u = rng.next_float();
         v = rng.next_float();
         if (strata > 1 && dim2 < kStratified2D)
@@ -806,13 +808,16 @@ struct Tracer {
             // (What the non-specular lobes compute of wo, once for the light and the bounce.)
             const Bsdf::Outgoing o = bsdf.has_nonspecular() ? bsdf.outgoing(wo) : Bsdf::Outgoing{};
             if (bsdf.has_nonspecular()) L += direct(h, bsdf, wo, o);
-            if (depth + 1 < scene.max_depth) {
-                if (!scene.path_tracing) {
+            if (!scene.path_tracing) {
+                if (depth + 1 < scene.max_depth) {
                     L += specular_reflect(ray, h, at, bsdf, wo, depth);
                     L += specular_transmit(ray, h, at, bsdf, wo, depth);
-                } else {
-                    L += continue_path(ray, h, at, bsdf, wo, o, depth);
                 }
+            } else if (depth + 1 < scene.max_depth || m.subsurface()) {
+                // (A path entering a subsurface material takes its exit point's direct light at
+                // this depth, as pbrt-v3's does: at the last depth too.)
+                subsurface_at = m.subsurface() ? Subsurface{&m, &ctx} : Subsurface{};
+                L += continue_path(ray, h, at, bsdf, wo, o, depth);
             }
             return scene.volumetric ? through_media * L : L;
         }
@@ -828,20 +833,144 @@ struct Tracer {
     // both, and of the specular lobes the reflection with the probability of its Fresnel term
     // (pbrt-v3's FresnelSpecular), each weighted by the inverse of its probability. Every other
     // lobe's children would double the rays at each hit of a glass or a glossy mirror.
+    //
+    // At a subsurface material (subsurface_at, set by li) a path that enters the surface goes on
+    // from the BSSRDF's exit point instead (subsurface); at the last depth only that is taken.
     Rgb continue_path(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
                       const Vec3& wo, const Bsdf::Outgoing& o, int depth) {
+        const Subsurface sss = std::exchange(subsurface_at, Subsurface{});
         const bool reflect = !b.kr.is_black(), transmit = !b.kt.is_black();
         const bool specular = reflect || transmit, other = b.has_nonspecular();
         if (!specular && !other) return {};
         const float p_specular = specular && other ? 0.5f : specular ? 1.0f : 0.0f;
-        if (!(next() < p_specular)) return bounce(h, b, o, depth) / (1 - p_specular);
+        if (!(next() < p_specular)) return bounce(h, b, o, depth, sss) / (1 - p_specular);
         float p_reflect = reflect ? 1.0f : 0.0f;
         if (reflect && transmit)
             p_reflect = b.fresnel_noop ? 0.5f : fresnel_dielectric(dot(wo, h.ns), 1.0f, b.eta);
-        const Rgb L = next() < p_reflect
-                          ? specular_reflect(ray, h, at, b, wo, depth) / p_reflect
-                          : specular_transmit(ray, h, at, b, wo, depth) / (1 - p_reflect);
+        const bool deeper = depth + 1 < scene.max_depth;
+        Rgb L;
+        if (next() < p_reflect) {
+            L = deeper ? specular_reflect(ray, h, at, b, wo, depth) / p_reflect : Rgb();
+        } else if (sss.material) {  // into the material: its weight, then the BSSRDF's exit
+            L = enter_subsurface(h, sss, b, wo, depth) / (1 - p_reflect);
+        } else {
+            L = deeper ? specular_transmit(ray, h, at, b, wo, depth) / (1 - p_reflect) : Rgb();
+        }
         return L / p_specular;
+    }
+
+    // The material a path is about to leave h of, where it scatters below the surface (pbrt-v3's
+    // BSSRDF), and its texture context at h; none elsewhere.
+    struct Subsurface {
+        const Material* material = nullptr;
+        const TexContext* ctx = nullptr;
+    };
+    Subsurface subsurface_at{};
+
+    // pbrt-v3's subsurface scattering from h, where a path with weight `weight` (its BSDF
+    // sample's through the surface) enters a subsurface material (algorithms.md §26): an exit
+    // point drawn by the BSSRDF's radial profile (a probe segment along one of h's shading axes,
+    // at a radius drawn from one channel's profile, meeting the material's surfaces), weighted
+    // by the profile over the density of drawing it; its direct light through the BSSRDF's exit
+    // lobe (its Fresnel-weighted diffuse lobe); and one bounce drawn from that lobe.
+    // (Kept out of its callers: inlined, it crowded li's own inlining out, costing every render.)
+    [[gnu::noinline]] Rgb subsurface(const SurfaceHit& h, const Subsurface& sss, const Rgb& weight,
+                                     int depth) {
+        const Material& m = *sss.material;
+        Rgb sigma_a, sigma_s;
+        if (m.type == Material::Type::Subsurface) {
+            sigma_a = clamp0(eval_texture(scene, m.sss_sigma_a, *sss.ctx)) * m.sss_scale;
+            sigma_s = clamp0(eval_texture(scene, m.sss_sigma_s, *sss.ctx)) * m.sss_scale;
+        } else {
+            subsurface_from_diffuse(*m.bssrdf, clamp0(eval_texture(scene, m.kd, *sss.ctx)),
+                                    eval_texture(scene, m.mfp, *sss.ctx) * m.sss_scale, sigma_a,
+                                    sigma_s);
+        }
+        const Bssrdf bssrdf(*m.bssrdf, sigma_a, sigma_s);
+        // The probe's axis (h's normal with probability 1/2, each tangent 1/4) and channel.
+        float u1 = next(), ur, uphi;
+        next2(ur, uphi);
+        const Frame f = Frame::from_z(h.ns);
+        Vec3 vx = f.s, vy = f.t, vz = f.n;
+        if (u1 < 0.5f) {
+            u1 *= 2;
+        } else if (u1 < 0.75f) {
+            vx = f.t, vy = f.n, vz = f.s;
+            u1 = (u1 - 0.5f) * 4;
+        } else {
+            vx = f.n, vy = f.s, vz = f.t;
+            u1 = (u1 - 0.75f) * 4;
+        }
+        const int ch = std::min(static_cast<int>(u1 * 3), 2);
+        u1 = std::min(u1 * 3 - float(ch), 0x1.fffffep-1f);
+        const float r = bssrdf.sample_sr(ch, ur), r_max = bssrdf.sample_sr(ch, 0.999f);
+        if (r < 0 || !(r < r_max)) return {};
+        const float phi = 2 * kPi * uphi, l = 2 * std::sqrt(r_max * r_max - r * r);
+        // The probe: the segment of length l through the point at (r, phi) about h, along vz;
+        // every surface of the same material on it is a candidate exit point.
+        Vec3 org = h.p + r * (std::cos(phi) * vx + std::sin(phi) * vy) - (0.5f * l) * vz;
+        thread_local std::vector<SurfaceHit> found;
+        found.clear();
+        float left = l;
+        for (int k = 0; k < kMaxProbeHits && left > 0; ++k) {
+            if (counts) ++counts->secondary;
+            const std::optional<SurfaceHit> y = scene.intersect(org, vz, 0, left, false);
+            if (!y) break;
+            if (y->prim->material == h.prim->material) found.push_back(*y);
+            const Vec3 next_org = offset_origin(*y, vz);
+            left -= dot(next_org - org, vz);
+            org = next_org;
+        }
+        if (found.empty()) return {};
+        const int n = static_cast<int>(found.size());
+        const SurfaceHit& pi = found[static_cast<std::size_t>(std::min(int(u1 * float(n)), n - 1))];
+        const float pdf = bssrdf.pdf_sp(f, h.p, pi.p, pi.ng) / float(n);
+        const Rgb sp = bssrdf.sr(length(h.p - pi.p));
+        if (!(pdf > 0) || sp.is_black()) return {};
+        const Rgb w = weight * sp / pdf;
+        // The exit lobe, facing along pi's shading normal.
+        Bsdf exit;
+        exit.frame = Frame::from_z(pi.ns);
+        exit.ng = pi.ng;
+        exit.sss_eta = m.eta.value.r;
+        exit.kd = Rgb(exit.sss_eta * exit.sss_eta / m.bssrdf->exit_norm);
+        const Vec3 wo_exit = pi.ns;
+        const Bsdf::Outgoing o = exit.outgoing(wo_exit);
+        Rgb L = w * direct(pi, exit, wo_exit, o);
+        if (depth + 1 < scene.max_depth) {
+            const Rgb saved = beta;
+            beta = beta * w;
+            L += w * bounce(pi, exit, o, depth, Subsurface{});
+            beta = saved;
+        }
+        return L;
+    }
+    // subsurface() for a path entering by a smooth dielectric's refraction at h.
+    [[gnu::noinline]] Rgb enter_subsurface(const SurfaceHit& h, const Subsurface& sss,
+                                           const Bsdf& b, const Vec3& wo, int depth) {
+        Vec3 wt;
+        const float ft = transmittance_into(h, b, wo, wt);
+        return ft > 0 ? subsurface(h, sss, b.kt * ft, depth) : Rgb();
+    }
+    // Surfaces a subsurface probe meets at most (a mesh folded on itself many times over).
+    static constexpr int kMaxProbeHits = 64;
+
+    // The weight of a smooth dielectric's refraction from h into the other side (1 - F times
+    // (eta_i / eta_t)^2, radiance's), its direction in wt; 0 under total internal reflection.
+    [[gnu::always_inline]] static float transmittance_into(const SurfaceHit& h, const Bsdf& b,
+                                                           const Vec3& wo, Vec3& wt) {
+        const Vec3& n = h.ns;
+        const float cos_o = dot(wo, n);
+        const bool entering = cos_o > 0;
+        const float eta_i = entering ? 1.0f : b.eta, eta_t = entering ? b.eta : 1.0f;
+        const std::optional<Vec3> refracted =
+            render::refract(wo, faceforward(n, wo), eta_i / eta_t);
+        if (!refracted) return 0;
+        wt = *refracted;
+        float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
+        ft *= (eta_i * eta_i) / (eta_t * eta_t);
+        if (dot(wt, n) == 0) return 0;
+        return ft;
     }
 
     // One non-specular bounce of a path from h (path tracing): a direction drawn from the BSDF,
@@ -851,7 +980,8 @@ struct Tracer {
     // footprint, as pbrt-v3's rays from such bounces carry no differentials: the textures it
     // meets are read at full resolution, and the CMAM's caches (whose paths are specular
     // chains) are not used below it.
-    Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Bsdf::Outgoing& o, int depth) {
+    Rgb bounce(const SurfaceHit& h, const Bsdf& bsdf, const Bsdf::Outgoing& o, int depth,
+               const Subsurface& sss) {
         const float u0 = next();
         float u1, u2;
         next2(u1, u2);
@@ -866,6 +996,8 @@ struct Tracer {
             weight = weight / (1 - q);
         }
         if (!finite(s.wi)) return {};
+        if (sss.material && dot(s.wi, h.ng) * o.w_ng < 0) return subsurface(h, sss, weight, depth);
+        if (depth + 1 >= scene.max_depth) return {};  // (only a subsurface exit at the last depth)
         if (counts) ++counts->secondary;
         const Ray next{offset_origin(h, s.wi), s.wi, RayFootprint{}};
         CmamRowState* const caches = cmam;
@@ -904,7 +1036,8 @@ struct Tracer {
     // with `weight`: its weighted radiance, or with a deferred parent (`parent` >= 0) nothing,
     // the child (in made_rays[lobe]) being kept as the parent's child `lobe` (0 reflected, 1
     // transmitted), to be traced by trace_packet.
-    Rgb spawn(const SurfaceHit& h, Ray& next, int depth, const Rgb& weight, int parent, int lobe) {
+    [[gnu::always_inline]] Rgb spawn(const SurfaceHit& h, Ray& next, int depth, const Rgb& weight,
+                                     int parent, int lobe) {
         if (counts) ++counts->secondary;
         next.org = offset_origin(h, next.dir);
         if (parent < 0) {
@@ -923,8 +1056,9 @@ struct Tracer {
     }
 
     // The specular children: their weighted radiance, or with a deferred parent nothing (spawn).
-    Rgb specular_reflect(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
-                         const Vec3& wo, int depth, int parent = -1) {
+    [[gnu::always_inline]] Rgb specular_reflect(const Ray& ray, const SurfaceHit& h,
+                                                const HitFootprint& at, const Bsdf& b,
+                                                const Vec3& wo, int depth, int parent = -1) {
         if (b.kr.is_black()) return {};
         const Vec3& n = h.ns;
         float cos_o = dot(wo, n);
@@ -939,20 +1073,15 @@ struct Tracer {
         return spawn(h, next, depth, b.kr * fr, parent, 0);
     }
 
-    Rgb specular_transmit(const Ray& ray, const SurfaceHit& h, const HitFootprint& at,
-                          const Bsdf& b, const Vec3& wo, int depth, int parent = -1) {
+    [[gnu::always_inline]] Rgb specular_transmit(const Ray& ray, const SurfaceHit& h,
+                                                 const HitFootprint& at, const Bsdf& b,
+                                                 const Vec3& wo, int depth, int parent = -1) {
         if (b.kt.is_black()) return {};
-        const Vec3& n = h.ns;
-        float cos_o = dot(wo, n);
-        bool entering = cos_o > 0;
-        float eta_i = entering ? 1.0f : b.eta, eta_t = entering ? b.eta : 1.0f;
-        const std::optional<Vec3> refracted =
-            render::refract(wo, faceforward(n, wo), eta_i / eta_t);
-        if (!refracted) return {};
-        const Vec3 wt = *refracted;
-        float ft = 1 - fresnel_dielectric(dot(wt, n), 1.0f, b.eta);
-        ft *= (eta_i * eta_i) / (eta_t * eta_t);
-        if (ft == 0 || dot(wt, n) == 0) return {};
+        Vec3 wt;
+        const float ft = transmittance_into(h, b, wo, wt);
+        if (ft == 0) return {};
+        const bool entering = dot(wo, h.ns) > 0;
+        const float eta_i = entering ? 1.0f : b.eta, eta_t = entering ? b.eta : 1.0f;
         Ray own;
         Ray& next = parent >= 0 ? *std::construct_at(made_rays + 1) : own;
         next.dir = wt;

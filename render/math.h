@@ -103,6 +103,11 @@ inline Rgb operator*(float s, const Rgb& c) {
     return c * s;
 }
 
+/// c with its negative channels made 0 (pbrt-v3's Spectrum::Clamp).
+inline Rgb clamp0(const Rgb& c) {
+    return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
+}
+
 /// Orthonormal frame with z along a given normal (for BSDF-local directions).
 struct Frame {
     Vec3 s, t, n;

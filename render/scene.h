@@ -156,6 +156,7 @@ struct TextureNode {
 constexpr int kMaxTextureDepth = 256;
 
 struct FourierTable;  // render/fourier.h
+struct BssrdfTable;   // render/subsurface.h
 
 struct Material {
     enum class Type {
@@ -170,6 +171,8 @@ struct Material {
         Fourier,
         Hair,
         Disney,
+        Subsurface,
+        KdSubsurface,
         None,
         Mix
     };
@@ -199,6 +202,15 @@ struct Material {
     TexInput metallic, specular_tint, disney_anisotropic, sheen, sheen_tint{-1, Rgb(0.5f)},
         clearcoat, clearcoat_gloss{-1, Rgb(1)}, flatness, diff_trans{-1, Rgb(1)}, spec_trans;
     bool thin = false;
+    // Subsurface (pbrt-v3's "subsurface" and "kdsubsurface", algorithms.md §26): a glass's BSDF
+    // (kr, kt, eta, roughness) over a BSSRDF of absorption and scattering sss_sigma_a and
+    // sss_sigma_s times sss_scale, or (kdsubsurface) those whose profile has the diffuse
+    // reflectance kd and mean free path mfp times sss_scale; its profile's table for its phase
+    // asymmetry and index (shared by the materials that have the same).
+    TexInput sss_sigma_a, sss_sigma_s, mfp;
+    float sss_scale = 1;
+    std::shared_ptr<const BssrdfTable> bssrdf;
+    bool subsurface() const { return type == Type::Subsurface || type == Type::KdSubsurface; }
     // pbrt-v3's "bumpmap": a float texture displacing the surface along its shading normal;
     // node -1 and a constant: none (a constant displacement leaves the normal as it is here).
     TexInput bump;
@@ -234,7 +246,10 @@ struct Material {
                                    &clearcoat_gloss,
                                    &flatness,
                                    &diff_trans,
-                                   &spec_trans})
+                                   &spec_trans,
+                                   &sss_sigma_a,
+                                   &sss_sigma_s,
+                                   &mfp})
             if (in->node >= 0) return true;
         return false;
     }

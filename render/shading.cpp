@@ -407,10 +407,6 @@ std::optional<Vec3> refract(const Vec3& wi, const Vec3& n, float eta) {
 
 namespace {
 
-Rgb clamp0(const Rgb& c) {
-    return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
-}
-
 // The Trowbridge-Reitz (GGX) microfacet distribution in the local frame, pbrt-v3's
 // D = 1 / (pi ax ay cos^4 (1 + e)^2), e = tan^2 (cos^2 phi / ax^2 + sin^2 phi / ay^2), of the
 // direction of h, which need not be a unit vector (l2 = |h|^2): cos^4 (1 + e)^2 is
@@ -626,7 +622,11 @@ Rgb Bsdf::own_f(const Outgoing& o, const Vec3& wi_w) const {
         return out;
     }
     if (fresnel_blend) return blend_f(wo, frame.to_local(wi_w));
-    if (on_b == 0 && !has_glossy()) return kd * kInvPi;  // Lambertian: wi's local frame unused
+    if (on_b == 0 && !has_glossy()) {  // Lambertian: wi's local frame unused
+        if (sss_eta > 0)
+            return kd * (kInvPi * (1 - fresnel_dielectric(dot(wi_w, frame.n), 1, sss_eta)));
+        return kd * kInvPi;
+    }
     const Vec3 wi = frame.to_local(wi_w);
     Rgb out{};
     if (has_diffuse()) {
@@ -1159,7 +1159,9 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.fresnel_noop = true;
             break;
-        case Material::Type::Glass: {
+        case Material::Type::Glass:
+        case Material::Type::Subsurface:  // (its BSSRDF is the path tracer's: Tracer::subsurface)
+        case Material::Type::KdSubsurface: {
             b.kr = clamp0(eval_texture(scene, m.kr, ctx));
             b.kt = clamp0(eval_texture(scene, m.kt, ctx));
             b.eta = index_of(eval_texture(scene, m.eta, ctx).r);

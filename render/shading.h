@@ -137,6 +137,10 @@ struct Bsdf {
     Rgb kt_rough{};
     // Lambertian transmission (pbrt-v3's translucent): kt_diffuse / pi on the far side.
     Rgb kt_diffuse{};
+    // Where a path leaves a subsurface material (pbrt-v3's SeparableBSSRDFAdapter): the diffuse
+    // lobe weighted by the transmittance into the material of index sss_eta, kd (1 - F(cos
+    // theta_i)) / pi (kd = eta^2 / c, c normalising; 0: an ordinary diffuse lobe).
+    float sss_eta = 0;
     // pbrt-v3's FresnelBlend (substrate) in place of the diffuse and glossy lobes: kd the base's
     // colour, ks the coat's reflectance at normal incidence (Schlick's approximation), the glossy
     // lobe's distribution; its value times blend_scale (a mix's weight).

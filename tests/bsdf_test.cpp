@@ -339,7 +339,7 @@ TEST(Materials, MetalTakesTheConductorsFresnelEquations) {
 TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
     std::vector<std::string> warnings;
     const Bsdf b =
-        bsdf_of("Material \"kdsubsurface\" \"rgb Kd\" [0.2 0.3 0.4] \"float eta\" 1.3", &warnings);
+        bsdf_of("Material \"coateddiffuse\" \"rgb Kd\" [0.2 0.3 0.4] \"float eta\" 1.3", &warnings);
     EXPECT_FLOAT_EQ(b.kd.b, 0.4f);
     EXPECT_TRUE(b.ks.is_black());
     // (Besides the scene's own: no integrator, no lights.)
@@ -349,9 +349,9 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
         });
     };
     EXPECT_EQ(
-        count("t.pbrt:4:1: warning: material \"kdsubsurface\" is rendered as \"matte\" "
+        count("t.pbrt:4:1: warning: material \"coateddiffuse\" is rendered as \"matte\" "
               "with its Kd (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-              "translucent, fourier, hair, disney and mix)"),
+              "translucent, fourier, hair, disney, subsurface, kdsubsurface and mix)"),
         1);
     EXPECT_EQ(count("material"), 1);  // its other parameters (eta) are not reported one by one
     warnings.clear();

@@ -82,6 +82,8 @@ class Builder {
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;           // by resolved path
     std::map<std::string, std::shared_ptr<const FourierTable>> m_fourier;  // by resolved path
+    // Subsurface materials' profile tables, by (g, eta).
+    std::map<std::pair<float, float>, std::shared_ptr<const BssrdfTable>> m_bssrdf_tables;
     std::map<std::string, std::string> m_fourier_errors;  // files that could not be read: why
 
     // Files read ahead, in parallel, before the directives are built in order (read_ahead):
@@ -219,6 +221,9 @@ class Builder {
     void fourier_material(const pbrt::MaterialDesc& d, Material& m);
     void hair_material(const pbrt::MaterialDesc& d, Material& m);
     void disney_material(const pbrt::MaterialDesc& d, Material& m);
+    void subsurface_material(const pbrt::MaterialDesc& d, Material& m);
+    void kd_subsurface_material(const pbrt::MaterialDesc& d, Material& m);
+    void subsurface_common(const pbrt::MaterialDesc& d, Material& m);
     Material unrendered_material(const pbrt::MaterialDesc& d);
 
     // --- shapes, instances and area lights (shapes.cpp) -----------------------------------

@@ -4,6 +4,7 @@
 #include "render/build/builder.h"
 #include "render/error.h"
 #include "render/fourier.h"
+#include "render/subsurface.h"
 
 namespace cmam::render::build_detail {
 
@@ -243,8 +244,75 @@ void Builder::disney_material(const pbrt::MaterialDesc& d, Material& m) {
     }
 }
 
-// pbrt-v3 renders a material it does not know as matte, with a warning; so does
-// cmam with the ones it does not render (subsurface scattering).
+// What pbrt-v3's "subsurface" and "kdsubsurface" share: a glass's BSDF (Kr, Kt, its index as a
+// plain float, default 1.33, and its roughness), the scale, and the profile's table for g and eta.
+void Builder::subsurface_common(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.kr = spectrum_input(e, s, "Kr", Rgb(1));
+    m.kt = spectrum_input(e, s, "Kt", Rgb(1));
+    const double eta = finite_float(e, "eta", 1.33);
+    if (!(eta > 0)) throw SceneError(loc_of(e, "eta"), "eta must be positive");
+    m.eta = TexInput{-1, Rgb(static_cast<float>(eta))};
+    m.roughness = float_input(e, s, "uroughness", 0);
+    m.vroughness = float_input(e, s, "vroughness", 0);
+    m.anisotropic = m.roughness.node != m.vroughness.node ||
+                    (m.roughness.node < 0 && !(m.roughness.value.r == m.vroughness.value.r));
+    m.remap_roughness = e.params.get_bool("remaproughness", true);
+    m.sss_scale = static_cast<float>(finite_float(e, "scale", 1));
+    if (m.sss_scale < 0) throw SceneError(loc_of(e, "scale"), "scale must not be negative");
+}
+
+// The profile table for phase asymmetry g and index eta, computed once for each pair.
+namespace {
+std::shared_ptr<const BssrdfTable> table_for(
+    std::map<std::pair<float, float>, std::shared_ptr<const BssrdfTable>>& tables, float g,
+    float eta, int threads) {
+    auto& t = tables[{g, eta}];
+    if (!t) t = BssrdfTable::beam_diffusion(g, eta, threads);
+    return t;
+}
+}  // namespace
+
+// pbrt-v3's "subsurface": absorption and scattering coefficients given ("sigma_a", "sigma_s",
+// pbrt-v3's defaults in mm^-1) or measured ones by name (reduced scattering: g is then 0, as in
+// pbrt-v3), times "scale".
+void Builder::subsurface_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::Subsurface;
+    subsurface_common(d, m);
+    Rgb sigma_a(.0011f, .0024f, .014f), sigma_s(2.55f, 3.21f, 3.77f);
+    float g = static_cast<float>(finite_float(e, "g", 0));
+    if (const std::string name = e.params.get_string("name", ""); !name.empty()) {
+        if (measured_scattering(name, sigma_a, sigma_s))
+            g = 0;
+        else
+            warn(loc_of(e, "name"), "unknown measured medium " + in_quotes(name) +
+                                        "; sigma_a and sigma_s take their defaults where not "
+                                        "given, as in pbrt-v3");
+    }
+    if (!(std::abs(g) < 1)) throw SceneError(loc_of(e, "g"), "g must be in (-1, 1)");
+    m.sss_sigma_a = spectrum_input(e, s, "sigma_a", sigma_a);
+    m.sss_sigma_s = spectrum_input(e, s, "sigma_s", sigma_s);
+    m.bssrdf = table_for(m_bssrdf_tables, g, m.eta.value.r, m_opts.threads);
+}
+
+// pbrt-v3's "kdsubsurface": the coefficients whose profile reflects "Kd" (default 0.5) with mean
+// free path "mfp" (default 1), times "scale".
+void Builder::kd_subsurface_material(const pbrt::MaterialDesc& d, Material& m) {
+    const Entity& e = d.entity;
+    const TextureScope& s = d.scope;
+    m.type = Material::Type::KdSubsurface;
+    subsurface_common(d, m);
+    m.kd = spectrum_input(e, s, "Kd", Rgb(0.5f));
+    m.mfp = spectrum_input(e, s, "mfp", Rgb(1));
+    const float g = static_cast<float>(finite_float(e, "g", 0));
+    if (!(std::abs(g) < 1)) throw SceneError(loc_of(e, "g"), "g must be in (-1, 1)");
+    m.bssrdf = table_for(m_bssrdf_tables, g, m.eta.value.r, m_opts.threads);
+}
+
+// pbrt-v3 renders a material it does not know as matte, with a warning; so does cmam.
 Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     const Entity& e = d.entity;
     Material m;
@@ -253,7 +321,7 @@ Material Builder::unrendered_material(const pbrt::MaterialDesc& d) {
     warn(e.loc, "material " + in_quotes(e.type) + " is rendered as \"matte\"" +
                     (e.params.find("Kd") ? " with its Kd" : "") +
                     " (cmam renders matte, mirror, glass, plastic, uber, metal, substrate, "
-                    "translucent, fourier, hair, disney and mix)");
+                    "translucent, fourier, hair, disney, subsurface, kdsubsurface and mix)");
     return m;  // its other parameters are not read: no warning for each
 }
 
@@ -270,6 +338,8 @@ Material Builder::material(const pbrt::MaterialDesc& d) {
         {"fourier", &Builder::fourier_material},
         {"hair", &Builder::hair_material},
         {"disney", &Builder::disney_material},
+        {"subsurface", &Builder::subsurface_material},
+        {"kdsubsurface", &Builder::kd_subsurface_material},
         {"none", &Builder::no_material},
         {"", &Builder::no_material},
         {"mix", &Builder::mix_material}};
