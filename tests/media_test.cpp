@@ -254,6 +254,40 @@ const char* kVolpath = "Integrator \"volpath\" WorldBegin\n";
 
 }  // namespace
 
+TEST(Media, PresetsArePbrtV3sMeasuredMedia) {
+    // A preset's absorption and reduced scattering (mm^-1) are the defaults of sigma_a and
+    // sigma_s, which "scale" multiplies as it does given ones.
+    std::vector<std::string> warnings;
+    auto medium = [&](const std::string& params) {
+        warnings.clear();
+        auto scene = render::build_scene(
+            pbrt::parse_string("Integrator \"volpath\" Camera \"perspective\" WorldBegin\n"
+                               "MakeNamedMedium \"m\" \"string type\" \"homogeneous\" " +
+                                   params +
+                                   "\nMediumInterface \"m\" \"\"\nShape \"sphere\"\nWorldEnd\n",
+                               "p.pbrt"),
+            {}, [&](const std::string& w) {
+                if (w.find("medi") != std::string::npos) warnings.push_back(w);
+            });
+        EXPECT_EQ(scene->media.size(), 1u);
+        return scene->media.empty() ? render::Medium{} : scene->media[0];
+    };
+    render::Medium m = medium("\"string preset\" \"Skin1\" \"float scale\" 2");
+    EXPECT_FLOAT_EQ(m.sigma_a.r, 0.064f);
+    EXPECT_FLOAT_EQ(m.sigma_a.b, 0.96f);
+    EXPECT_FLOAT_EQ(m.sigma_s.g, 1.76f);
+    EXPECT_TRUE(warnings.empty());
+    m = medium("\"string preset\" \"Coke\" \"rgb sigma_a\" [1 1 1]");  // a given one wins
+    EXPECT_FLOAT_EQ(m.sigma_a.g, 1);
+    EXPECT_FLOAT_EQ(m.sigma_s.r, 8.9053e-05f);
+    m = medium("\"string preset\" \"Fog\"");
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("medium preset \"Fog\" is not one of pbrt-v3's measured media"),
+              std::string::npos)
+        << warnings[0];
+    EXPECT_FLOAT_EQ(m.sigma_s.r, 2.55f);  // pbrt-v3's defaults
+}
+
 TEST(Media, TheBuilderChecksTheirParameters) {
     // Errors, located at the parameter.
     auto error = [](const std::string& medium) {

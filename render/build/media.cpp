@@ -3,13 +3,14 @@
 #include <algorithm>
 
 #include "render/build/builder.h"
+#include "render/subsurface.h"
 
 namespace cmam::render::build_detail {
 
 // pbrt-v3's defaults, which its MakeNamedMedium takes where "sigma_a" and "sigma_s" are not
 // given (per mm: whole milk).
-constexpr double kDefaultSigmaA[3] = {0.0011, 0.0024, 0.014};
-constexpr double kDefaultSigmaS[3] = {2.55, 3.21, 3.77};
+constexpr Rgb kDefaultSigmaA(0.0011f, 0.0024f, 0.014f);
+constexpr Rgb kDefaultSigmaS(2.55f, 3.21f, 3.77f);
 
 void Builder::media() {
     m_medium_index.assign(m_desc.media.size(), -1);
@@ -30,12 +31,16 @@ void Builder::media() {
                                         " (cmam renders \"homogeneous\" and \"heterogeneous\")");
             continue;
         }
-        if (const std::string preset = e.params.get_string("preset", ""); !preset.empty())
+        // A preset: pbrt-v3's measured media (subsurface.h), the defaults of sigma_a and
+        // sigma_s (the reduced scattering coefficient, as pbrt-v3 takes it).
+        Rgb preset_a = kDefaultSigmaA, preset_s = kDefaultSigmaS;
+        if (const std::string preset = e.params.get_string("preset", "");
+            !preset.empty() && !measured_scattering(preset, preset_a, preset_s))
             warn(loc_of(e, "preset"), "medium preset " + in_quotes(preset) +
-                                          " is not known to cmam; sigma_a and sigma_s take their "
-                                          "defaults where not given");
-        auto coefficients = [&](const char* name, const double* def) {
-            Rgb c{float(def[0]), float(def[1]), float(def[2])};
+                                          " is not one of pbrt-v3's measured media; sigma_a and "
+                                          "sigma_s take their defaults where not given");
+        auto coefficients = [&](const char* name, const Rgb& def) {
+            Rgb c = def;
             if (auto v = e.params.get_rgb(name)) c = to_rgb(finite_values(e, name, *v));
             if (c.r < 0 || c.g < 0 || c.b < 0)
                 throw SceneError(loc_of(e, name), std::string(name) + " must not be negative");
@@ -43,8 +48,8 @@ void Builder::media() {
         };
         const float scale = static_cast<float>(finite_float(e, "scale", 1));
         if (scale < 0) throw SceneError(loc_of(e, "scale"), "scale must not be negative");
-        m.sigma_a = coefficients("sigma_a", kDefaultSigmaA) * scale;
-        m.sigma_s = coefficients("sigma_s", kDefaultSigmaS) * scale;
+        m.sigma_a = coefficients("sigma_a", preset_a) * scale;
+        m.sigma_s = coefficients("sigma_s", preset_s) * scale;
         m.sigma_t = m.sigma_a + m.sigma_s;
         m.g = static_cast<float>(finite_float(e, "g", 0));
         if (!(std::abs(m.g) < 1))
