@@ -873,7 +873,7 @@ struct Tracer {
     // at a radius drawn from one channel's profile, meeting the material's surfaces), weighted
     // by the profile over the density of drawing it; its direct light through the BSSRDF's exit
     // lobe (its Fresnel-weighted diffuse lobe); and one bounce drawn from that lobe.
-    // (Kept out of its callers: inlined, it crowded li's own inlining out, costing every render.)
+    // (Out of line: it is rare, and its callers' inlining is kept for the common paths.)
     [[gnu::noinline]] Rgb subsurface(const SurfaceHit& h, const Subsurface& sss, const Rgb& weight,
                                      int depth) {
         const Material& m = *sss.material;
@@ -1302,7 +1302,9 @@ void Tracer::record_aov(const TexContext& ctx, const SurfaceHit& h, const Bsdf& 
         // CMAM's cache); a mix's, its layers' too.
         // (A Disney BSDF's: its base colour.)
         auto kd_of = [](const Bsdf& b) { return b.disney ? b.disney->base : b.kd; };
-        Rgb k = kd_of(bsdf);
+        // (A kdsubsurface's Kd is its BSSRDF's, not its BSDF's, which is a glass's.)
+        Rgb k = m.type == Material::Type::KdSubsurface ? clamp0(eval_texture(scene, m.kd, ctx))
+                                                       : kd_of(bsdf);
         for (const Bsdf* l = bsdf.layer; l; l = l->layer) k += kd_of(*l);
         aov->v[0] = k.r;
         aov->v[1] = k.g;

@@ -201,6 +201,17 @@ TEST(Subsurface, SemiInfiniteSlabReflectsItsKd) {
     }
 }
 
+TEST(Subsurface, TextureAovIsTheKdOfTheBssrdf) {
+    // The texture AOV records a kdsubsurface's Kd where it is hit (its BSDF, a glass's, has none).
+    auto scene = test::scene_from(slab(R"(Material "kdsubsurface" "rgb Kd" [0.5 0.2 0.8])"));
+    RenderOptions o;
+    o.aov = AovKind::Texture;
+    const Rgb k = mean_of(render::render(*scene, o, nullptr));
+    EXPECT_FLOAT_EQ(k.r, 0.5f);
+    EXPECT_FLOAT_EQ(k.g, 0.2f);
+    EXPECT_FLOAT_EQ(k.b, 0.8f);
+}
+
 TEST(Subsurface, WithoutAPathTracerItIsItsSurfacesGlass) {
     // pbrt-v3's whitted and directlighting leave the BSSRDF out: the material is its BSDF, a
     // glass of its index (here a smooth one: the sky through the slab, which is black below).
