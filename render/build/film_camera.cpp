@@ -376,7 +376,8 @@ void Builder::integrator() {
         if (e.type != "path" && e.type != "volpath")
             warn(e.loc, "Integrator " + in_quotes(e.type) +
                             " is rendered as \"volpath\" (the same light transport, sampled by a "
-                            "path tracer)");
+                            "path tracer, which misses the caustics of point, spot and distant "
+                            "lights through mirrors and glass: \"sppm\" renders those)");
     } else if (e.type == "sppm") {
         sppm_integrator(e);
     } else if (direct) {
