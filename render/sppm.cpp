@@ -195,8 +195,8 @@ struct Pixel {
 };
 
 // The visible points in a uniform grid over their bounds, cells of about the largest radius,
-// hashed into as many buckets as there are pixels; each point is in the buckets of every cell its
-// disc of radius overlaps.
+// hashed into a power of two of buckets at least the pixels' count; each point is in the buckets of
+// every cell its disc of radius overlaps.
 class VisibleGrid {
   public:
     explicit VisibleGrid(const std::vector<Pixel>& pixels) {
@@ -216,17 +216,26 @@ class VisibleGrid {
         const float base = std::min(largest / max_radius, float(1 << 20));
         for (int a = 0; a < 3; ++a)
             m_res[a] = std::max(1, static_cast<int>(base * diag[a] / largest));
-        m_buckets = pixels.size();
+        // A power of two at least the pixels' count, indexed by the hash's top bits.
+        while ((std::size_t(1) << m_bucket_bits) < pixels.size()) ++m_bucket_bits;
+        m_buckets = std::size_t(1) << m_bucket_bits;
         std::vector<uint32_t> count(m_buckets + 1, 0);
+        // The buckets of the cells point i's ball overlaps, each once: two of its cells may hash
+        // to one bucket, where the point entered twice would take a photon there twice.
+        std::vector<std::size_t> buckets;
         auto each_cell = [&](uint32_t i, auto&& f) {
             const Pixel& px = pixels[i];
             const Vec3 r(px.radius, px.radius, px.radius);
             int lo[3], hi[3];
             cell(px.vp.p - r, lo);
             cell(px.vp.p + r, hi);
+            buckets.clear();
             for (int z = lo[2]; z <= hi[2]; ++z)
                 for (int y = lo[1]; y <= hi[1]; ++y)
-                    for (int x = lo[0]; x <= hi[0]; ++x) f(bucket(x, y, z));
+                    for (int x = lo[0]; x <= hi[0]; ++x) buckets.push_back(bucket(x, y, z));
+            std::sort(buckets.begin(), buckets.end());
+            buckets.erase(std::unique(buckets.begin(), buckets.end()), buckets.end());
+            for (const std::size_t b : buckets) f(b);
         };
         for (uint32_t i : m_points) each_cell(i, [&](std::size_t b) { ++count[b + 1]; });
         for (std::size_t b = 0; b < m_buckets; ++b) count[b + 1] += count[b];
@@ -255,11 +264,15 @@ class VisibleGrid {
             c[a] = std::clamp(static_cast<int>(t * float(m_res[a])), 0, m_res[a] - 1);
         }
     }
+    // The cell's bucket: its coordinates mixed by large primes, then Fibonacci hashing (the top
+    // bits of the product with 2^64 / golden ratio), without a division.
     std::size_t bucket(int x, int y, int z) const {
         const uint64_t h = (uint64_t(uint32_t(x)) * 73856093u) ^
                            (uint64_t(uint32_t(y)) * 19349663u) ^
                            (uint64_t(uint32_t(z)) * 83492791u);
-        return static_cast<std::size_t>(h % m_buckets);
+        return m_bucket_bits == 0
+                   ? 0
+                   : static_cast<std::size_t>((h * 0x9E3779B97F4A7C15ull) >> (64 - m_bucket_bits));
     }
 
     Vec3 m_lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
@@ -267,6 +280,7 @@ class VisibleGrid {
     Vec3 m_hi = -m_lo;
     int m_res[3] = {1, 1, 1};
     std::size_t m_buckets = 0;
+    int m_bucket_bits = 0;
     std::vector<uint32_t> m_points, m_start, m_entries;
 };
 

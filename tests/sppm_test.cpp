@@ -44,10 +44,12 @@ double mean_of(const Framebuffer& fb, int c0 = 0, int c1 = -1, int r0 = 0, int r
 // the floor's radiance at distance x from the foot of the light is 1/(2 pi) (E_direct +
 // E_mirror), where E_mirror is the irradiance from the light's mirror image at height 2.
 // maxdepth 2 leaves out the light bouncing between floor and mirror.
-std::string mirror_scene(const std::string& light) {
+std::string mirror_scene(const std::string& light, int side = 16) {
+    const std::string n = std::to_string(side);
     return R"(LookAt 0.6 0.5 0  0.6 0 0  0 0 1
 Camera "orthographic" "float screenwindow" [-0.2 0.2 -0.2 0.2]
-Film "image" "integer xresolution" 16 "integer yresolution" 16
+Film "image" "integer xresolution" )" +
+           n + R"( "integer yresolution" )" + n + R"(
 Integrator "sppm" "integer maxdepth" 2 "integer numiterations" 32
   "integer photonsperiteration" 50000 "float radius" 0.05
 WorldBegin
@@ -87,6 +89,11 @@ TEST(Sppm, MirroredLightReachesTheFloorThroughPhotons) {
     const Framebuffer point =
         render_text(mirror_scene(R"(LightSource "point" "point from" [0 1 0] "rgb I" [1 1 1])"));
     EXPECT_NEAR(mean_of(point) / mirror_expected(true), 1.0, 0.01);
+    // One pixel over the same view: its visible points' grid is a single bucket, where each
+    // point's ball spans several cells; it must still take each photon once.
+    const Framebuffer one =
+        render_text(mirror_scene(R"(LightSource "point" "point from" [0 1 0] "rgb I" [1 1 1])", 1));
+    EXPECT_NEAR(mean_of(one) / mirror_expected(true), 1.0, 0.05);
     // A spot light facing the mirror: nothing reaches the floor directly, all of it by photons
     // from the spot's cone (whose falloff ends 40 degrees out: the floor seen is within 6).
     const Framebuffer spot = render_text(mirror_scene(
