@@ -1,6 +1,7 @@
 #include "render/sppm.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <memory>
 
@@ -199,7 +200,10 @@ struct Pixel {
 // every cell its disc of radius overlaps.
 class VisibleGrid {
   public:
-    explicit VisibleGrid(const std::vector<Pixel>& pixels) {
+    /// Built on `threads` workers (0: all cores). The order of a bucket's entries depends on
+    /// them, no sum does: a photon adds to each pixel once, and each pixel's deposits are added in
+    /// the photons' order.
+    VisibleGrid(const std::vector<Pixel>& pixels, int threads) {
         float max_radius = 0;
         for (std::size_t i = 0; i < pixels.size(); ++i) {
             const Pixel& px = pixels[i];
@@ -219,29 +223,52 @@ class VisibleGrid {
         // A power of two at least the pixels' count, indexed by the hash's top bits.
         while ((std::size_t(1) << m_bucket_bits) < pixels.size()) ++m_bucket_bits;
         m_buckets = std::size_t(1) << m_bucket_bits;
-        std::vector<uint32_t> count(m_buckets + 1, 0);
         // The buckets of the cells point i's ball overlaps, each once: two of its cells may hash
-        // to one bucket, where the point entered twice would take a photon there twice.
-        std::vector<std::size_t> buckets;
+        // to one bucket, where the point entered twice would take a photon there twice. (Cells
+        // are at least the largest radius wide: a ball meets at most 3 x 3 x 3 of them.)
         auto each_cell = [&](uint32_t i, auto&& f) {
             const Pixel& px = pixels[i];
             const Vec3 r(px.radius, px.radius, px.radius);
             int lo[3], hi[3];
             cell(px.vp.p - r, lo);
             cell(px.vp.p + r, hi);
-            buckets.clear();
+            std::size_t seen[27];
+            int n = 0;
             for (int z = lo[2]; z <= hi[2]; ++z)
                 for (int y = lo[1]; y <= hi[1]; ++y)
-                    for (int x = lo[0]; x <= hi[0]; ++x) buckets.push_back(bucket(x, y, z));
-            std::sort(buckets.begin(), buckets.end());
-            buckets.erase(std::unique(buckets.begin(), buckets.end()), buckets.end());
-            for (const std::size_t b : buckets) f(b);
+                    for (int x = lo[0]; x <= hi[0]; ++x) {
+                        const std::size_t b = bucket(x, y, z);
+                        if (std::find(seen, seen + n, b) != seen + n) continue;
+                        if (n < 27) seen[n++] = b;
+                        f(b);
+                    }
         };
-        for (uint32_t i : m_points) each_cell(i, [&](std::size_t b) { ++count[b + 1]; });
-        for (std::size_t b = 0; b < m_buckets; ++b) count[b + 1] += count[b];
-        m_start = count;
-        m_entries.resize(count[m_buckets]);
-        for (uint32_t i : m_points) each_cell(i, [&](std::size_t b) { m_entries[count[b]++] = i; });
+        const int points = static_cast<int>(m_points.size());
+        constexpr int kChunk = 4096;
+        const int chunks = (points + kChunk - 1) / kChunk;
+        std::vector<std::atomic<uint32_t>> count(m_buckets + 1);
+        parallel_range(chunks, threads, [&](int begin, int end) {
+            for (int k = begin * kChunk; k < std::min(points, end * kChunk); ++k)
+                each_cell(m_points[std::size_t(k)], [&](std::size_t b) {
+                    count[b + 1].fetch_add(1, std::memory_order_relaxed);
+                });
+        });
+        m_start.resize(m_buckets + 1);
+        uint32_t sum = 0;
+        for (std::size_t b = 0; b <= m_buckets; ++b) {
+            sum += count[b].load(std::memory_order_relaxed);
+            m_start[b] = sum;
+            count[b].store(sum, std::memory_order_relaxed);  // each bucket's next free entry
+        }
+        m_entries.resize(sum);
+        parallel_range(chunks, threads, [&](int begin, int end) {
+            for (int k = begin * kChunk; k < std::min(points, end * kChunk); ++k) {
+                const uint32_t i = m_points[std::size_t(k)];
+                each_cell(i, [&](std::size_t b) {
+                    m_entries[count[b].fetch_add(1, std::memory_order_relaxed)] = i;
+                });
+            }
+        });
     }
 
     /// The pixels whose visible points may lie within their radius of p (none outside the
@@ -377,7 +404,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
         });
 
         // Photons, in waves of tasks; each wave's deposits added in the tasks' order.
-        const VisibleGrid grid(pixels);
+        const VisibleGrid grid(pixels, options.threads);
         for (uint64_t first = 0; first < chunks && !scene.lights.empty(); first += kWaveChunks) {
             const int wave = static_cast<int>(std::min<uint64_t>(kWaveChunks, chunks - first));
             parallel_range(wave, options.threads, [&](int begin, int end) {
