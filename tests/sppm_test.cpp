@@ -209,6 +209,7 @@ TEST(Sppm, Parameters) {
     s = build(R"(Integrator "sppm" "integer numiterations" 5 "integer iterations" 7
                  "integer photonsperiteration" 1000 "float radius" 0.5)");
     EXPECT_EQ(s->sppm.iterations, 7);
+    EXPECT_TRUE(warnings.empty()) << warnings.front();  // (numiterations is read too)
     EXPECT_EQ(s->sppm.photons, 1000);
     EXPECT_EQ(s->sppm.radius, 0.5f);
     // A negative photon count is pbrt-v3's default (a photon per pixel).

@@ -427,9 +427,10 @@ void Builder::integrator() {
 void Builder::sppm_integrator(const Entity& e) {
     m_scene->sppm.on = true;
     m_scene->path_tracing = true;  // (an AOV render's paths, and MIS in the direct light)
-    // "iterations" is pbrt-v3's other name for numiterations, and wins where both are given.
+    // "iterations" is pbrt-v3's other name for numiterations, and wins where both are given
+    // (both are read, as pbrt-v3 reads both).
     const char* iterations_name = e.params.find("iterations") ? "iterations" : "numiterations";
-    const int iterations = e.params.get_int(iterations_name, 64);
+    const int iterations = e.params.get_int("iterations", e.params.get_int("numiterations", 64));
     if (iterations < 1)
         throw SceneError(loc_of(e, iterations_name), std::string(iterations_name) +
                                                          " must be at least 1, got " +
