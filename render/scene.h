@@ -208,6 +208,9 @@ struct Material {
     // reflectance kd and mean free path mfp times sss_scale; its profile's table for its phase
     // asymmetry and index (shared by the materials that have the same).
     TexInput sss_sigma_a, sss_sigma_s, mfp;
+    // Uber (without specular lobes): its opacity, every lobe times it and the rest passed through
+    // (node -1 and 1: opaque).
+    TexInput opacity{-1, Rgb(1)};
     float sss_scale = 1;
     std::shared_ptr<const BssrdfTable> bssrdf;
     bool subsurface() const { return type == Type::Subsurface || type == Type::KdSubsurface; }
@@ -249,7 +252,8 @@ struct Material {
                                    &spec_trans,
                                    &sss_sigma_a,
                                    &sss_sigma_s,
-                                   &mfp})
+                                   &mfp,
+                                   &opacity})
             if (in->node >= 0) return true;
         return false;
     }

@@ -1217,6 +1217,16 @@ std::optional<Bsdf> make_bsdf(const Scene& scene, const Material& m, const Surfa
             b.eta = index_of(eval_texture(scene, m.eta, ctx).r);
             b.lobe_eta_i = 1;  // pbrt-v3's uber: its microfacet lobe's Fresnel is air to eta
             b.lobe_eta_t = b.eta;
+            if (m.opacity.node >= 0 ||
+                !(m.opacity.value.r == 1 && m.opacity.value.g == 1 && m.opacity.value.b == 1)) {
+                // pbrt-v3's opacity (the builder gives one only to an uber without Kr and Kt):
+                // the lobes times it, the rest straight through, a transmission of index 1.
+                const Rgb op = clamp0(eval_texture(scene, m.opacity, ctx));
+                b.kd = b.kd * op;
+                b.ks = b.ks * op;
+                b.kt = clamp0(Rgb(1) - op);
+                b.eta = 1;
+            }
             break;
         }
         case Material::Type::Metal: {

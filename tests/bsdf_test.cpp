@@ -366,8 +366,24 @@ TEST(Materials, UnknownAndUnrenderedMaterialsAreMatteWithAWarning) {
                   &warnings);
     EXPECT_EQ(count("material"), 0);
     EXPECT_EQ(count("ignored"), 0);
-    (void)bsdf_of("Material \"uber\" \"rgb opacity\" [0.5 0.5 0.5]", &warnings);
-    EXPECT_EQ(count("uber \"opacity\" ignored"), 1);
+    // An opacity below 1 beside the uber's own specular lobes (which the Bsdf's one specular
+    // transmission cannot hold with it): opaque, with a warning.
+    (void)bsdf_of("Material \"uber\" \"rgb opacity\" [0.5 0.5 0.5] \"rgb Kr\" [0.2 0.2 0.2]",
+                  &warnings);
+    EXPECT_EQ(count("uber \"opacity\" ignored beside its specular Kr or Kt"), 1);
+    // Without them: the lobes times the opacity, the rest passed straight through.
+    warnings.clear();
+    const Bsdf half = bsdf_of(
+        "Material \"uber\" \"rgb opacity\" [0.25 0.5 1] \"rgb Kd\" [0.4 0.4 0.4] \"rgb Ks\" [0 0 "
+        "0]",
+        &warnings);
+    EXPECT_EQ(count("opacity"), 0);
+    EXPECT_FLOAT_EQ(half.kd.r, 0.1f);
+    EXPECT_FLOAT_EQ(half.kd.b, 0.4f);
+    EXPECT_FLOAT_EQ(half.kt.r, 0.75f);
+    EXPECT_FLOAT_EQ(half.kt.g, 0.5f);
+    EXPECT_FLOAT_EQ(half.kt.b, 0.0f);
+    EXPECT_FLOAT_EQ(half.eta, 1.0f);
 }
 
 namespace {

@@ -82,6 +82,30 @@ TEST(Analytic, LambertianPlaneUnderADistantLightAndUniformSky) {
     EXPECT_NEAR(mean, 0.5 * 0.7, 0.004);  // Kd/pi * pi * L
 }
 
+TEST(Analytic, UberOpacityPassesTheRestThrough) {
+    // An uber of opacity 0.25 (red) to 1 (blue) and no Kd or Ks, in front of a uniform sky of
+    // radiance 1, under whitted and path: the sky seen through it, times 1 - opacity.
+    for (const char* integrator : {"whitted", "path"}) {
+        auto s = test::scene_from(std::string("Integrator \"") + integrator + R"("
+LookAt 0 0 -2  0 0 0  0 1 0
+Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
+Film "image" "integer xresolution" 4 "integer yresolution" 4
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Material "uber" "rgb Kd" [0 0 0] "rgb Ks" [0 0 0] "rgb opacity" [0.25 0.5 1]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point P" [-1 -1 0 1 -1 0 1 1 0 -1 1 0]
+WorldEnd
+)",
+                                  "t.pbrt", 4);
+        const Framebuffer fb = render::render(*s, {}, nullptr);
+        for (std::size_t i = 0; i < fb.rgb.size(); i += 3) {
+            EXPECT_NEAR(fb.rgb[i], 0.75f, 1e-5) << integrator;
+            EXPECT_NEAR(fb.rgb[i + 1], 0.5f, 1e-5) << integrator;
+            EXPECT_NEAR(fb.rgb[i + 2], 0.0f, 1e-5) << integrator;
+        }
+    }
+}
+
 TEST(Analytic, SpotLightFalloff) {
     // Spot straight down from (0,0,5): full inside conedelta, zero outside coneangle.
     auto s = test::scene_from(

@@ -89,11 +89,20 @@ void Builder::uber_material(const pbrt::MaterialDesc& d, Material& m) {
     const char* eta = e.params.find("eta") ? "eta" : "index";
     m.eta = float_input(e, s, eta, 1.5f, true);
     if (const auto* op = e.params.find("opacity")) {
-        // (Opaque, 1 1 1, is pbrt-v3's default and what published scenes give.)
+        // pbrt-v3's opacity: every lobe times it, and the rest passed straight through (a
+        // specular transmission of index 1, in the Bsdf's one specular transmission: where the
+        // uber has its own, Kr or Kt, the opacity is left out, with a warning). (Opaque, 1 1 1,
+        // is pbrt-v3's default and what published scenes give.)
         const TexInput opacity = spectrum_input(e, s, "opacity", Rgb(1));
-        if (opacity.node >= 0 ||
-            !(opacity.value.r == 1 && opacity.value.g == 1 && opacity.value.b == 1))
-            warn(op->loc, "uber \"opacity\" ignored: cmam renders the material opaque");
+        const bool opaque = opacity.node < 0 && opacity.value.r == 1 && opacity.value.g == 1 &&
+                            opacity.value.b == 1;
+        const auto black = [](const TexInput& in) { return in.node < 0 && in.value.is_black(); };
+        if (!opaque && black(m.kr) && black(m.kt))
+            m.opacity = opacity;
+        else if (!opaque)
+            warn(op->loc,
+                 "uber \"opacity\" ignored beside its specular Kr or Kt: cmam renders the "
+                 "material opaque");
     }
 }
 
