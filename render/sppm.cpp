@@ -340,6 +340,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
     constexpr int kBlockRows = 8;
     const int blocks = (height + kBlockRows - 1) / kBlockRows;
     const bool cmam_used = scene.footprint_methods.has(FootprintMethod::Cmam);
+    const bool cmam_2d = cmam_used && scene.cmam.two_d;
 
     std::vector<Pixel> pixels(count);
     for (Pixel& p : pixels) p.radius = scene.sppm.radius;
@@ -356,38 +357,50 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
     std::vector<std::vector<Deposit>> deposits(kWaveChunks);
     for (int iter = 0; iter < iterations; ++iter) {
         // Visible points, row by row, in blocks of kBlockRows whose rows share the CMAM's
-        // caches (each row a scanline, as at one sample per pixel; the 2-D CMAM finds the row
-        // above but on a block's first row).
+        // caches (each row a scanline, as at one sample per pixel). With the 2-D CMAM a block
+        // first traces the row above it into its caches only (its visible points dropped), so
+        // that every row but the image's first has its row above, as in the film's strips.
         parallel_range(blocks, options.threads, [&](int begin, int end) {
             RayCounts counts;
             counts.count_lookups = options.count_lookups;
             CmamRowState cmam;
+            SppmVisiblePoint primed;
+            // Pixel (x, y)'s camera path into vp: its weight (0: blocked by the lens, no path).
+            auto trace = [&](int x, int y, SppmVisiblePoint& vp, RayCounts* c) {
+                const int px = film.x0 + x, py = film.y0 + y;
+                const uint64_t pixel_seed =
+                    mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
+                const uint64_t seed = mix_seed(pixel_seed, uint64_t(iter) + 1);
+                const float ju = Rng::float_at(seed, 0), jv = Rng::float_at(seed, 1);
+                float su, sv;
+                stratified2(mix_seed(pixel_seed, 0x73707031ull), uint32_t(iter), uint32_t(nx),
+                            uint32_t(ny), ju, jv, su, sv);
+                TracedRay ray;
+                const float weight =
+                    camera_ray(scene, footprints, float(px) + su, float(py) + sv, pixel_seed, iter,
+                               nx, ny, 0.5f - ju, 0.5f - jv, ray);
+                ray.fp.tag = {};
+                ray.fp.tag.id = static_cast<uint32_t>(y);
+                ray.fp.tag.seq = static_cast<uint32_t>(x);
+                ray.fp.tag.positioned = true;
+                ray.fp.tag.x = double(x) + su;
+                ray.fp.tag.y = double(y) + sv;
+                vp.found = false;
+                if (weight != 0)
+                    sppm_visible_point(scene, footprints, ray, mix_seed(seed, 0x7670ull), c,
+                                       cmam_used ? &cmam : nullptr, vp);
+                return weight;
+            };
             for (int y = begin * kBlockRows; y < std::min(height, end * kBlockRows); ++y) {
-                if (y % kBlockRows == 0) cmam.clear();
+                if (y % kBlockRows == 0) {
+                    cmam.clear();
+                    if (cmam_2d && y > 0)
+                        for (int x = 0; x < width; ++x) trace(x, y - 1, primed, nullptr);
+                }
                 for (int x = 0; x < width; ++x) {
-                    const int px = film.x0 + x, py = film.y0 + y;
-                    const uint64_t pixel_seed =
-                        mix_seed(uint64_t(py) * uint64_t(film.xres) + uint64_t(px), 0x5eed);
-                    const uint64_t seed = mix_seed(pixel_seed, uint64_t(iter) + 1);
-                    const float ju = Rng::float_at(seed, 0), jv = Rng::float_at(seed, 1);
-                    float su, sv;
-                    stratified2(mix_seed(pixel_seed, 0x73707031ull), uint32_t(iter), uint32_t(nx),
-                                uint32_t(ny), ju, jv, su, sv);
-                    TracedRay ray;
-                    const float weight =
-                        camera_ray(scene, footprints, float(px) + su, float(py) + sv, pixel_seed,
-                                   iter, nx, ny, 0.5f - ju, 0.5f - jv, ray);
-                    ray.fp.tag = {};
-                    ray.fp.tag.id = static_cast<uint32_t>(y);
-                    ray.fp.tag.seq = static_cast<uint32_t>(x);
-                    ray.fp.tag.positioned = true;
-                    ray.fp.tag.x = double(x) + su;
-                    ray.fp.tag.y = double(y) + sv;
                     Pixel& p = pixels[static_cast<std::size_t>(y) * width + x];
-                    p.vp.found = false;
+                    const float weight = trace(x, y, p.vp, &counts);
                     if (weight == 0) continue;
-                    sppm_visible_point(scene, footprints, ray, mix_seed(seed, 0x7670ull), &counts,
-                                       cmam_used ? &cmam : nullptr, p.vp);
                     Rgb ld = p.vp.ld * weight;
                     if (!finite_rgb(ld)) {
                         ++counts.non_finite_samples;
