@@ -624,17 +624,7 @@ TEST(Cmam, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
     // for any thread count, with the same image. 1024 pixels are 16 strips: one thread traces
     // each strip whole, two cut each into two segments of rows, the second starting from the
     // row above traced into its caches.
-    const std::string text =
-        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
-        "Film \"image\" \"integer xresolution\" 1024 \"integer yresolution\" 40\n"
-        "WorldBegin\nLightSource \"distant\" \"point from\" [0 0 5] \"point to\" [0 0 0]\n"
-        "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"" +
-        std::string(CMAM_SCENES_DIR) +
-        "/textures/bricks.png\" \"string lod\" \"cmam\" \"string filter\" \"area\"\n"
-        "Material \"matte\" \"texture Kd\" \"t\"\n"
-        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
-        "  \"point P\" [-50 -10 0 50 -10 0 50 10 0 -50 10 0] \"float uv\" [0 0 20 0 20 4 0 4]\n"
-        "WorldEnd\n";
+    const std::string text = test::cmam_plane(1024, 40);
     const pbrt::SceneDesc d = pbrt::parse_string(text, "plane.pbrt");
     for (int spp : {1, 4}) {
         BuildOptions bo;

@@ -191,18 +191,8 @@ TEST(Sppm, TwoDimensionalCmamHasTheRowAboveOnEveryRowButTheFirst) {
     // A textured plane filling the frame, its texture filtered by the 2-D CMAM: each block of
     // rows traces the row above into its caches first, so that only the image's first row lacks
     // its row above, in every iteration, for any thread count.
-    const std::string text =
-        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
-        "Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 40\n"
-        "Integrator \"sppm\" \"integer numiterations\" 2 \"float radius\" 0.1\n"
-        "WorldBegin\nLightSource \"distant\" \"point from\" [0 0 5] \"point to\" [0 0 0]\n"
-        "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"" +
-        std::string(CMAM_SCENES_DIR) +
-        "/textures/bricks.png\" \"string lod\" \"cmam\" \"string filter\" \"area\"\n"
-        "Material \"matte\" \"texture Kd\" \"t\"\n"
-        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
-        "  \"point P\" [-50 -10 0 50 -10 0 50 10 0 -50 10 0] \"float uv\" [0 0 20 0 20 4 0 4]\n"
-        "WorldEnd\n";
+    const std::string text = test::cmam_plane(
+        64, 40, "Integrator \"sppm\" \"integer numiterations\" 2 \"float radius\" 0.1\n");
     BuildOptions bo;
     bo.cmam.two_d = true;
     auto s = build_scene(pbrt::parse_string(text, "plane.pbrt"), bo, {});
