@@ -17,8 +17,8 @@ Vec3 environment_direction(const std::array<float, 12>& m, float sin_theta, floa
                           m[4] * d.x + m[5] * d.y + m[6] * d.z,
                           m[8] * d.x + m[9] * d.y + m[10] * d.z));
 }
-// Shirley and Chiu's concentric map of [0,1)^2 onto the unit disc (pbrt-v3's
-// ConcentricSampleDisk): squares' rings onto circles, so strata stay compact.
+}  // namespace
+
 void concentric_disc(float u, float v, float& x, float& y) {
     const float a = 2 * u - 1, b = 2 * v - 1;
     if (a == 0 && b == 0) {
@@ -36,7 +36,6 @@ void concentric_disc(float u, float v, float& x, float& y) {
     x = r * std::cos(theta);
     y = r * std::sin(theta);
 }
-}  // namespace
 
 CameraRay Camera::generate_ray(float px, float py, float lu, float lv) const {
     if (!has_lens()) return generate_ray(px, py);

@@ -497,7 +497,7 @@ class FilmTracer {
             for (int k = 0; k < packet.n; ++k) {
                 if (packet.i[k] < sp.prime) continue;  // (primed pixels feed the caches only)
                 Rgb L = radiance[k];
-                if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) {
+                if (!finite(L)) {
                     ++sp.counts.non_finite_samples;
                     L = Rgb();
                 }
@@ -531,7 +531,7 @@ class FilmTracer {
             Rgb L = radiance[k];
             if (m_options.aov != AovKind::None)
                 L = Rgb(packet.aov[k].v[0], packet.aov[k].v[1], packet.aov[k].v[2]);
-            if (!std::isfinite(L.r) || !std::isfinite(L.g) || !std::isfinite(L.b)) {
+            if (!finite(L)) {
                 if (i >= sp.prime) ++sp.counts.non_finite_samples;
                 L = Rgb();
             }

@@ -2,7 +2,6 @@
 
 #include <bit>
 #include <memory>
-#include <utility>
 
 #include "render/footprint/footprint.h"
 #include "render/shading.h"
@@ -495,10 +494,8 @@ struct Tracer {
         if (light.type == Light::Type::Infinite && !light.env) {
             float u1, u2;
             next2(u1, u2);
-            const float z = 1 - 2 * u1, r = std::sqrt(std::max(0.0f, 1 - z * z)),
-                        phi = 2 * kPi * u2;
             LightSample ls;
-            ls.wi = Vec3(r * std::cos(phi), r * std::sin(phi), z);
+            ls.wi = sphere_direction(u1, u2);
             ls.pdf = 1 / (4 * kPi);
             ls.li = light.intensity;
             return ls;
@@ -816,8 +813,8 @@ struct Tracer {
             } else if (depth + 1 < scene.max_depth || m.subsurface()) {
                 // (A path entering a subsurface material takes its exit point's direct light at
                 // this depth, as pbrt-v3's does: at the last depth too.)
-                subsurface_at = m.subsurface() ? Subsurface{&m, &ctx} : Subsurface{};
-                L += continue_path(ray, h, at, bsdf, wo, o, depth);
+                L += continue_path(ray, h, at, bsdf, wo, o, depth,
+                                   m.subsurface() ? Subsurface{&m, &ctx} : Subsurface{});
             }
             return scene.volumetric ? through_media * L : L;
         }
@@ -828,17 +825,23 @@ struct Tracer {
     // Russian roulette reads (pbrt-v3's beta).
     Rgb beta{1, 1, 1};
 
+    // The material a path leaves h of where it may scatter below the surface (pbrt-v3's
+    // BSSRDF), and its texture context at h; none elsewhere.
+    struct Subsurface {
+        const Material* material = nullptr;
+        const TexContext* ctx = nullptr;
+    };
+
     // A path goes on from h by one ray (path tracing), as pbrt-v3's path integrator samples one
     // component of the BSDF: a specular lobe or a non-specular bounce, evenly when there are
     // both, and of the specular lobes the reflection with the probability of its Fresnel term
     // (pbrt-v3's FresnelSpecular), each weighted by the inverse of its probability. Every other
     // lobe's children would double the rays at each hit of a glass or a glossy mirror.
     //
-    // At a subsurface material (subsurface_at, set by li) a path that enters the surface goes on
-    // from the BSSRDF's exit point instead (subsurface); at the last depth only that is taken.
+    // At a subsurface material (`sss`) a path that enters the surface goes on from the BSSRDF's
+    // exit point instead (subsurface); at the last depth only that is taken.
     Rgb continue_path(const Ray& ray, const SurfaceHit& h, const HitFootprint& at, const Bsdf& b,
-                      const Vec3& wo, const Bsdf::Outgoing& o, int depth) {
-        const Subsurface sss = std::exchange(subsurface_at, Subsurface{});
+                      const Vec3& wo, const Bsdf::Outgoing& o, int depth, const Subsurface& sss) {
         const bool reflect = !b.kr.is_black(), transmit = !b.kt.is_black();
         const bool specular = reflect || transmit, other = b.has_nonspecular();
         if (!specular && !other) return {};
@@ -858,14 +861,6 @@ struct Tracer {
         }
         return L / p_specular;
     }
-
-    // The material a path is about to leave h of, where it scatters below the surface (pbrt-v3's
-    // BSSRDF), and its texture context at h; none elsewhere.
-    struct Subsurface {
-        const Material* material = nullptr;
-        const TexContext* ctx = nullptr;
-    };
-    Subsurface subsurface_at{};
 
     // pbrt-v3's subsurface scattering from h, where a path with weight `weight` (its BSDF
     // sample's through the surface) enters a subsurface material (algorithms.md §26): an exit

@@ -103,6 +103,11 @@ inline Rgb operator*(float s, const Rgb& c) {
     return c * s;
 }
 
+/// Whether every channel of c is finite.
+inline bool finite(const Rgb& c) {
+    return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);
+}
+
 /// c with its negative channels made 0 (pbrt-v3's Spectrum::Clamp).
 inline Rgb clamp0(const Rgb& c) {
     return {std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
@@ -133,6 +138,16 @@ inline Vec3 hemisphere_direction(float u1, float u2, bool uniform = false) {
     const float r = uniform ? std::sqrt(std::max(0.0f, 1 - z * z)) : std::sqrt(u1);
     return {r * std::cos(phi), r * std::sin(phi), z};
 }
+
+/// A direction uniform over the unit sphere from uniform u1, u2 (density 1 / 4 pi).
+inline Vec3 sphere_direction(float u1, float u2) {
+    const float z = 1 - 2 * u1, r = std::sqrt(std::max(0.0f, 1 - z * z)), phi = 2 * kPi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+/// Shirley and Chiu's concentric map of [0,1)^2 onto the unit disc (pbrt-v3's
+/// ConcentricSampleDisk): squares' rings onto circles, so strata stay compact.
+void concentric_disc(float u, float v, float& x, float& y);
 
 struct DirectionSample {
     Vec3 wi;

@@ -33,9 +33,6 @@ float radical_inverse(uint64_t a) {
     return std::min(float(double(reversed) * scale), 0x1.fffffep-1f);
 }
 
-bool finite_rgb(const Rgb& c) {
-    return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);
-}
 Vec3 min(const Vec3& a, const Vec3& b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
 }
@@ -47,18 +44,6 @@ Vec3 max(const Vec3& a, const Vec3& b) {
 float mean_luminance(const texture::Image& image) {
     const texture::Texel& m = image.mean();
     return image.channels() == 1 ? m[0] : Rgb(m[0], m[1], m[2]).luminance();
-}
-
-Vec3 uniform_sphere(float u1, float u2) {
-    const float z = 1 - 2 * u1, r = std::sqrt(std::max(0.0f, 1 - z * z)), phi = 2 * kPi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), z};
-}
-
-// A point of the unit disc, uniform by area.
-void uniform_disc(float u1, float u2, float& x, float& y) {
-    const float r = std::sqrt(u1), phi = 2 * kPi * u2;
-    x = r * std::cos(phi);
-    y = r * std::sin(phi);
 }
 
 // A photon as a light emits it: its ray and weight, Le |cos| / (density of the position times
@@ -85,7 +70,7 @@ bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission&
     auto from_disc = [&](const Vec3& d) {
         const Frame f = Frame::from_z(d);
         float x, y;
-        uniform_disc(u[2], u[3], x, y);
+        concentric_disc(u[2], u[3], x, y);
         e.org = scene.world_center - radius * d + radius * (x * f.s + y * f.t);
         e.dir = d;
     };
@@ -95,7 +80,7 @@ bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission&
         case Light::Type::Projection:
             // The whole sphere, uniform (a projection's image is black outside its screen).
             e.org = light.position;
-            e.dir = uniform_sphere(u[0], u[1]);
+            e.dir = sphere_direction(u[0], u[1]);
             e.beta = positional_intensity(light, e.dir, light.intensity) * (4 * kPi);
             break;
         case Light::Type::Spot: {
@@ -122,7 +107,7 @@ bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission&
                 from_disc(-s.wi);
                 e.beta = light.intensity * s.radiance * (kPi * radius * radius / s.pdf);
             } else {
-                from_disc(-uniform_sphere(u[0], u[1]));
+                from_disc(-sphere_direction(u[0], u[1]));
                 e.beta = light.intensity * (4 * kPi * kPi * radius * radius);
             }
             break;
@@ -402,7 +387,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
                     const float weight = trace(x, y, p.vp, &counts);
                     if (weight == 0) continue;
                     Rgb ld = p.vp.ld * weight;
-                    if (!finite_rgb(ld)) {
+                    if (!finite(ld)) {
                         ++counts.non_finite_samples;
                         ld = Rgb();
                     }
@@ -410,7 +395,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
                     p.ld[1] += ld.g;
                     p.ld[2] += ld.b;
                     p.vp.beta = p.vp.beta * weight;
-                    if (!finite_rgb(p.vp.beta)) p.vp.found = false;
+                    if (!finite(p.vp.beta)) p.vp.found = false;
                 }
             }
             counts.add_to(stats);
@@ -434,7 +419,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
                             const Vec3 d = px.vp.p - p;
                             if (dot(d, d) > px.radius * px.radius) continue;
                             const Rgb phi = beta * px.vp.bsdf->f(px.vp.wo, wi);
-                            if (finite_rgb(phi)) out.push_back({*i, phi});
+                            if (finite(phi)) out.push_back({*i, phi});
                         }
                     };
                     const uint64_t p0 = (first + uint64_t(c)) * kPhotonChunk,

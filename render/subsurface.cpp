@@ -11,7 +11,8 @@ namespace cmam::render {
 namespace {
 
 // The unpolarised reflectance of a dielectric boundary for light arriving at cos theta = c from
-// the side of index eta_i (the other's eta_t), in double.
+// the side of index eta_i (the other's eta_t), in double: fresnel_dielectric's, whose float
+// rounding (1e-8 where there is no boundary at all) the Fresnel moments' quadrature would sum.
 double dielectric_reflectance(double c, double eta_i, double eta_t) {
     const double sin_t = eta_i / eta_t * std::sqrt(std::max(0.0, 1 - c * c));
     if (sin_t >= 1) return 1;
