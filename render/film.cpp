@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "render/integrator.h"
+#include "render/lighttrace.h"
 #include "render/memory.h"
 #include "render/parallel.h"
 #include "render/sppm.h"
@@ -698,6 +699,8 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
     else
         render_rows(tracer, options, px, splat.get());
     if (splat) splat->resolve(fb);
+    if (scene.light_tracing && options.aov == AovKind::None)
+        add_light_paths(scene, options, stats, fb);
     return fb;
 }
 

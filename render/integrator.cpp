@@ -1234,11 +1234,24 @@ struct Tracer {
         vp.layers.clear();
     }
 
-    // A photon's path from the light (pbrt-v3's, algorithms.md §25): at each hit after the first
-    // (the direct light is the camera paths'), `deposit` gets the hit point, the direction the
-    // photon came from and its weight; then it scatters (importance's weights), and goes on with
-    // the probability that keeps its weight's luminance.
-    void photon(Ray ray, Rgb beta, const PhotonDeposit& deposit) {
+    // What a path from a light does at its hits: SPPM's photon deposits (`deposit`), or bdpt's
+    // joins to the camera (`join`, their splats to `splat`).
+    struct LightHits {
+        const PhotonDeposit* deposit = nullptr;
+        const CameraJoinFn* join = nullptr;
+        const LightSplatFn* splat = nullptr;
+    };
+
+    // A path from a light, SPPM's photon (pbrt-v3's, algorithms.md §25) or bdpt's light path
+    // (tracer.h's light_path, algorithms.md §27). A photon's hits after the first (the direct
+    // light is the camera paths') get its deposit: the hit point, the direction it came from and
+    // its weight. A light path's hits with non-specular lobes after the first are joined to the
+    // camera, and the path ends at a first bounce that is not specular. Then the path scatters
+    // (`scatter`'s choice, importance's weights; a light path's times the shading normals'
+    // correction, as pbrt-v3's bdpt weighs them, not its photons) and goes on with the
+    // probability that keeps its weight's luminance.
+    void light_walk(Ray ray, Rgb beta, const LightHits& at_hits) {
+        const bool bdpt = at_hits.join != nullptr;
         int passes = 0;
         for (int depth = 0; depth < scene.max_depth;) {
             if (counts) ++counts->secondary;
@@ -1247,7 +1260,7 @@ struct Tracer {
             if (!hit) return;
             SurfaceHit& h = *hit;
             const Vec3 wo = -ray.dir;
-            if (depth > 0) deposit(h.p, wo, beta);
+            if (at_hits.deposit && depth > 0) (*at_hits.deposit)(h.p, wo, beta);
             HitFootprint at;
             std::forward_list<Bsdf> layers;
             const std::optional<Bsdf> bsdf = shade(ray, h, at, layers);
@@ -1256,12 +1269,16 @@ struct Tracer {
                 ray.org = offset_origin(h, ray.dir);
                 continue;
             }
-            const Bsdf::Outgoing o =
-                bsdf->has_nonspecular() ? bsdf->outgoing(wo) : Bsdf::Outgoing{};
+            const bool other = bsdf->has_nonspecular();
+            const Bsdf::Outgoing o = other ? bsdf->outgoing(wo) : Bsdf::Outgoing{};
+            if (bdpt && depth > 0 && other)
+                to_camera(h, *bsdf, o, wo, beta, *at_hits.join, *at_hits.splat);
             Ray next_ray;
             Rgb weight;
             bool specular;
             if (!scatter(ray, h, at, *bsdf, wo, o, false, true, next_ray, weight, specular)) return;
+            if (bdpt && depth == 0 && !specular) return;
+            if (bdpt) weight = weight * shading_correction(h, wo, next_ray.dir);
             const Rgb after = beta * weight;
             const float y = beta.luminance();
             if (!(y > 0)) return;
@@ -1271,6 +1288,47 @@ struct Tracer {
             ray = next_ray;
             ++depth;
         }
+    }
+
+    // --- the light paths of pbrt-v3's bdpt (lighttrace.cpp; algorithms.md §27) ---
+
+    // pbrt-v3's correction for shading normals on a path carrying importance: the adjoint BSDF
+    // with shading normals is f(wi, wo) |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|) (Veach 1997, §5.3).
+    // wo points to where the path came from, wi to where it goes.
+    static float shading_correction(const SurfaceHit& h, const Vec3& wo, const Vec3& wi) {
+        const float den = std::abs(dot(wo, h.ng)) * std::abs(dot(wi, h.ns));
+        return den > 0 ? std::abs(dot(wo, h.ns)) * std::abs(dot(wi, h.ng)) / den : 0.0f;
+    }
+
+    // pbrt-v3's bdpt strategy t = 1 at a light path's vertex h (with non-specular lobes): the
+    // vertex joined to a point of the camera's lens, its BSDF for importance (a rough
+    // dielectric's transmission times eta^2, as scatter weighs it) with the shading normals'
+    // correction, times the camera's importance, when nothing lies between.
+    void to_camera(const SurfaceHit& h, const Bsdf& b, const Bsdf::Outgoing& o, const Vec3& wo,
+                   const Rgb& beta, const CameraJoinFn& join, const LightSplatFn& splat) {
+        float u1, u2;
+        next2(u1, u2);
+        CameraJoin j;
+        if (!join(h.p, u1, u2, j)) return;
+        Rgb f = b.f(o, j.wi);
+        if (f.is_black()) return;
+        const float side_o = dot(wo, b.frame.n), side_i = dot(j.wi, b.frame.n);
+        if (b.has_transmission() && side_o * side_i < 0) {
+            const float eta =
+                side_o > 0 ? b.lobe_eta_t / b.lobe_eta_i : b.lobe_eta_i / b.lobe_eta_t;
+            f = f * (eta * eta);
+        }
+        const float den = std::abs(dot(wo, h.ng));
+        if (!(den > 0)) return;
+        const Rgb L =
+            beta * f * (std::abs(dot(wo, h.ns)) * std::abs(dot(j.wi, h.ng)) / den * j.importance);
+        if (L.is_black() || !finite(L)) return;
+        const Vec3 org = offset_origin(h, j.wi), to = j.lens - org;
+        const float dist = length(to);
+        if (!(dist > 0)) return;
+        if (counts) ++counts->shadow;
+        if (scene.occluded(org, to / dist, 0, dist * (1 - 1e-4f))) return;
+        splat(j.pixel, L);
     }
 };
 
@@ -1364,7 +1422,17 @@ void sppm_photon(const Scene& scene, const FootprintProducers& footprints, const
     Rng rng(seed);
     thread_local std::vector<ShadowRay> shadow;
     Tracer t{scene, footprints, counts, rng, nullptr, shadow};
-    if (finite(org) && finite(dir)) t.photon({org, dir, RayFootprint{}}, beta, deposit);
+    if (finite(org) && finite(dir)) t.light_walk({org, dir, RayFootprint{}}, beta, {&deposit});
+}
+
+void light_path(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
+                const Vec3& dir, const Rgb& beta, uint64_t seed, RayCounts* counts,
+                const CameraJoinFn& join, const LightSplatFn& splat) {
+    Rng rng(seed);
+    thread_local std::vector<ShadowRay> shadow;
+    Tracer t{scene, footprints, counts, rng, nullptr, shadow};
+    if (finite(org) && finite(dir))
+        t.light_walk({org, dir, RayFootprint{}}, beta, {nullptr, &join, &splat});
 }
 
 Rgb trace_one(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,

@@ -525,6 +525,11 @@ class Scene {
     // (algorithms.md §18), continued past three bounces by Russian roulette below rr_threshold.
     bool path_tracing = false;
     float rr_threshold = 1;
+    // pbrt-v3's "bdpt" and "mlt" integrators (lighttrace.h, algorithms.md §27): the path tracer,
+    // and light paths from the point, spot, goniometric, projection and distant lights whose
+    // first bounce is specular, joined to the camera at their non-specular hits (the caustics no
+    // camera path reaches). Set for a perspective camera without media; path_tracing is set too.
+    bool light_tracing = false;
     // pbrt-v3's "ambientocclusion" integrator (algorithms.md §23): at each camera ray's first
     // hit, `ao_samples` directions over the hemisphere of the geometric normal on the viewer's
     // side, cosine-weighted (`ao_cosine`) or uniform; a pixel's value is pi times the weighted

@@ -18,21 +18,6 @@ namespace {
 constexpr int kPhotonChunk = 4096;
 constexpr int kWaveChunks = 64;
 
-// The radical inverse of `a` in base B (digits reversed behind the point): the Halton
-// sequence's coordinate of base B. The base is a constant, so the divisions are products.
-template <uint64_t B>
-float radical_inverse(uint64_t a) {
-    uint64_t reversed = 0;
-    double scale = 1;
-    while (a != 0) {
-        const uint64_t next = a / B;
-        reversed = reversed * B + (a - next * B);
-        scale /= double(B);
-        a = next;
-    }
-    return std::min(float(double(reversed) * scale), 0x1.fffffep-1f);
-}
-
 Vec3 min(const Vec3& a, const Vec3& b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
 }
@@ -46,13 +31,6 @@ float mean_luminance(const texture::Image& image) {
     return image.channels() == 1 ? m[0] : Rgb(m[0], m[1], m[2]).luminance();
 }
 
-// A photon as a light emits it: its ray and weight, Le |cos| / (density of the position times
-// density of the direction) (pbrt-v3's Sample_Le, before the light's choice).
-struct Emission {
-    Vec3 org, dir;
-    Rgb beta;
-};
-
 // The cosine of the half-angle of the cone that holds a projection light's screen.
 float projection_cos_total(const LightImage& image) {
     const float x = std::max(std::abs(image.screen[0]), std::abs(image.screen[1]));
@@ -61,8 +39,8 @@ float projection_cos_total(const LightImage& image) {
     return 1 / std::sqrt(1 + tan_diagonal * tan_diagonal);
 }
 
-// A photon of `light` from four uniform numbers; false when there is none (a zero density or
-// weight, or a light at infinity around an empty scene).
+}  // namespace
+
 bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission& e) {
     const float radius = scene.world_radius;
     // A ray into the scene's bounding sphere along d, from a point uniform on the disc of its
@@ -139,8 +117,6 @@ bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission&
     return !e.beta.is_black() && finite(e.dir);
 }
 
-// A light's power as pbrt-v3 gives it (the luminance of its Power()), by which photons choose
-// their light; a projection light's cone is the one that holds its screen.
 float light_power(const Scene& scene, const Light& light) {
     const float r2 = scene.world_radius * scene.world_radius;
     const float mean = light.image ? mean_luminance(light.image->image->image())
@@ -168,6 +144,8 @@ float light_power(const Scene& scene, const Light& light) {
     }
     return 0;
 }
+
+namespace {
 
 // One pixel's state across the iterations (pbrt-v3's SPPMPixel).
 struct Pixel {

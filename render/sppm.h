@@ -4,7 +4,9 @@
 // camera cannot find it, photons from the light do (algorithms.md §25).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
 
 #include "render/integrator.h"
 
@@ -23,5 +25,38 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
 /// What render_sppm keeps per pixel of the cropped film (its state, visible point and BSDF, and
 /// the visible points' grid), for the memory a render needs.
 std::size_t sppm_pixel_bytes();
+
+// What SPPM's photons and the light tracer's paths (lighttrace.h) start from.
+
+/// A photon as a light emits it: its ray and weight, Le |cos| / (density of the position times
+/// density of the direction) (pbrt-v3's Sample_Le, before the light's choice).
+struct Emission {
+    Vec3 org, dir;
+    Rgb beta;
+};
+
+/// A photon of `light` from four uniform numbers (pbrt-v3's sampling of each light type's
+/// emission); false when there is none (a zero density or weight, or a light at infinity around
+/// an empty scene).
+bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission& e);
+
+/// A light's power as pbrt-v3 gives it (the luminance of its Power()), by which photons choose
+/// their light; a projection light's cone is the one that holds its screen.
+float light_power(const Scene& scene, const Light& light);
+
+/// The radical inverse of `a` in base B (digits reversed behind the point): the Halton
+/// sequence's coordinate of base B. The base is a constant, so the divisions are products.
+template <uint64_t B>
+float radical_inverse(uint64_t a) {
+    uint64_t reversed = 0;
+    double scale = 1;
+    while (a != 0) {
+        const uint64_t next = a / B;
+        reversed = reversed * B + (a - next * B);
+        scale /= double(B);
+        a = next;
+    }
+    return std::min(float(double(reversed) * scale), 0x1.fffffep-1f);
+}
 
 }  // namespace cmam::render

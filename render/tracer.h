@@ -264,6 +264,33 @@ void sppm_photon(const Scene& scene, const FootprintProducers& footprints, const
                  const Vec3& dir, const Rgb& beta, uint64_t seed, RayCounts* counts,
                  const PhotonDeposit& deposit);
 
+/// Where a light path's vertex joins the camera (lighttrace.cpp): the unit direction from the
+/// vertex towards the camera's lens point `lens`, the camera's importance over the density of
+/// choosing that point (W_e / pdf, by solid angle at the vertex: 1 / (d^2 A cos^3 theta) for a
+/// film of area A at unit distance), and the pixel of the cropped film it lands in.
+struct CameraJoin {
+    Vec3 wi, lens;
+    float importance = 0;
+    uint32_t pixel = 0;
+};
+
+/// Joins a vertex at p to the camera with two uniform numbers (a lens point); false where the
+/// camera does not see p's direction (behind it, outside the cropped film).
+using CameraJoinFn = std::function<bool(const Vec3& p, float u1, float u2, CameraJoin& join)>;
+
+/// What a light path adds to a pixel of the cropped film.
+using LightSplatFn = std::function<void(uint32_t pixel, const Rgb& L)>;
+
+/// A light path of pbrt-v3's bdpt from a delta light (algorithms.md §27): from org along dir with
+/// weight `beta`, its random numbers from `seed`. A path whose first bounce is not specular ends
+/// there (the path tracer's light sample at that hit is its estimate); past a specular first
+/// bounce each hit with non-specular lobes is joined to the camera by `join`, and what it sees
+/// there, unoccluded, goes to `splat`; the path scatters with importance's weights and shading
+/// normals' correction, and goes on with the probability that keeps its weight's luminance.
+void light_path(const Scene& scene, const FootprintProducers& footprints, const Vec3& org,
+                const Vec3& dir, const Rgb& beta, uint64_t seed, RayCounts* counts,
+                const CameraJoinFn& join, const LightSplatFn& splat);
+
 /// A point, spot, goniometric or projection light's intensity towards the unit direction w (away
 /// from the light), `i` (its intensity, or that over a distance squared) times its image and
 /// spot falloff: 0 outside a spot's cone.

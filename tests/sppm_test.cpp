@@ -20,23 +20,8 @@ using namespace cmam::render;
 
 namespace {
 
-Framebuffer render_text(const std::string& text, int threads = 0, RenderStats* stats = nullptr) {
-    auto scene = test::scene_from(text);
-    RenderOptions o;
-    o.threads = threads;
-    return render::render(*scene, o, stats);
-}
-
-double mean_of(const Framebuffer& fb, int c0 = 0, int c1 = -1, int r0 = 0, int r1 = -1) {
-    if (c1 < 0) c1 = fb.width;
-    if (r1 < 0) r1 = fb.height;
-    double sum = 0;
-    for (int y = r0; y < r1; ++y)
-        for (int x = c0; x < c1; ++x)
-            for (int c = 0; c < 3; ++c)
-                sum += fb.rgb[(static_cast<std::size_t>(y) * fb.width + x) * 3 + c];
-    return sum / (3.0 * (c1 - c0) * (r1 - r0));
-}
+using test::mean_of;
+using test::render_text;
 
 // A diffuse floor (albedo 1/2) at y = 0, a light at height 1 above the origin and a mirror
 // facing down at height 1.5, the floor seen over [0.4, 0.8] x [-0.2, 0.2] by an orthographic
@@ -52,16 +37,7 @@ Film "image" "integer xresolution" )" +
            n + R"( "integer yresolution" )" + n + R"(
 Integrator "sppm" "integer maxdepth" 2 "integer numiterations" 32
   "integer photonsperiteration" 50000 "float radius" 0.05
-WorldBegin
-)" + light +
-           R"(
-Material "matte" "rgb Kd" [0.5 0.5 0.5]
-Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point P" [-10 0 -10 10 0 -10 10 0 10 -10 0 10]
-Material "mirror" "rgb Kr" [1 1 1]
-Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
-  "point P" [-10 1.5 -10 10 1.5 -10 10 1.5 10 -10 1.5 10]
-WorldEnd
-)";
+)" + test::mirror_world(light);
 }
 
 // The closed form's mean over the 16 x 16 pixels: the floor's radiance at each pixel's centre,

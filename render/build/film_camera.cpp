@@ -10,6 +10,7 @@
 #include "render/build/builder.h"
 #include "render/error.h"
 #include "render/lens.h"
+#include "render/lighttrace.h"
 
 namespace cmam::render::build_detail {
 
@@ -367,17 +368,27 @@ void Builder::integrator() {
     // once, the same expectation).
     const bool direct = e.type == "directlighting";
     // pbrt-v3's path integrator, and volpath, which adds participating media (media()); its
-    // bdpt and mlt compute the same light transport with media, so they are path traced too.
+    // bdpt and mlt compute the same light transport with media: they are path traced too, with
+    // the light paths a path tracer cannot do without (lighttrace.h) where the camera allows.
     const bool path =
         e.type == "path" || e.type == "volpath" || e.type == "bdpt" || e.type == "mlt";
     if (path) {
         m_scene->path_tracing = true;
         m_scene->rr_threshold = static_cast<float>(finite_float(e, "rrthreshold", 1));
-        if (e.type != "path" && e.type != "volpath")
-            warn(e.loc, "Integrator " + in_quotes(e.type) +
-                            " is rendered as \"volpath\" (the same light transport, sampled by a "
-                            "path tracer, which misses the caustics of point, spot and distant "
-                            "lights through mirrors and glass: \"sppm\" renders those)");
+        if (e.type != "path" && e.type != "volpath") {
+            m_scene->light_tracing = light_tracing_camera(m_scene->camera);
+            warn(e.loc,
+                 "Integrator " + in_quotes(e.type) + " is rendered as \"volpath\" (" +
+                     (m_scene->light_tracing
+                          ? "a path tracer, with light paths from point, spot and distant lights "
+                            "joined to the camera for their caustics through mirrors and glass; "
+                            "the same light transport but for those caustics lit again and seen "
+                            "through mirrors or glass"
+                          : "a path tracer, which misses the caustics of point, spot and distant "
+                            "lights through mirrors and glass: \"sppm\" renders those; light "
+                            "paths join a perspective camera only") +
+                     ")");
+        }
     } else if (e.type == "sppm") {
         sppm_integrator(e);
     } else if (direct) {

@@ -105,6 +105,14 @@ void Builder::media() {
     const bool renders = integ == "volpath" || integ == "bdpt" || integ == "mlt";
     const bool used = m_desc.medium_interface.line != 0;
     m_scene->volumetric = renders && used && !m_scene->media.empty();
+    if (m_scene->volumetric && m_scene->light_tracing) {
+        // (The light paths do not cross media.)
+        m_scene->light_tracing = false;
+        warn(m_desc.medium_interface,
+             "the caustics of point, spot and distant lights through mirrors and glass are left "
+             "out: the light paths of " +
+                 in_quotes(integ) + " are not traced through participating media");
+    }
     if (used && !renders)
         warn(m_desc.medium_interface,
              "the scene has participating media, which the " + in_quotes(integ) +
