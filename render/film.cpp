@@ -688,19 +688,29 @@ Framebuffer render(const Scene& scene, const RenderOptions& options, RenderStats
                                                       options.threads);
     build_texture_tables(scene, options.threads);
     if (scene.sppm.on && options.aov == AovKind::None) return render_sppm(scene, options, stats);
+    // bdpt's and mlt's light paths after the film, each reported as half of the progress.
+    const bool light_paths = scene.light_tracing && options.aov == AovKind::None;
+    RenderOptions film_options = options, light_options = options;
+    if (light_paths && options.progress) {
+        film_options.progress = [&options](int done, int total) {
+            options.progress(done, 2 * total);
+        };
+        light_options.progress = [&options](int done, int total) {
+            options.progress(total + done, 2 * total);
+        };
+    }
     // A pixel filter reaching beyond the pixel splats its samples; AOVs are each pixel's own.
     std::unique_ptr<SplatFilm> splat;
     if (!scene.film.filter.own_pixel() && options.pixel_filter && options.aov == AovKind::None)
         splat = std::make_unique<SplatFilm>(scene.film);
-    const FilmTracer tracer(scene, options, stats, fb, splat.get());
+    const FilmTracer tracer(scene, film_options, stats, fb, splat.get());
     const Traced& px = tracer.traced();
     if (scene.footprint_methods.has(FootprintMethod::Cmam) && scene.cmam.two_d)
-        render_cmam_strips(tracer, options, px, splat.get());
+        render_cmam_strips(tracer, film_options, px, splat.get());
     else
-        render_rows(tracer, options, px, splat.get());
+        render_rows(tracer, film_options, px, splat.get());
     if (splat) splat->resolve(fb);
-    if (scene.light_tracing && options.aov == AovKind::None)
-        add_light_paths(scene, options, stats, fb);
+    if (light_paths) add_light_paths(scene, light_options, stats, fb);
     return fb;
 }
 

@@ -177,6 +177,9 @@ void add_light_paths(const Scene& scene, const RenderOptions& options, RenderSta
                 px[1] += s.L.g;
                 px[2] += s.L.b;
             }
+        // (In thousandths: the waves may be more than an int holds.)
+        if (options.progress)
+            options.progress(static_cast<int>(1000 * (first + uint64_t(wave)) / chunks), 1000);
     }
     for (std::size_t i = 0; i < count * 3; ++i)
         fb.rgb[i] = static_cast<float>(double(fb.rgb[i]) + sum[i] * scale);

@@ -6,6 +6,7 @@
 // path has a specular first bounce or the camera has no importance.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -206,6 +207,22 @@ TEST(LightPaths, SameImageForAnyThreadCount) {
     EXPECT_EQ(one.rgb, two.rgb);
     EXPECT_EQ(one.rgb, three.rgb);
     EXPECT_GT(mean_of(one), 0.01);
+}
+
+TEST(LightPaths, ProgressCoversTheFilmThenTheLightPaths) {
+    // The film's rows are the first half of the progress, the light paths the second; on one
+    // thread every report is at or past the one before, and the last is the whole.
+    auto scene = test::scene_from(mirror_scene(kPoint, 64));
+    RenderOptions o;
+    o.threads = 1;
+    std::vector<double> fractions;
+    o.progress = [&](int done, int total) { fractions.push_back(double(done) / total); };
+    render::render(*scene, o, nullptr);
+    ASSERT_FALSE(fractions.empty());
+    for (std::size_t i = 1; i < fractions.size(); ++i)
+        EXPECT_GE(fractions[i], fractions[i - 1]) << i;
+    EXPECT_EQ(fractions.back(), 1.0);
+    EXPECT_EQ(std::count(fractions.begin(), fractions.end(), 0.5), 1);  // the film's last row
 }
 
 TEST(LightPaths, OnlyWhereAPathTracerCannotReach) {
