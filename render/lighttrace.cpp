@@ -104,6 +104,10 @@ bool light_tracing_camera(const Camera& c) {
            near(dot(x, z), 0) && near(dot(y, z), 0);
 }
 
+std::size_t light_path_pixel_bytes() {
+    return 3 * sizeof(double);
+}
+
 void add_light_paths(const Scene& scene, const RenderOptions& options, RenderStats* stats,
                      Framebuffer& fb) {
     if (!scene.light_tracing || scene.volumetric || !light_tracing_camera(scene.camera)) return;

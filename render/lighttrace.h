@@ -5,6 +5,8 @@
 // renders everything else.
 #pragma once
 
+#include <cstddef>
+
 #include "render/integrator.h"
 
 namespace cmam::render {
@@ -20,5 +22,9 @@ bool light_tracing_camera(const Camera& camera);
 /// (no pixel filter, as pbrt-v3's splats). The image is the same for any thread count.
 void add_light_paths(const Scene& scene, const RenderOptions& options, RenderStats* stats,
                      Framebuffer& fb);
+
+/// What add_light_paths keeps per pixel of the cropped film (its sums), for the memory a render
+/// needs.
+std::size_t light_path_pixel_bytes();
 
 }  // namespace cmam::render

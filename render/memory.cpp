@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "render/error.h"
+#include "render/lighttrace.h"
 #include "render/sppm.h"
 
 namespace cmam::render {
@@ -78,6 +79,9 @@ MemoryNeed render_memory_need(const Scene& scene) {
     if (scene.sppm.on)  // each pixel's state across the iterations
         need.film +=
             static_cast<std::size_t>(scene.film.width()) * scene.film.height() * sppm_pixel_bytes();
+    else if (scene.light_tracing)  // the light paths' sums, a double per channel
+        need.film += static_cast<std::size_t>(scene.film.width()) * scene.film.height() *
+                     light_path_pixel_bytes();
     for (const auto& [tex, u] : texture_uses(scene)) {
         const texture::Image& im = tex->image();
         const double texels = double(im.width()) * im.height(), c = im.channels();

@@ -14,6 +14,7 @@
 #include "pbrt/parser.h"
 #include "render/build_scene.h"
 #include "render/integrator.h"
+#include "render/memory.h"
 #include "scene_util.h"
 
 using namespace cmam;
@@ -248,11 +249,16 @@ TEST(LightPaths, OnlyWhereAPathTracerCannotReach) {
                   "Camera \"orthographic\" \"float screenwindow\" [-0.2 0.2 -0.2 0.2]");
     same_as_path(ortho);
     std::vector<std::string> warnings;
-    build_scene(pbrt::parse_string(ortho, "o.pbrt"), {},
-                [&](const std::string& w) { warnings.push_back(w); });
+    const auto ortho_scene = build_scene(pbrt::parse_string(ortho, "o.pbrt"), {},
+                                         [&](const std::string& w) { warnings.push_back(w); });
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_NE(warnings[0].find("light paths join a perspective camera only"), std::string::npos)
         << warnings[0];
+    // The memory a render needs: the light paths' sums (a double per channel and pixel) beside
+    // the image, where they are traced.
+    EXPECT_EQ(render_memory_need(*test::scene_from(mirror_scene(kPoint, 4))).film,
+              16u * 16u * 3u * (sizeof(float) + sizeof(double)));
+    EXPECT_EQ(render_memory_need(*ortho_scene).film, 16u * 16u * 3u * sizeof(float));
 }
 
 TEST(LightPaths, RefractedCausticAgreesWithSppm) {
