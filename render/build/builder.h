@@ -162,6 +162,7 @@ class Builder {
     void filter();
     void integrator();
     void sppm_integrator(const Entity& e);
+    void mlt_samples(const Entity& e);
 
     // --- participating media (media.cpp) -------------------------------------------------
     void media();

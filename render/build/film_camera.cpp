@@ -281,11 +281,13 @@ void Builder::sampler() {
         }
         int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
         s.xsamples = s.ysamples = k;
-        // With --spp the count comes from there (set below), not from pixelsamples.
+        // With --spp the count comes from there (set below), not from pixelsamples; under mlt
+        // from its mutationsperpixel (mlt_samples).
+        const bool mlt = m_desc.integrator.given && m_desc.integrator.type == "mlt";
         const std::string count =
-            m_opts.spp_override > 0
-                ? std::string(", as many as --spp asks for")
-                : " with " + std::to_string(k) + "x" + std::to_string(k) + " per pixel";
+            m_opts.spp_override > 0 ? std::string(", as many as --spp asks for")
+            : mlt ? std::string(", as many as the mlt integrator's mutationsperpixel")
+                  : " with " + std::to_string(k) + "x" + std::to_string(k) + " per pixel";
         warn(e.loc, "Sampler " + in_quotes(e.type) +
                         " is rendered as \"stratified\" jittered samples" + count);
         e.params.check_unused("Sampler " + in_quotes(e.type), m_warn, names_of(e));
@@ -375,6 +377,7 @@ void Builder::integrator() {
     if (path) {
         m_scene->path_tracing = true;
         m_scene->rr_threshold = static_cast<float>(finite_float(e, "rrthreshold", 1));
+        if (e.type == "mlt") mlt_samples(e);
         if (e.type != "path" && e.type != "volpath") {
             m_scene->light_tracing = light_tracing_camera(m_scene->camera);
             warn(e.loc,
@@ -435,6 +438,32 @@ void Builder::integrator() {
 
 // pbrt-v3's "sppm" (Scene::sppm): its parameters, those it would fail on an error here (no
 // iteration: pbrt-v3 writes no image; no radius: a black or NaN one).
+// pbrt-v3's mlt takes no Sampler: its image has `mutationsperpixel` samples per pixel (default
+// 100), here the path tracer's, rounded to a square as the samplers' counts are; --spp wins.
+// Its Metropolis parameters (bootstrapsamples, chains, largestepprobability, sigma) change the
+// noise only, and are reported unused.
+void Builder::mlt_samples(const Entity& e) {
+    const int n = e.params.get_int("mutationsperpixel", 100);
+    if (n < 1)
+        throw SceneError(loc_of(e, "mutationsperpixel"),
+                         "mutationsperpixel must be at least 1, got " + std::to_string(n));
+    if (n > kMaxSamplesPerPixel)
+        throw SceneError(loc_of(e, "mutationsperpixel"),
+                         "mutationsperpixel " + std::to_string(n) + " is above cmam's limit of " +
+                             std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
+    if (m_opts.spp_override > 0) return;
+    const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
+    const long long side = std::max(m_scene->film.xres, m_scene->film.yres);
+    if (side * k * k > kMaxSamplesPerRow)
+        throw SceneError(
+            loc_of(e, "mutationsperpixel"),
+            std::to_string(k * k) + " samples per pixel along " + std::to_string(side) +
+                " pixels (the film's larger side) = " + std::to_string(side * k * k) +
+                " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
+    m_scene->sampler.xsamples = m_scene->sampler.ysamples = k;
+    m_scene->sampler.jitter = true;
+}
+
 void Builder::sppm_integrator(const Entity& e) {
     m_scene->sppm.on = true;
     m_scene->path_tracing = true;  // (an AOV render's paths, and MIS in the direct light)
