@@ -90,6 +90,17 @@ TEST(LightPaths, MirroredSpotReachesTheFloorByLightPaths) {
     EXPECT_GE(stats.secondary_rays.load(), 2u * 16u * 16u * 512u);
     EXPECT_GT(stats.shadow_rays.load(), 16u * 16u * 512u / 25u);
     EXPECT_LT(stats.shadow_rays.load(), 16u * 16u * 512u / 8u);
+    // A camera mirrored left to right (pbrt-v3 scenes' Scale -1 1 1): the same image, mirrored.
+    const Framebuffer flipped = render_text("Scale -1 1 1\n" + mirror_scene(kSpotUp, 512));
+    for (int y = 0; y < 16; y += 3)
+        for (int x = 0; x < 16; x += 3)
+            EXPECT_NEAR(flipped.rgb[(static_cast<std::size_t>(y) * 16 + x) * 3] /
+                            mirror_radiance(15 - x, y, false),
+                        1.0, 0.15)
+                << x << " " << y;
+    // (Its left half the floor's far side: 0.92 of its right half, 1/0.92 unmirrored.)
+    EXPECT_NEAR(mean_of(flipped, 0, 8) / mean_of(flipped, 8, 16),
+                mirror_expected(false, 8, 16) / mirror_expected(false, 0, 8), 0.02);
     // A black strip at height 0.25 hides the floor from the camera over columns 0 to 3, where
     // the floor is lit: no join passes through it.
     const Framebuffer hidden = render_text(mirror_scene(std::string(kSpotUp) + R"(
@@ -291,8 +302,11 @@ TEST(LightPaths, OnlyWhereAPathTracerCannotReach) {
     const auto ortho_scene = build_scene(pbrt::parse_string(ortho, "o.pbrt"), {},
                                          [&](const std::string& w) { warnings.push_back(w); });
     ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_NE(warnings[0].find("light paths join a perspective camera only"), std::string::npos)
+    EXPECT_NE(warnings[0].find("light paths join only a perspective camera"), std::string::npos)
         << warnings[0];
+    // A camera mirrored (pbrt-v3 scenes' Scale -1 1 1) has importance, a scaled one not.
+    EXPECT_TRUE(test::scene_from("Scale -1 1 1\n" + mirror_scene(kPoint, 4))->light_tracing);
+    EXPECT_FALSE(test::scene_from("Scale 2 2 2\n" + mirror_scene(kPoint, 4))->light_tracing);
     // The memory a render needs: the light paths' sums (a double per channel and pixel) beside
     // the image, where they are traced.
     EXPECT_EQ(render_memory_need(*test::scene_from(mirror_scene(kPoint, 4))).film,

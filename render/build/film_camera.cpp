@@ -389,7 +389,8 @@ void Builder::integrator() {
                             "through mirrors or glass"
                           : "a path tracer, which misses the caustics of point, spot and distant "
                             "lights through mirrors and glass: \"sppm\" renders those; light "
-                            "paths join a perspective camera only") +
+                            "paths join only a perspective camera whose transform neither scales "
+                            "nor shears") +
                      ")");
         }
     } else if (e.type == "sppm") {
@@ -436,8 +437,6 @@ void Builder::integrator() {
                               : names_of(e));
 }
 
-// pbrt-v3's "sppm" (Scene::sppm): its parameters, those it would fail on an error here (no
-// iteration: pbrt-v3 writes no image; no radius: a black or NaN one).
 // pbrt-v3's mlt takes no Sampler: its image has `mutationsperpixel` samples per pixel (default
 // 100), here the path tracer's, rounded to a square as the samplers' counts are; --spp wins.
 // Its Metropolis parameters (bootstrapsamples, chains, largestepprobability, sigma) change the
@@ -464,6 +463,8 @@ void Builder::mlt_samples(const Entity& e) {
     m_scene->sampler.jitter = true;
 }
 
+// pbrt-v3's "sppm" (Scene::sppm): its parameters, those it would fail on an error here (no
+// iteration: pbrt-v3 writes no image; no radius: a black or NaN one).
 void Builder::sppm_integrator(const Entity& e) {
     m_scene->sppm.on = true;
     m_scene->path_tracing = true;  // (an AOV render's paths, and MIS in the direct light)
