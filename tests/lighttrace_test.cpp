@@ -76,8 +76,8 @@ TEST(LightPaths, MirroredSpotReachesTheFloorByLightPaths) {
     RenderStats stats;
     const Framebuffer spot = render_text(mirror_scene(kSpotUp, 512), 0, &stats);
     EXPECT_NEAR(mean_of(spot) / mirror_expected(false), 1.0, 0.02);
-    // Every pixel near its own closed form: each joins the camera where it should (the floor
-    // falls off along x, so a mirrored raster would be far off at the ends).
+    // Every third pixel of every third row near its own closed form: the joins land where they
+    // should (the halves' ratio below tells a raster mirrored along x apart).
     for (int y = 0; y < 16; y += 3)
         for (int x = 0; x < 16; x += 3)
             EXPECT_NEAR(
@@ -85,8 +85,7 @@ TEST(LightPaths, MirroredSpotReachesTheFloorByLightPaths) {
                 1.0, 0.15)
                 << x << " " << y;
     // As many light paths as camera samples, each a ray to the mirror and one to the floor or
-    // beyond;
-    // each join where the camera sees the floor a shadow ray (about 6% of the paths).
+    // beyond; each join where the camera sees the floor a shadow ray (about 6% of the paths).
     EXPECT_GE(stats.secondary_rays.load(), 2u * 16u * 16u * 512u);
     EXPECT_GT(stats.shadow_rays.load(), 16u * 16u * 512u / 25u);
     EXPECT_LT(stats.shadow_rays.load(), 16u * 16u * 512u / 8u);
@@ -315,11 +314,10 @@ TEST(LightPaths, OnlyWhereAPathTracerCannotReach) {
 }
 
 TEST(LightPaths, RefractedCausticAgreesWithSppm) {
-    // A spot light above a glass sphere that focuses it onto a diffuse floor, seen from above
-    // (not through the glass): the caustic by light paths (refraction carrying importance, and
-    // the shading normals' correction) against SPPM's photons, two estimates of the same light.
-    // The camera sees the floor beside the sphere, not through it (SPPM's photons reach what a
-    // camera sees through glass, light paths joined to it do not).
+    // A spot light above a glass sphere that focuses it onto a diffuse floor: the caustic by
+    // light paths (refraction carrying importance) against SPPM's photons, two estimates of the
+    // same light. The camera sees the floor from one side, not through the sphere (SPPM's
+    // photons reach what a camera sees through glass, light paths joined to it do not).
     auto scene = [](const std::string& integrator, const std::string& sampler) {
         return R"(LookAt 2 1.5 0  0 0 0  0 1 0
 Camera "perspective" "float fov" 30
