@@ -18,11 +18,6 @@ namespace {
 constexpr int kPathChunk = 4096;
 constexpr int kWaveChunks = 64;
 
-bool is_delta(Light::Type t) {
-    return t == Light::Type::Point || t == Light::Type::Spot || t == Light::Type::Goniometric ||
-           t == Light::Type::Projection || t == Light::Type::Distant;
-}
-
 // The perspective camera as the light paths see it (pbrt-v3's PerspectiveCamera::Sample_Wi and
 // We): a point of its lens (its centre for the pinhole) towards a point p, the pixel whose rays
 // from that lens point pass through p, and the importance over the density of the lens point.
@@ -115,17 +110,8 @@ void add_light_paths(const Scene& scene, const RenderOptions& options, RenderSta
     const std::size_t count = std::size_t(film.width()) * std::size_t(film.height());
     if (count == 0 || fb.rgb.size() != count * 3) return;
 
-    // The delta lights, chosen by power (evenly where none has any).
-    std::vector<std::size_t> lights;
-    std::vector<double> cdf{0.0};
-    for (std::size_t l = 0; l < scene.lights.size(); ++l)
-        if (is_delta(scene.lights[l].type)) {
-            lights.push_back(l);
-            cdf.push_back(cdf.back() + std::max(0.0f, light_power(scene, scene.lights[l])));
-        }
+    const LightEmitter lights(scene, true);
     if (lights.empty()) return;
-    if (!(cdf.back() > 0))
-        for (std::size_t k = 0; k < lights.size(); ++k) cdf[k + 1] = double(k + 1);
 
     // As many paths as the film has camera samples (pbrt-v3 traces one for each); a pixel's
     // splats estimate its radiance times the cropped film's share of the whole film over that.
@@ -156,19 +142,9 @@ void add_light_paths(const Scene& scene, const RenderOptions& options, RenderSta
                 for (uint64_t k = k0; k < k1; ++k) {
                     // The light, its position and direction from the Halton sequence, the
                     // path's bounces and lens points from a generator of its own.
-                    const double pick = double(radical_inverse<2>(k)) * cdf.back();
-                    const std::size_t i = std::min<std::size_t>(
-                        static_cast<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), pick) -
-                                                 cdf.begin()) -
-                            1,
-                        lights.size() - 1);
-                    const double chance = (cdf[i + 1] - cdf[i]) / cdf.back();
-                    if (!(chance > 0)) continue;
-                    const float u[4] = {radical_inverse<3>(k), radical_inverse<5>(k),
-                                        radical_inverse<7>(k), radical_inverse<11>(k)};
                     Emission e;
-                    if (!emit(scene, scene.lights[lights[i]], u, e)) continue;
-                    light_path(scene, footprints, e.org, e.dir, e.beta / float(chance),
+                    if (!lights.emit(k, e)) continue;
+                    light_path(scene, footprints, e.org, e.dir, e.beta,
                                mix_seed(0x6c69676874ull, k), &counts, join, splat);
                 }
             }

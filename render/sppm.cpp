@@ -39,8 +39,23 @@ float projection_cos_total(const LightImage& image) {
     return 1 / std::sqrt(1 + tan_diagonal * tan_diagonal);
 }
 
-}  // namespace
+// The radical inverse of `a` in base B (digits reversed behind the point): the Halton
+// sequence's coordinate of base B. The base is a constant, so the divisions are products.
+template <uint64_t B>
+float radical_inverse(uint64_t a) {
+    uint64_t reversed = 0;
+    double scale = 1;
+    while (a != 0) {
+        const uint64_t next = a / B;
+        reversed = reversed * B + (a - next * B);
+        scale /= double(B);
+        a = next;
+    }
+    return std::min(float(double(reversed) * scale), 0x1.fffffep-1f);
+}
 
+// A photon of `light` from four uniform numbers (its weight before the light's choice); false
+// when there is none (a zero density or weight, or a light at infinity around an empty scene).
 bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission& e) {
     const float radius = scene.world_radius;
     // A ray into the scene's bounding sphere along d, from a point uniform on the disc of its
@@ -117,6 +132,8 @@ bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission&
     return !e.beta.is_black() && finite(e.dir);
 }
 
+// A light's power as pbrt-v3 gives it (the luminance of its Power()); a projection light's cone
+// is the one that holds its screen.
 float light_power(const Scene& scene, const Light& light) {
     const float r2 = scene.world_radius * scene.world_radius;
     const float mean = light.image ? mean_luminance(light.image->image->image())
@@ -143,6 +160,40 @@ float light_power(const Scene& scene, const Light& light) {
         }
     }
     return 0;
+}
+
+bool is_delta(Light::Type t) {
+    return t == Light::Type::Point || t == Light::Type::Spot || t == Light::Type::Goniometric ||
+           t == Light::Type::Projection || t == Light::Type::Distant;
+}
+
+}  // namespace
+
+LightEmitter::LightEmitter(const Scene& scene, bool delta_only) : m_scene(scene), m_cdf{0.0} {
+    for (std::size_t l = 0; l < scene.lights.size(); ++l)
+        if (!delta_only || is_delta(scene.lights[l].type)) {
+            m_lights.push_back(l);
+            m_cdf.push_back(m_cdf.back() + std::max(0.0f, light_power(scene, scene.lights[l])));
+        }
+    if (!(m_cdf.back() > 0))
+        for (std::size_t k = 0; k < m_lights.size(); ++k) m_cdf[k + 1] = double(k + 1);
+}
+
+bool LightEmitter::emit(uint64_t index, Emission& e) const {
+    if (m_lights.empty()) return false;
+    const double pick = double(radical_inverse<2>(index)) * m_cdf.back();
+    const std::size_t i = std::min<std::size_t>(
+        static_cast<std::size_t>(std::upper_bound(m_cdf.begin(), m_cdf.end(), pick) -
+                                 m_cdf.begin()) -
+            1,
+        m_lights.size() - 1);
+    const double chance = (m_cdf[i + 1] - m_cdf[i]) / m_cdf.back();
+    if (!(chance > 0)) return false;
+    const float u[4] = {radical_inverse<3>(index), radical_inverse<5>(index),
+                        radical_inverse<7>(index), radical_inverse<11>(index)};
+    if (!render::emit(m_scene, m_scene.lights[m_lights[i]], u, e)) return false;
+    e.beta = e.beta / static_cast<float>(chance);
+    return true;
 }
 
 namespace {
@@ -308,13 +359,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
     std::vector<Pixel> pixels(count);
     for (Pixel& p : pixels) p.radius = scene.sppm.radius;
 
-    // The lights' choice by power (uniform where none has any).
-    std::vector<double> cdf(scene.lights.size() + 1, 0.0);
-    for (std::size_t l = 0; l < scene.lights.size(); ++l)
-        cdf[l + 1] = cdf[l] + std::max(0.0f, light_power(scene, scene.lights[l]));
-    const bool uniform_lights = !(cdf.back() > 0);
-    if (uniform_lights)
-        for (std::size_t l = 0; l < scene.lights.size(); ++l) cdf[l + 1] = double(l + 1);
+    const LightEmitter lights(scene, false);
 
     const uint64_t chunks = (photons + kPhotonChunk - 1) / kPhotonChunk;
     std::vector<std::vector<Deposit>> deposits(kWaveChunks);
@@ -381,7 +426,7 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
 
         // Photons, in waves of tasks; each wave's deposits added in the tasks' order.
         const VisibleGrid grid(pixels, options.threads);
-        for (uint64_t first = 0; first < chunks && !scene.lights.empty(); first += kWaveChunks) {
+        for (uint64_t first = 0; first < chunks && !lights.empty(); first += kWaveChunks) {
             const int wave = static_cast<int>(std::min<uint64_t>(kWaveChunks, chunks - first));
             parallel_range(wave, options.threads, [&](int begin, int end) {
                 RayCounts counts;
@@ -406,21 +451,9 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
                         // The photon's light, position and direction from the Halton sequence
                         // (its index counts on across the iterations), its bounces from a
                         // generator of its own.
-                        const uint64_t index = uint64_t(iter) * photons + k;
-                        const double pick = double(radical_inverse<2>(index)) * cdf.back();
-                        const std::size_t l = std::min<std::size_t>(
-                            static_cast<std::size_t>(
-                                std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin()) -
-                                1,
-                            scene.lights.size() - 1);
-                        const double chance = (cdf[l + 1] - cdf[l]) / cdf.back();
-                        if (!(chance > 0)) continue;
-                        const float u[4] = {radical_inverse<3>(index), radical_inverse<5>(index),
-                                            radical_inverse<7>(index), radical_inverse<11>(index)};
                         Emission e;
-                        if (!emit(scene, scene.lights[l], u, e)) continue;
-                        sppm_photon(scene, footprints, e.org, e.dir,
-                                    e.beta / static_cast<float>(chance),
+                        if (!lights.emit(uint64_t(iter) * photons + k, e)) continue;
+                        sppm_photon(scene, footprints, e.org, e.dir, e.beta,
                                     mix_seed(0x70686f74ull + uint64_t(iter), k), &counts, deposit);
                     }
                 }

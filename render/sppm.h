@@ -4,9 +4,9 @@
 // camera cannot find it, photons from the light do (algorithms.md §25).
 #pragma once
 
-#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "render/integrator.h"
 
@@ -29,34 +29,29 @@ std::size_t sppm_pixel_bytes();
 // What SPPM's photons and the light tracer's paths (lighttrace.h) start from.
 
 /// A photon as a light emits it: its ray and weight, Le |cos| / (density of the position times
-/// density of the direction) (pbrt-v3's Sample_Le, before the light's choice).
+/// density of the direction, times the light's chance of being chosen) (pbrt-v3's Sample_Le).
 struct Emission {
     Vec3 org, dir;
     Rgb beta;
 };
 
-/// A photon of `light` from four uniform numbers (pbrt-v3's sampling of each light type's
-/// emission); false when there is none (a zero density or weight, or a light at infinity around
-/// an empty scene).
-bool emit(const Scene& scene, const Light& light, const float (&u)[4], Emission& e);
+/// The photons of a scene's lights, all of them or its delta lights alone (point, spot,
+/// goniometric, projection, distant): a light chosen by power (pbrt-v3's Power(), evenly where
+/// none has any), its photon drawn as pbrt-v3 samples each light type's emission.
+class LightEmitter {
+  public:
+    LightEmitter(const Scene& scene, bool delta_only);
+    bool empty() const { return m_lights.empty(); }
+    /// The photon of the Halton sequence's point `index`: its light from the radical inverse of
+    /// `index` in base 2, its position and direction from bases 3, 5, 7 and 11. False where there
+    /// is none (a light of no chance, a zero density or weight, a light at infinity around an
+    /// empty scene).
+    bool emit(uint64_t index, Emission& e) const;
 
-/// A light's power as pbrt-v3 gives it (the luminance of its Power()), by which photons choose
-/// their light; a projection light's cone is the one that holds its screen.
-float light_power(const Scene& scene, const Light& light);
-
-/// The radical inverse of `a` in base B (digits reversed behind the point): the Halton
-/// sequence's coordinate of base B. The base is a constant, so the divisions are products.
-template <uint64_t B>
-float radical_inverse(uint64_t a) {
-    uint64_t reversed = 0;
-    double scale = 1;
-    while (a != 0) {
-        const uint64_t next = a / B;
-        reversed = reversed * B + (a - next * B);
-        scale /= double(B);
-        a = next;
-    }
-    return std::min(float(double(reversed) * scale), 0x1.fffffep-1f);
-}
+  private:
+    const Scene& m_scene;
+    std::vector<std::size_t> m_lights;  // indices in Scene::lights
+    std::vector<double> m_cdf;          // m_lights' powers summed, from 0
+};
 
 }  // namespace cmam::render
