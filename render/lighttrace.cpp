@@ -105,7 +105,7 @@ std::size_t light_path_pixel_bytes() {
 
 void add_light_paths(const Scene& scene, const RenderOptions& options, RenderStats* stats,
                      Framebuffer& fb) {
-    if (!scene.light_tracing || scene.volumetric || !light_tracing_camera(scene.camera)) return;
+    if (!scene.light_tracing) return;  // (set only for a camera and scene they can join)
     const FilmSettings& film = scene.film;
     const std::size_t count = std::size_t(film.width()) * std::size_t(film.height());
     if (count == 0 || fb.rgb.size() != count * 3) return;

@@ -528,7 +528,8 @@ class Scene {
     // pbrt-v3's "bdpt" and "mlt" integrators (lighttrace.h, algorithms.md §27): the path tracer,
     // and light paths from the point, spot, goniometric, projection and distant lights whose
     // first bounce is specular, joined to the camera at their non-specular hits (the caustics no
-    // camera path reaches). Set for a perspective camera without media; path_tracing is set too.
+    // camera path reaches). Set only where light_tracing_camera accepts the camera and the scene
+    // has no media; path_tracing is set too.
     bool light_tracing = false;
     // pbrt-v3's "ambientocclusion" integrator (algorithms.md §23): at each camera ray's first
     // hit, `ao_samples` directions over the hemisphere of the geometric normal on the viewer's

@@ -159,6 +159,7 @@ class Builder {
     void realistic_camera(const Entity& e, Camera& c);
     static void check_camera_rays(const Camera& c, const pbrt::FileLoc& loc);
     void sampler();
+    void check_samples_per_row(const pbrt::FileLoc& loc) const;
     void filter();
     void integrator();
     void sppm_integrator(const Entity& e);

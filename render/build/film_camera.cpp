@@ -17,6 +17,14 @@ namespace cmam::render::build_detail {
 // Widest pinhole a realistic camera is rendered as, in degrees.
 constexpr double kMaxRealisticFov = 170;
 
+namespace {
+// The side of the square count of samples nearest n (at least 1): what a sample count that is
+// not a stratified grid's (pixelsamples, --spp, mutationsperpixel) is rendered as.
+int square_side(long long n) {
+    return std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
+}
+}  // namespace
+
 void Builder::film() {
     const Entity& e = m_desc.film;
     FilmSettings& f = m_scene->film;
@@ -279,7 +287,7 @@ void Builder::sampler() {
                      std::to_string(up) + ", as pbrt-v3's " + in_quotes(e.type) + " sampler does");
             n = up;
         }
-        int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
+        int k = square_side(n);
         s.xsamples = s.ysamples = k;
         // With --spp the count comes from there (set below), not from pixelsamples; under mlt
         // from its mutationsperpixel (mlt_samples).
@@ -298,21 +306,24 @@ void Builder::sampler() {
         throw SceneError("--spp " + std::to_string(m_opts.spp_override) +
                          " is above cmam's limit of " + std::to_string(kMaxSamplesPerPixel));
     if (m_opts.spp_override > 0) {
-        int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
+        const int k = square_side(m_opts.spp_override);
         s.xsamples = s.ysamples = k;
         s.jitter = k > 1;
     }
-    // A row of the film holds every sample of its pixels at once (and sample numbers along a
-    // row or column are ints), so the samples along the film's larger side are bounded too.
+    check_samples_per_row(m_opts.spp_override > 0 ? pbrt::FileLoc{} : e.loc);
+}
+
+// A row of the film holds every sample of its pixels at once (and sample numbers along a row or
+// column are ints), so the samples along the film's larger side are bounded too.
+void Builder::check_samples_per_row(const pbrt::FileLoc& loc) const {
     const FilmSettings& f = m_scene->film;
-    const long long side = std::max(f.xres, f.yres);
-    const long long per_row = side * s.spp();
+    const long long spp = m_scene->sampler.spp();
+    const long long side = std::max(f.xres, f.yres), per_row = side * spp;
     if (per_row > kMaxSamplesPerRow)
         throw SceneError(
-            m_opts.spp_override > 0 ? pbrt::FileLoc{} : e.loc,
-            std::to_string(s.spp()) + " samples per pixel along " + std::to_string(side) +
-                " pixels (the film's larger side) = " + std::to_string(per_row) +
-                " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
+            loc, std::to_string(spp) + " samples per pixel along " + std::to_string(side) +
+                     " pixels (the film's larger side) = " + std::to_string(per_row) +
+                     " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
 }
 
 void Builder::filter() {
@@ -451,16 +462,9 @@ void Builder::mlt_samples(const Entity& e) {
                          "mutationsperpixel " + std::to_string(n) + " is above cmam's limit of " +
                              std::to_string(kMaxSamplesPerPixel) + " samples per pixel");
     if (m_opts.spp_override > 0) return;
-    const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(double(n)))));
-    const long long side = std::max(m_scene->film.xres, m_scene->film.yres);
-    if (side * k * k > kMaxSamplesPerRow)
-        throw SceneError(
-            loc_of(e, "mutationsperpixel"),
-            std::to_string(k * k) + " samples per pixel along " + std::to_string(side) +
-                " pixels (the film's larger side) = " + std::to_string(side * k * k) +
-                " samples, above cmam's limit of " + std::to_string(kMaxSamplesPerRow));
-    m_scene->sampler.xsamples = m_scene->sampler.ysamples = k;
+    m_scene->sampler.xsamples = m_scene->sampler.ysamples = square_side(n);
     m_scene->sampler.jitter = true;
+    check_samples_per_row(loc_of(e, "mutationsperpixel"));
 }
 
 // pbrt-v3's "sppm" (Scene::sppm): its parameters, those it would fail on an error here (no
@@ -479,8 +483,7 @@ void Builder::sppm_integrator(const Entity& e) {
     m_scene->sppm.iterations = iterations;
     // --spp sets the iterations (each a camera sample per pixel), rounded as for the samplers.
     if (m_opts.spp_override > 0) {
-        const int k =
-            std::max(1, static_cast<int>(std::lround(std::sqrt(double(m_opts.spp_override)))));
+        const int k = square_side(m_opts.spp_override);
         m_scene->sppm.iterations = k * k;
     }
     // (0 or negative: one photon per pixel of the cropped film, as in pbrt-v3.)
