@@ -7,6 +7,9 @@
 #   make paper-figures  render the paper's scenes with the CMAM on and off, with an error table
 #   make results  evaluate every method on the bundled scenes; rewrites docs/results.md
 #   make fuzz     build the fuzz targets (Clang, build/fuzz) and run each for FUZZ_SECONDS
+# The release build is profile-guided (GCC): the renderer is first built instrumented in
+# build/pgo and trained on the bundled scenes (scripts/pgo-train.sh), again whenever its sources
+# are newer than the profile. PGO=0 builds without (e.g. `make PGO=0 test`).
 JOBS ?= $(shell nproc)
 BUILD := build/release
 CMAM := $(BUILD)/app/cmam
@@ -15,6 +18,14 @@ DEMO_OUT ?= $(BUILD)/demo.png
 FUZZ_SECONDS ?= 60
 FUZZ_TARGETS ?= parse scene ply image bsdf filter
 
+PGO ?= 1
+PGO_PROFILE := $(abspath build/pgo-profile)
+PGO_STAMP := $(PGO_PROFILE)/trained
+PGO_MODE := $(if $(filter 1,$(PGO)),use,)
+PGO_FLAGS := -DCMAM_PGO=$(PGO_MODE) -DCMAM_PGO_DIR=$(PGO_PROFILE)
+PGO_SOURCES := $(shell find texture render pbrt app eval -name '*.cpp' -o -name '*.h') \
+               CMakeLists.txt scripts/pgo-train.sh $(wildcard scripts/pgo/*.pbrt)
+
 .PHONY: all build deps configure demo test bench paper-figures results fuzz clean
 
 all: build
@@ -22,10 +33,20 @@ all: build
 deps:
 	@bash scripts/setup-deps.sh
 
+# Configured when new, and again when PGO changes.
 configure:
-	@test -f $(BUILD)/build.ninja || cmake --preset release >/dev/null
+	@if [ ! -f $(BUILD)/build.ninja ]; then cmake --preset release $(PGO_FLAGS) >/dev/null; \
+	elif ! grep -qx 'CMAM_PGO:STRING=$(PGO_MODE)' $(BUILD)/CMakeCache.txt; then \
+	  cmake -B $(BUILD) $(PGO_FLAGS) >/dev/null; fi
 
-build: configure
+$(PGO_STAMP): $(PGO_SOURCES)
+	@echo "profile-guided optimisation: the renderer built instrumented (build/pgo) and trained"
+	@cmake --preset pgo-generate -DCMAM_PGO_DIR=$(PGO_PROFILE) >/dev/null
+	@cmake --build build/pgo -j $(JOBS) --target cmam
+	@bash scripts/pgo-train.sh build/pgo/app/cmam $(PGO_PROFILE)
+	@touch $@
+
+build: $(if $(PGO_MODE),$(PGO_STAMP)) configure
 	@cmake --build $(BUILD) -j $(JOBS)
 
 demo: deps
@@ -37,7 +58,8 @@ demo: deps
 # make demo) would not have found Clang, and would skip texture.clang_build.
 test:
 	@bash scripts/setup-deps.sh --test
-	@cmake --preset release >/dev/null
+	@if [ -n "$(PGO_MODE)" ]; then $(MAKE) --no-print-directory $(PGO_STAMP); fi
+	@cmake --preset release $(PGO_FLAGS) >/dev/null
 	@$(MAKE) --no-print-directory build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 

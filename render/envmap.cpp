@@ -5,9 +5,27 @@
 #include <algorithm>
 #include <numbers>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "render/huge_pages.h"
 
 namespace cmam::render {
+
+namespace {
+// std::max(a, b) (b if a < b, else a) as one instruction: the profile-guided build otherwise
+// turns the maxima of a map's cells into branches (they were predictable on its training map),
+// which mispredict on a real map's texels (the weights of a 1500-pixel map took 4.7 times as
+// long).
+inline float max_of(float a, float b) {
+#if defined(__SSE2__)
+    return _mm_cvtss_f32(_mm_max_ss(_mm_set_ss(b), _mm_set_ss(a)));
+#else
+    return std::max(a, b);
+#endif
+}
+}  // namespace
 
 std::size_t Distribution1D::table_bytes(std::size_t n) {
     return (n + (n + 1)) * sizeof(float) + guide_count(n) * sizeof(uint32_t);
@@ -167,7 +185,7 @@ EnvironmentMap::EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> i
                 for (int i = 0; i < W; ++i) {
                     const float* t = img.texel(i, want[k]);
                     const float y = ch >= 3 ? Rgb(t[0], t[1], t[2]).luminance() : t[0];
-                    have->y[static_cast<std::size_t>(i)] = std::max(0.0f, y);
+                    have->y[static_cast<std::size_t>(i)] = max_of(0.0f, y);
                 }
             }
             out[static_cast<std::size_t>(k)] = have->y.data();
@@ -187,7 +205,7 @@ EnvironmentMap::EnvironmentMap(std::shared_ptr<const texture::FilteredTexture> i
                 for (int di = 0; di < 2; ++di) {
                     const float side_u = row[side[di]], side_v = beside[dj][i];
                     const float corner = 0.25f * (c + side_u + side_v + beside[dj][side[di]]);
-                    m = std::max({m, 0.5f * (c + side_u), 0.5f * (c + side_v), corner});
+                    m = max_of(max_of(max_of(m, 0.5f * (c + side_u)), 0.5f * (c + side_v)), corner);
                 }
             weights[i] = m * sin_theta;
         }

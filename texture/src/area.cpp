@@ -106,7 +106,7 @@ void RowPrefixTable::build_rows(int j0, int j1) const {
             prefix_row<NC>(*m_source, j, mean, row);
             // The margin's knots: R(k) with Repeat's extension, R(q W + r) = q D[W] + D[r].
             for (int k = m_w + 1; k < m_row_len; ++k) {
-                double r[NC];
+                double r[NC] = {};  // (knot writes all of them)
                 knot<NC>(row, k, r);
                 for (int c = 0; c < NC; ++c)
                     row[std::size_t(k) * NC + c] = static_cast<float>(r[c]);
