@@ -3,8 +3,8 @@
 # instrumented cmam renders the bundled scenes small with their own settings, the demo with each
 # footprint method and filter, and the scenes of scripts/pgo/: the common materials and lights
 # (path traced, and as bdpt), an environment map (directlighting) and participating media
-# (volpath), so that the profile records what renders spend their time on. About 15 s of CPU
-# time. The profile of an earlier training is removed first.
+# (volpath), so that the profile records what renders spend their time on. About 20 s on 2 cores
+# (37 s of CPU time). The profile of an earlier training is removed first.
 #   usage: scripts/pgo-train.sh CMAM PROFILE_DIR
 set -euo pipefail
 CMAM=${1:?usage: pgo-train.sh CMAM PROFILE_DIR}
