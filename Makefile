@@ -33,8 +33,9 @@ all: build
 deps:
 	@bash scripts/setup-deps.sh
 
-# Configured when new, and again when PGO changes.
-configure:
+# Configured when new, and again when PGO changes; after the training (whose time stamp the
+# profile's objects depend on, when it exists at configure time).
+configure: $(if $(PGO_MODE),$(PGO_STAMP))
 	@if [ ! -f $(BUILD)/build.ninja ]; then cmake --preset release $(PGO_FLAGS) >/dev/null; \
 	elif ! grep -qx 'CMAM_PGO:STRING=$(PGO_MODE)' $(BUILD)/CMakeCache.txt; then \
 	  cmake -B $(BUILD) $(PGO_FLAGS) >/dev/null; fi
@@ -46,7 +47,7 @@ $(PGO_STAMP): $(PGO_SOURCES)
 	@bash scripts/pgo-train.sh build/pgo/app/cmam $(PGO_PROFILE)
 	@touch $@
 
-build: $(if $(PGO_MODE),$(PGO_STAMP)) configure
+build: configure
 	@cmake --build $(BUILD) -j $(JOBS)
 
 demo: deps
