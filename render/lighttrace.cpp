@@ -126,9 +126,9 @@ void add_light_paths(const Scene& scene, const RenderOptions& options, RenderSta
     std::vector<double> sum(count * 3, 0.0);
     std::vector<std::vector<Splat>> splats(kWaveChunks);
     const uint64_t chunks = (paths + kPathChunk - 1) / kPathChunk;
-    for (uint64_t first = 0; first < chunks; first += kWaveChunks) {
-        const int wave = static_cast<int>(std::min<uint64_t>(kWaveChunks, chunks - first));
-        parallel_range(wave, options.threads, [&](int begin, int end) {
+    in_waves(
+        chunks, kWaveChunks, options.threads,
+        [&](uint64_t first, int begin, int end) {
             RayCounts counts;
             counts.count_lookups = options.count_lookups;
             for (int c = begin; c < end; ++c) {
@@ -149,18 +149,19 @@ void add_light_paths(const Scene& scene, const RenderOptions& options, RenderSta
                 }
             }
             counts.add_to(stats);
+        },
+        [&](uint64_t first, int wave) {
+            for (int c = 0; c < wave; ++c)
+                for (const Splat& s : splats[static_cast<std::size_t>(c)]) {
+                    double* px = &sum[std::size_t(s.pixel) * 3];
+                    px[0] += s.L.r;
+                    px[1] += s.L.g;
+                    px[2] += s.L.b;
+                }
+            // (In thousandths: the waves may be more than an int holds.)
+            if (options.progress)
+                options.progress(static_cast<int>(1000 * (first + uint64_t(wave)) / chunks), 1000);
         });
-        for (int c = 0; c < wave; ++c)
-            for (const Splat& s : splats[static_cast<std::size_t>(c)]) {
-                double* px = &sum[std::size_t(s.pixel) * 3];
-                px[0] += s.L.r;
-                px[1] += s.L.g;
-                px[2] += s.L.b;
-            }
-        // (In thousandths: the waves may be more than an int holds.)
-        if (options.progress)
-            options.progress(static_cast<int>(1000 * (first + uint64_t(wave)) / chunks), 1000);
-    }
     for (std::size_t i = 0; i < count * 3; ++i)
         fb.rgb[i] = static_cast<float>(double(fb.rgb[i]) + sum[i] * scale);
 }

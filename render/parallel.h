@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <thread>
 #include <vector>
 
@@ -57,6 +58,19 @@ void parallel_range_on(int n, int threads, Body&& body) {
     }
 #endif
     parallel_range(n, threads, body);
+}
+
+/// Tasks 0..n-1 in waves of at most `wave` tasks: body(first, begin, end) runs tasks
+/// first + begin .. first + end - 1 in parallel (begin and end count within the wave), then
+/// after_wave(first, count) runs on the calling thread. What the tasks write per task and
+/// after_wave adds up in task order is the same for any thread count.
+template <class Body, class AfterWave>
+void in_waves(uint64_t n, int wave, int threads, Body&& body, AfterWave&& after_wave) {
+    for (uint64_t first = 0; first < n; first += uint64_t(wave)) {
+        const int count = static_cast<int>(std::min<uint64_t>(uint64_t(wave), n - first));
+        parallel_range(count, threads, [&](int begin, int end) { body(first, begin, end); });
+        after_wave(first, count);
+    }
 }
 
 }  // namespace cmam::render

@@ -426,9 +426,9 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
 
         // Photons, in waves of tasks; each wave's deposits added in the tasks' order.
         const VisibleGrid grid(pixels, options.threads);
-        for (uint64_t first = 0; first < chunks && !lights.empty(); first += kWaveChunks) {
-            const int wave = static_cast<int>(std::min<uint64_t>(kWaveChunks, chunks - first));
-            parallel_range(wave, options.threads, [&](int begin, int end) {
+        in_waves(
+            lights.empty() ? 0 : chunks, kWaveChunks, options.threads,
+            [&](uint64_t first, int begin, int end) {
                 RayCounts counts;
                 counts.count_lookups = options.count_lookups;
                 for (int c = begin; c < end; ++c) {
@@ -458,16 +458,17 @@ Framebuffer render_sppm(const Scene& scene, const RenderOptions& options, Render
                     }
                 }
                 counts.add_to(stats);
+            },
+            [&](uint64_t, int wave) {
+                for (int c = 0; c < wave; ++c)
+                    for (const Deposit& d : deposits[static_cast<std::size_t>(c)]) {
+                        Pixel& p = pixels[d.pixel];
+                        p.phi[0] += d.phi.r;
+                        p.phi[1] += d.phi.g;
+                        p.phi[2] += d.phi.b;
+                        ++p.m;
+                    }
             });
-            for (int c = 0; c < wave; ++c)
-                for (const Deposit& d : deposits[static_cast<std::size_t>(c)]) {
-                    Pixel& p = pixels[d.pixel];
-                    p.phi[0] += d.phi.r;
-                    p.phi[1] += d.phi.g;
-                    p.phi[2] += d.phi.b;
-                    ++p.m;
-                }
-        }
 
         // Each pixel's radius and flux (pbrt-v3's update, alpha = 2/3).
         parallel_range(height, options.threads, [&](int begin, int end) {
