@@ -44,11 +44,19 @@ int run_check(const CheckArgs& a) {
         curves == 0
             ? ""
             : ", " + std::to_string(curves) + (curves == 1 ? " curve segment" : " curve segments");
+    // Instances built in place (their shapes counted among the triangles above) included.
     std::string instances;
-    if (!scene->instances.empty())
-        instances = " (" + std::to_string(scene->instances.size()) + " instances of " +
-                    std::to_string(scene->objects.size()) +
-                    (scene->objects.size() == 1 ? " object)" : " objects)");
+    const std::size_t placed = scene->instances.size() + scene->instances_in_place,
+                      objects = scene->objects.size() + scene->objects_in_place;
+    if (placed > 0) {
+        instances = " (" + std::to_string(placed) + " instances of " + std::to_string(objects) +
+                    (objects == 1 ? " object" : " objects");
+        if (scene->instances_in_place == placed)
+            instances += ", built in place";
+        else if (scene->instances_in_place > 0)
+            instances += ", " + std::to_string(scene->instances_in_place) + " built in place";
+        instances += ")";
+    }
     // (Media only where there are some, so that other scenes' line stays as it was.)
     std::string media;
     if (!scene->media.empty())

@@ -26,6 +26,13 @@ struct BuildOptions {
     std::optional<std::size_t> max_memory;
     /// Threads that read the scene's image and mesh files (0: all cores).
     int threads = 0;
+    /// Object instances that are cheap to copy are built in place, each instance's shapes
+    /// placed by the instance's transform composed with theirs, instead of as instances of one
+    /// shared object (a ray then crosses one level of Embree's hierarchy, not two): an object
+    /// used once, and an object whose uses together come to at most this many triangles (curve
+    /// segments and quadrics count one each) while the scene's copies stay within it. Objects
+    /// with curves stay instances. 0: every ObjectInstance is an instance.
+    std::size_t flatten_instances = std::size_t(1) << 16;
 };
 
 /// Builds a renderable scene; throws pbrt::SceneError with locations on any problem.

@@ -565,6 +565,10 @@ class Scene {
     std::vector<std::unique_ptr<Primitive>> primitives;  // outside objects
     std::vector<Object> objects;                         // ObjectBegin ... ObjectEnd
     std::vector<Instance> instances;                     // ObjectInstance
+    /// Object instances built in place (their shapes in `primitives`, placed by the instance's
+    /// transform) rather than instanced, and the objects they place (BuildOptions::
+    /// flatten_instances).
+    std::size_t instances_in_place = 0, objects_in_place = 0;
     std::map<std::string, std::unique_ptr<texture::FilteredTexture>>
         images;  // loaded once per settings
     Material default_material;

@@ -358,7 +358,7 @@ TEST(Cones, ARoundSphereHasOneCurvatureEverywhere) {
         const SurfaceHit h = hit_at(*s, px, py, &d);
         EXPECT_NEAR(surface_curvature(h), 1.0, 1e-6) << px << ", " << py;
     }
-    auto inst = test::scene_from(
+    auto inst = test::instanced_scene_from(
         camera512("ObjectBegin \"b\" Scale 2 2 2 Shape \"sphere\" \"float radius\" 0.5 ObjectEnd "
                   "Translate 0 0 5 Scale 0.75 0.75 0.75 ObjectInstance \"b\""));
     Vec3 d;
@@ -373,8 +373,8 @@ TEST(Cones, ARoundSphereHasOneCurvatureEverywhere) {
     EXPECT_TRUE(std::isfinite(k) && k > 0.25f && k < 2) << k;
     // A round sphere squashed by its instance's transform is that ellipsoid too.
     auto squashed_instance =
-        test::scene_from(camera512("ObjectBegin \"b\" Shape \"sphere\" ObjectEnd "
-                                   "Translate 0 0 5 Scale 1 1 2 ObjectInstance \"b\""));
+        test::instanced_scene_from(camera512("ObjectBegin \"b\" Shape \"sphere\" ObjectEnd "
+                                             "Translate 0 0 5 Scale 1 1 2 ObjectInstance \"b\""));
     h = hit_at(*squashed_instance, 270, 250, &d);
     ASSERT_NE(h.instance, nullptr);
     EXPECT_FALSE(h.instance->uniform);

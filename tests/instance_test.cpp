@@ -68,20 +68,41 @@ std::string flattened_scene() {
     return s + "WorldEnd\n";
 }
 
+// `flatten`: BuildOptions::flatten_instances (0: every instance kept an instance).
 std::vector<float> render_text(const std::string& text, std::optional<FootprintMethod> lod,
-                               texture::FilterKind filter) {
+                               texture::FilterKind filter, std::size_t flatten = 0) {
     BuildOptions bo;
     bo.spp_override = 4;
     bo.lod = lod;
     bo.filter = filter;
+    bo.flatten_instances = flatten;
     auto s = build_scene(pbrt::parse_string(text, "t.pbrt"), bo, {});
     return render::render(*s, {}, nullptr).rgb;
+}
+
+BuildOptions kept_instances() {
+    BuildOptions bo;
+    bo.flatten_instances = 0;
+    return bo;
+}
+
+// Relative RMS difference of two images (over b's mean), which must be bright enough to say so.
+double relative_rms(const std::vector<float>& a, const std::vector<float>& b) {
+    EXPECT_EQ(a.size(), b.size());
+    double se = 0, mean = 0;
+    for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) {
+        se += (a[i] - b[i]) * double(a[i] - b[i]);
+        mean += b[i];
+    }
+    mean /= b.size();
+    EXPECT_GT(mean, 0.05);
+    return std::sqrt(se / a.size()) / mean;
 }
 
 }  // namespace
 
 TEST(Instancing, ObjectIsBuiltOnceAndPlacedByEachInstance) {
-    auto s = build_scene(pbrt::parse_string(instanced_scene(), "t.pbrt"), {}, {});
+    auto s = build_scene(pbrt::parse_string(instanced_scene(), "t.pbrt"), kept_instances(), {});
     EXPECT_EQ(s->primitives.size(), 1u);  // the floor
     ASSERT_EQ(s->objects.size(), 1u);
     EXPECT_EQ(s->objects[0].primitives.size(), 2u);
@@ -125,28 +146,100 @@ TEST(Instancing, ImagesMatchTheFlattenedScene) {
                      std::string(texture::to_string(c.filter)));
         const std::vector<float> a = render_text(instanced_scene(), c.lod, c.filter);
         const std::vector<float> b = render_text(flattened_scene(), c.lod, c.filter);
-        ASSERT_EQ(a.size(), b.size());
-        double se = 0, mean = 0;
-        for (std::size_t i = 0; i < a.size(); ++i) {
-            se += (a[i] - b[i]) * double(a[i] - b[i]);
-            mean += b[i];
-        }
-        mean /= b.size();
-        EXPECT_GT(mean, 0.05);
-        EXPECT_LT(std::sqrt(se / a.size()) / mean, 2e-4);
+        EXPECT_LT(relative_rms(a, b), 2e-4);
+        // Built in place, the instances are the flattened scene's shapes (their transforms
+        // composed in another order: float precision again).
+        const std::vector<float> in_place =
+            render_text(instanced_scene(), c.lod, c.filter, BuildOptions{}.flatten_instances);
+        EXPECT_LT(relative_rms(in_place, b), 2e-4);
     }
 }
 
-// An instance whose transform cannot be inverted is an error at its directive.
+// Which instances are built in place: an object used once always; one used more often while
+// all its uses, and the scene's copies together, stay within the budget of triangles; none with
+// the budget 0; never an object with curves.
+TEST(Instancing, CheapInstancesAreBuiltInPlaceWithinTheBudget) {
+    auto build = [](const std::string& text, std::size_t budget) {
+        BuildOptions bo;
+        bo.flatten_instances = budget;
+        return build_scene(pbrt::parse_string(text, "t.pbrt"), bo, {});
+    };
+    // The object: two triangles and a sphere, 3 elements; used three times, 9.
+    for (std::size_t budget : {std::size_t(9), std::size_t(8), std::size_t(0)}) {
+        SCOPED_TRACE(budget);
+        auto s = build(instanced_scene(), budget);
+        const bool in_place = budget >= 9;
+        EXPECT_EQ(s->instances.size(), in_place ? 0u : 3u);
+        EXPECT_EQ(s->instances_in_place, in_place ? 3u : 0u);
+        EXPECT_EQ(s->objects_in_place, in_place ? 1u : 0u);
+        EXPECT_EQ(s->objects.size(), in_place ? 0u : 1u);
+        EXPECT_EQ(s->primitives.size(), in_place ? 1u + 3 * 2 : 1u);  // the floor and copies
+        // The copies are the shapes placed: the first instance's sphere's top at 1.6.
+        const std::optional<SurfaceHit> hit =
+            s->intersect(Vec3(-1.8f, 5, 0), Vec3(0, -1, 0), 0, 100);
+        ASSERT_TRUE(hit.has_value());
+        EXPECT_NEAR(hit->p.y, 1.6, 1e-5);
+        EXPECT_EQ(hit->instance == nullptr, in_place);
+    }
+    // Used once: in place whatever the budget (no copy), but not with 0.
+    const std::string once = kHeader + "ObjectBegin \"thing\"\n" + kShapes +
+                             "ObjectEnd\nTranslate 1 0 0 ObjectInstance \"thing\"\nWorldEnd\n";
+    EXPECT_EQ(build(once, 1)->instances_in_place, 1u);
+    EXPECT_EQ(build(once, 1)->instances.size(), 0u);
+    EXPECT_EQ(build(once, 0)->instances.size(), 1u);
+    // The budget is the scene's: of two such objects used three times each, one fits in 12.
+    std::string two = kHeader + "ObjectBegin \"a\"\n" + kShapes + "ObjectEnd\n" +
+                      "ObjectBegin \"b\"\n" + kShapes + "ObjectEnd\n";
+    for (const char* p : kPlacements)
+        two += std::string("AttributeBegin\n") + p +
+               "\nObjectInstance \"a\"\nObjectInstance \"b\"\nAttributeEnd\n";
+    auto s = build(two + "WorldEnd\n", 12);
+    EXPECT_EQ(s->objects_in_place, 1u);
+    EXPECT_EQ(s->instances.size(), 3u);
+    // Ids: the copies' after the floor, then the instances' (each its own, as before).
+    ASSERT_EQ(s->primitives.size(), 7u);
+    for (std::size_t i = 0; i < s->primitives.size(); ++i) EXPECT_EQ(s->primitives[i]->id, i);
+    EXPECT_EQ(s->instances[0].first_id, 7u);
+    EXPECT_EQ(s->instances[2].first_id, 11u);
+    // Curves stay instances.
+    const std::string curve =
+        kHeader +
+        "ObjectBegin \"c\" Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] "
+        "\"float width\" 0.1 ObjectEnd ObjectInstance \"c\"\nWorldEnd\n";
+    EXPECT_EQ(build(curve, 1000)->instances.size(), 1u);
+}
+
+// An object's warnings come once, however many of its instances are built in place.
+TEST(Instancing, InPlaceObjectsWarnOnce) {
+    for (int uses : {1, 3}) {
+        std::string text = kHeader +
+                           "ObjectBegin \"w\" Shape \"trianglemesh\" \"integer indices\" [0 1 2] "
+                           "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"float unknown\" 1 ObjectEnd\n";
+        for (int i = 0; i < uses; ++i) text += "Translate 0 0 1 ObjectInstance \"w\"\n";
+        std::vector<std::string> warnings;
+        auto s = build_scene(pbrt::parse_string(text + "WorldEnd\n", "t.pbrt"), {},
+                             [&](const std::string& w) { warnings.push_back(w); });
+        EXPECT_EQ(s->instances_in_place, std::size_t(uses));
+        int unknown = 0;
+        for (const std::string& w : warnings) unknown += w.find("unknown") != std::string::npos;
+        EXPECT_EQ(unknown, 1) << uses << " uses";
+    }
+}
+
+// An instance whose transform cannot be inverted is an error at its directive, kept as an
+// instance or built in place.
 TEST(Instancing, SingularInstanceTransformIsALocatedError) {
     const std::string text = kHeader + "ObjectBegin \"thing\"\n" + kShapes +
                              "ObjectEnd\nScale 1 0 1\nObjectInstance \"thing\"\nWorldEnd\n";
-    try {
-        build_scene(pbrt::parse_string(text, "t.pbrt"), {}, {});
-        FAIL();
-    } catch (const pbrt::SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("the instance's transform is singular"),
-                  std::string::npos)
-            << e.what();
+    for (const BuildOptions& bo : {BuildOptions{}, kept_instances()}) {
+        try {
+            build_scene(pbrt::parse_string(text, "t.pbrt"), bo, {});
+            FAIL();
+        } catch (const pbrt::SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("t.pbrt:29:1: error: the instance's transform "
+                                                 "is singular"),
+                      std::string::npos)
+                << e.what();
+        }
     }
 }

@@ -17,6 +17,10 @@ namespace {
 std::unique_ptr<render::Scene> world(const std::string& body) {
     return test::scene_from("Camera \"perspective\" WorldBegin " + body + " WorldEnd");
 }
+// The same with its object instances kept as instances (none built in place).
+std::unique_ptr<render::Scene> instanced_world(const std::string& body) {
+    return test::instanced_scene_from("Camera \"perspective\" WorldBegin " + body + " WorldEnd");
+}
 SurfaceHit hit(const render::Scene& s, Vec3 o, Vec3 d) {
     const std::optional<SurfaceHit> h = s.intersect(o, render::normalize(d), 0, 1e30f);
     EXPECT_TRUE(h.has_value());
@@ -195,7 +199,7 @@ void expect_same_hit(const std::optional<SurfaceHit>& a, const std::optional<Sur
 
 // Both packet widths (Embree's packets of 16, or two of 8), whichever this processor uses.
 TEST(Packets, IntersectPacketGivesTheSingleRaysHits) {
-    auto s = world(kPacketWorld);
+    auto s = instanced_world(kPacketWorld);
     constexpr int N = render::Scene::kPacketSize;
     EXPECT_TRUE(s->packet_width() == 8 || s->packet_width() == 16);
     int hits = 0, quadrics = 0, instanced = 0;
@@ -227,7 +231,7 @@ TEST(Packets, IntersectPacketGivesTheSingleRaysHits) {
 }
 
 TEST(Packets, OccludedPacketGivesTheSingleRaysAnswers) {
-    auto s = world(kPacketWorld);
+    auto s = instanced_world(kPacketWorld);
     constexpr int N = render::Scene::kPacketSize;
     int blocked = 0, clear = 0;
     for (int seed = 0; seed < 16; ++seed) {
@@ -254,7 +258,7 @@ TEST(Packets, OccludedPacketGivesTheSingleRaysAnswers) {
 
 // A quadric's (u,v) left for later and then computed equal the ones computed at once.
 TEST(Packets, QuadricUvOnDemandEqualsUvAtOnce) {
-    auto s = world(kPacketWorld);
+    auto s = instanced_world(kPacketWorld);
     int quadrics = 0;
     for (int seed = 0; seed < 8; ++seed) {
         Vec3 org[render::Scene::kPacketSize], dir[render::Scene::kPacketSize];

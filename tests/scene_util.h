@@ -20,6 +20,14 @@ inline std::unique_ptr<render::Scene> scene_from(const std::string& text,
     return render::build_scene(d, o, {});
 }
 
+/// As scene_from, with every ObjectInstance an instance of its object (none built in place:
+/// BuildOptions::flatten_instances), for tests of instancing itself.
+inline std::unique_ptr<render::Scene> instanced_scene_from(const std::string& text) {
+    render::BuildOptions o;
+    o.flatten_instances = 0;
+    return render::build_scene(pbrt::parse_string(text, "t.pbrt"), o, {});
+}
+
 /// The image of a scene from pbrt text, rendered on `threads` threads (0: all).
 inline render::Framebuffer render_text(const std::string& text, int threads = 0,
                                        render::RenderStats* stats = nullptr) {

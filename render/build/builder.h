@@ -79,6 +79,7 @@ class Builder {
     const pbrt::SceneDesc& m_desc;
     BuildOptions m_opts;
     pbrt::WarningSink m_warn;
+    const pbrt::Mat4* m_placement = nullptr;  // the instance being built in place (instances())
     std::unique_ptr<Scene> m_scene;
     std::map<std::string, std::unique_ptr<pbrt::PlyMesh>> m_ply;           // by resolved path
     std::map<std::string, std::shared_ptr<const FourierTable>> m_fourier;  // by resolved path
@@ -259,6 +260,10 @@ class Builder {
                     NormalSide side = NormalSide::Given);
     void emit_area_light(const pbrt::ShapeDesc& s, Primitive& prim);
     void instances();
+    // The shape's world_from_object, placed by the instance being built in place (instances()).
+    pbrt::Mat4 world_from(const pbrt::ShapeDesc& s) const {
+        return m_placement ? *m_placement * s.world_from_object : s.world_from_object;
+    }
     QuadricParams quadric_params(const Entity& e);
     static void round_sphere(Primitive& prim);
     Light area_light(const Entity& e);

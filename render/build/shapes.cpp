@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "pbrt/parser.h"
 #include "render/build/builder.h"
@@ -35,9 +36,9 @@ double uniform_scale(const std::array<double, 12>& m) {
 // pbrt-v3's sphere and disk, intersected analytically in object space.
 bool Builder::analytic_quadric(const pbrt::ShapeDesc& s, Primitive& prim) {
     const Entity& e = s.entity;
-    const Mat4 ow =
-        inverse_or_error(s.world_from_object, e.loc, "the shape's transform is singular");
-    prim.world_from_object = to34(s.world_from_object);
+    const Mat4 wo = world_from(s);
+    const Mat4 ow = inverse_or_error(wo, e.loc, "the shape's transform is singular");
+    prim.world_from_object = to34(wo);
     prim.object_from_world = to34(ow);
     prim.uniform_scale = uniform_scale(prim.world_from_object);
     double r = finite_float(e, "radius", 1, true);
@@ -250,7 +251,7 @@ bool Builder::curve(const pbrt::ShapeDesc& s, Primitive& prim) {
                                      std::to_string(segments) + " segments takes " +
                                      std::to_string(segments + 1) + ", one at each segment's ends");
             const Mat4 inv_t =
-                inverse_or_error(s.world_from_object, e.loc, "the shape's transform is singular")
+                inverse_or_error(world_from(s), e.loc, "the shape's transform is singular")
                     .transposed();
             for (std::size_t i = 0; i + 2 < nv.size(); i += 3) {
                 const auto w = inv_t.apply_vector({nv[i], nv[i + 1], nv[i + 2]});
@@ -265,7 +266,7 @@ bool Builder::curve(const pbrt::ShapeDesc& s, Primitive& prim) {
     }
     // Widths are in the object's space: scaled by the transform's mean scale (exact for a
     // uniform one).
-    const Mat4& m = s.world_from_object;
+    const Mat4 m = world_from(s);
     const double scale = std::cbrt(std::abs(m.linear_determinant()));
     auto cp = [&](int i) {
         return Vec3(float(pv[3 * i]), float(pv[3 * i + 1]), float(pv[3 * i + 2]));
@@ -509,16 +510,15 @@ bool Builder::place_mesh(const pbrt::ShapeDesc& s, const std::vector<float>& P,
                          const std::vector<int>& idx, Primitive& prim, NormalSide side) {
     std::size_t nv = P.size() / 3;
     prim.positions.resize(nv);
+    const Mat4 wo = world_from(s);
     for (std::size_t i = 0; i < nv; ++i) {
-        auto w = s.world_from_object.apply_point({P[3 * i], P[3 * i + 1], P[3 * i + 2]});
+        auto w = wo.apply_point({P[3 * i], P[3 * i + 1], P[3 * i + 2]});
         prim.positions[i] = Vec3(float(w[0]), float(w[1]), float(w[2]));
     }
     if (!N.empty()) {
         const Mat4 inv_t =
-            inverse_or_error(s.world_from_object, s.entity.loc, "the shape's transform is singular")
-                .transposed();
-        const float sign =
-            side == NormalSide::Given && s.world_from_object.swaps_handedness() ? -1.0f : 1.0f;
+            inverse_or_error(wo, s.entity.loc, "the shape's transform is singular").transposed();
+        const float sign = side == NormalSide::Given && wo.swaps_handedness() ? -1.0f : 1.0f;
         prim.normals.resize(nv);
         for (std::size_t i = 0; i < nv; ++i) {
             auto w = inv_t.apply_vector({N[3 * i], N[3 * i + 1], N[3 * i + 2]});
@@ -588,10 +588,12 @@ void Builder::shape(const pbrt::ShapeDesc& s, std::vector<std::unique_ptr<Primit
     prim->medium_inside = medium(s.medium_inside);
     prim->medium_outside = medium(s.medium_outside);
     finite_transform(s.world_from_object, e.loc, "shape");
-    prim->flip = s.reverse_orientation ^ s.world_from_object.swaps_handedness();
+    prim->flip = s.reverse_orientation ^ world_from(s).swaps_handedness();
     if (!(this->*builder_for(kShapes, e, "shape"))(s, *prim)) return;
     prim->id = static_cast<uint32_t>(out.size());
-    if (s.area_light >= 0 && &out == &m_scene->primitives) emit_area_light(s, *prim);
+    // (Shapes of objects do not emit, placed in instances or in place, as in pbrt-v3.)
+    if (s.area_light >= 0 && &out == &m_scene->primitives && !m_placement)
+        emit_area_light(s, *prim);
     out.push_back(std::move(prim));
 }
 
@@ -647,19 +649,86 @@ Light Builder::area_light(const Entity& e) {
     return l;
 }
 
+namespace {
+// What an object adds to a scene that copies it: triangles, curve segments, one per quadric.
+std::size_t elements(const std::vector<std::unique_ptr<Primitive>>& prims) {
+    std::size_t n = 0;
+    for (const auto& p : prims)
+        n += p->kind == Primitive::Kind::Triangles ? p->indices.size() / 3
+             : p->kind == Primitive::Kind::Curves  ? p->curve_first.size()
+                                                   : 1;
+    return n;
+}
+}  // namespace
+
 // Each object an instance uses is built once, in its own space; each instance places it
 // (algorithms.md §7.1). Textured-object ids (the CMAM's caches) are per instance.
+//
+// Where a copy is cheap, an instance is built in place instead: its object's shapes go into the
+// scene's own primitives, each placed by the instance's transform composed with its own, as if
+// the file had written them there (BuildOptions::flatten_instances: an object used once, or
+// whose uses come to few triangles). A ray then crosses one level of Embree's hierarchy, not two,
+// and its hits need no instance's transform (docs/performance.md, "Instancing").
 void Builder::instances() {
-    std::vector<int> built(m_desc.objects.size(), -1);
+    const auto& objects = m_desc.objects;
+    std::vector<std::size_t> uses(objects.size(), 0);
+    for (const pbrt::InstanceDesc& d : m_desc.instances) ++uses[d.object];
+    // Per object: the index in Scene::objects, or one of these.
+    constexpr int kUnbuilt = -1, kInPlace = -2;
+    std::vector<int> built(objects.size(), kUnbuilt);
+    std::vector<bool> warned(objects.size(), false);  // its shapes' warnings given once
+    std::size_t budget = m_opts.flatten_instances;
+    for (const pbrt::InstanceDesc& d : m_desc.instances) {
+        const pbrt::ObjectDesc& obj = objects[d.object];
+        int& o = built[d.object];
+        if (o == kUnbuilt) {
+            // A curve's width follows an instance's transform, but only the mean scale of a
+            // shape's own (Builder::curve): objects with curves stay instances.
+            const bool placeable =
+                m_opts.flatten_instances > 0 &&
+                std::none_of(obj.shapes.begin(), obj.shapes.end(),
+                             [](const pbrt::ShapeDesc& s) { return s.entity.type == "curve"; });
+            if (placeable && uses[d.object] == 1) {
+                o = kInPlace;  // no copy at all
+            } else {
+                std::vector<std::unique_ptr<Primitive>> prims;
+                for (const auto& s : obj.shapes) shape(s, prims);
+                warned[d.object] = true;
+                const std::size_t n = elements(prims), all = n * uses[d.object];
+                if (placeable && n > 0 && all / uses[d.object] == n && all <= budget) {
+                    budget -= all;
+                    o = kInPlace;
+                } else {
+                    o = static_cast<int>(m_scene->objects.size());
+                    m_scene->objects.emplace_back().primitives = std::move(prims);
+                }
+            }
+            if (o == kInPlace) ++m_scene->objects_in_place;
+        }
+        if (o != kInPlace || obj.shapes.empty()) continue;
+        finite_transform(d.world_from_instance, d.loc, "object instance");
+        inverse_or_error(d.world_from_instance, d.loc, "the instance's transform is singular");
+        // The object's shapes here: placed by this instance (and its warnings given once).
+        struct Placing {
+            Builder& b;
+            pbrt::WarningSink warn;
+            Placing(Builder& builder, const Mat4& m, bool quiet) : b(builder) {
+                b.m_placement = &m;
+                if (quiet) warn = std::exchange(b.m_warn, {});
+            }
+            ~Placing() {
+                b.m_placement = nullptr;
+                if (warn) b.m_warn = std::move(warn);
+            }
+        } placing(*this, d.world_from_instance, warned[d.object]);
+        for (const auto& s : obj.shapes) shape(s, m_scene->primitives);
+        warned[d.object] = true;
+        ++m_scene->instances_in_place;
+    }
     std::size_t next_id = m_scene->primitives.size();
     for (const pbrt::InstanceDesc& d : m_desc.instances) {
-        int& o = built[d.object];
-        if (o < 0) {
-            o = static_cast<int>(m_scene->objects.size());
-            m_scene->objects.emplace_back();
-            for (const auto& s : m_desc.objects[d.object].shapes)
-                shape(s, m_scene->objects.back().primitives);
-        }
+        const int o = built[d.object];
+        if (o == kInPlace) continue;
         const std::size_t n = m_scene->objects[o].primitives.size();
         if (n == 0) continue;  // an empty object places nothing
         finite_transform(d.world_from_instance, d.loc, "object instance");
