@@ -19,26 +19,16 @@ struct CheckArgs {
     std::string scene;
 };
 
-// Triangles, quadrics and curve segments as rendered: an object's count once per instance.
-void count_primitives(const std::vector<std::unique_ptr<render::Primitive>>& prims,
-                      std::size_t* tris, std::size_t* quadrics, std::size_t* curves) {
-    for (const auto& p : prims) {
-        if (p->kind == render::Primitive::Kind::Triangles)
-            *tris += p->indices.size() / 3;
-        else if (p->kind == render::Primitive::Kind::Curves)
-            *curves += p->curve_first.size();
-        else
-            ++*quadrics;
-    }
-}
-
 int run_check(const CheckArgs& a) {
     pbrt::SceneDesc desc = pbrt::parse_file(a.scene, print_warning);
     auto scene = render::build_scene(desc, {}, print_warning);
-    std::size_t tris = 0, quadrics = 0, curves = 0;
-    count_primitives(scene->primitives, &tris, &quadrics, &curves);
+    // Triangles, quadrics and curve segments as rendered: an object's count once per instance.
+    render::PrimitiveCounts counts;
+    render::count_primitives(scene->primitives, counts);
     for (const auto& in : scene->instances)
-        count_primitives(scene->objects[in.object].primitives, &tris, &quadrics, &curves);
+        render::count_primitives(scene->objects[in.object].primitives, counts);
+    const std::size_t tris = counts.triangles, quadrics = counts.quadrics,
+                      curves = counts.curve_segments;
     // (Curves, as media, only where there are some.)
     const std::string curve_text =
         curves == 0

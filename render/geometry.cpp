@@ -13,6 +13,18 @@
 
 namespace cmam::render {
 
+void count_primitives(const std::vector<std::unique_ptr<Primitive>>& prims,
+                      PrimitiveCounts& counts) {
+    for (const auto& p : prims) {
+        if (p->kind == Primitive::Kind::Triangles)
+            counts.triangles += p->indices.size() / 3;
+        else if (p->kind == Primitive::Kind::Curves)
+            counts.curve_segments += p->curve_first.size();
+        else
+            ++counts.quadrics;
+    }
+}
+
 using namespace xform;
 
 namespace {

@@ -412,6 +412,15 @@ struct Object {
     std::vector<std::unique_ptr<Primitive>> primitives;
 };
 
+/// What primitives hold: triangles, quadrics (spheres and disks) and curve segments.
+struct PrimitiveCounts {
+    std::size_t triangles = 0, quadrics = 0, curve_segments = 0;
+    std::size_t elements() const { return triangles + quadrics + curve_segments; }
+};
+/// Adds what `prims` hold to `counts`.
+void count_primitives(const std::vector<std::unique_ptr<Primitive>>& prims,
+                      PrimitiveCounts& counts);
+
 /// An ObjectInstance: an object placed in the world by a transform (3x4, row-major).
 struct Instance {
     uint32_t object = 0;  // index in Scene::objects

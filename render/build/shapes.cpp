@@ -649,18 +649,6 @@ Light Builder::area_light(const Entity& e) {
     return l;
 }
 
-namespace {
-// What an object adds to a scene that copies it: triangles, curve segments, one per quadric.
-std::size_t elements(const std::vector<std::unique_ptr<Primitive>>& prims) {
-    std::size_t n = 0;
-    for (const auto& p : prims)
-        n += p->kind == Primitive::Kind::Triangles ? p->indices.size() / 3
-             : p->kind == Primitive::Kind::Curves  ? p->curve_first.size()
-                                                   : 1;
-    return n;
-}
-}  // namespace
-
 // Each object an instance uses is built once, in its own space; each instance places it
 // (algorithms.md §7.1). Textured-object ids (the CMAM's caches) are per instance.
 //
@@ -676,7 +664,6 @@ void Builder::instances() {
     // Per object: the index in Scene::objects, or one of these.
     constexpr int kUnbuilt = -1, kInPlace = -2;
     std::vector<int> built(objects.size(), kUnbuilt);
-    std::vector<bool> warned(objects.size(), false);  // its shapes' warnings given once
     std::size_t budget = m_opts.flatten_instances;
     for (const pbrt::InstanceDesc& d : m_desc.instances) {
         const pbrt::ObjectDesc& obj = objects[d.object];
@@ -693,8 +680,9 @@ void Builder::instances() {
             } else {
                 std::vector<std::unique_ptr<Primitive>> prims;
                 for (const auto& s : obj.shapes) shape(s, prims);
-                warned[d.object] = true;
-                const std::size_t n = elements(prims), all = n * uses[d.object];
+                PrimitiveCounts counts;
+                count_primitives(prims, counts);
+                const std::size_t n = counts.elements(), all = n * uses[d.object];
                 if (placeable && n > 0 && all / uses[d.object] == n && all <= budget) {
                     budget -= all;
                     o = kInPlace;
@@ -708,7 +696,8 @@ void Builder::instances() {
         if (o != kInPlace || obj.shapes.empty()) continue;
         finite_transform(d.world_from_instance, d.loc, "object instance");
         inverse_or_error(d.world_from_instance, d.loc, "the instance's transform is singular");
-        // The object's shapes here: placed by this instance (and its warnings given once).
+        // The object's shapes here, placed by this instance. An object used more than once was
+        // built above to be counted, which gave its warnings: its placements give none.
         struct Placing {
             Builder& b;
             pbrt::WarningSink warn;
@@ -720,9 +709,8 @@ void Builder::instances() {
                 b.m_placement = nullptr;
                 if (warn) b.m_warn = std::move(warn);
             }
-        } placing(*this, d.world_from_instance, warned[d.object]);
+        } placing(*this, d.world_from_instance, uses[d.object] > 1);
         for (const auto& s : obj.shapes) shape(s, m_scene->primitives);
-        warned[d.object] = true;
         ++m_scene->instances_in_place;
     }
     std::size_t next_id = m_scene->primitives.size();
