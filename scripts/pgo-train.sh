@@ -39,4 +39,5 @@ sed -e "s#\"../../scenes/textures/gravel.png\"#\"$work/sky.exr\"#" \
   "$ROOT/scripts/pgo/envmap.pbrt" >"$exr"
 render "$exr" --resolution 200 --spp 16
 sed 's/"path"/"bdpt"/' "$ROOT/scripts/pgo/materials.pbrt" >"$bdpt"
-render "$bdpt" --resolution 200 --spp 16 2>/dev/null  # (without bdpt's warning)
+# (bdpt's warning kept out of the build's output, but shown with any error)
+render "$bdpt" --resolution 200 --spp 16 2>"$work/bdpt.err" || { cat "$work/bdpt.err" >&2; exit 1; }
