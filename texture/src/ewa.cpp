@@ -292,7 +292,10 @@ void ewa_accumulate(const L& lines, double s0, double t0, double A, double B, do
             int64_t outside = 0;
             double xi = double(s_lo);
             // One texel of the span; outside a black edge (t null) only the weight counts.
-            auto visit = [&](const float* t, bool black) {
+            // Always inlined: GCC otherwise puts it out of line, which takes the address of the
+            // sums it captures, and then every texel's additions go through memory (a store and
+            // a reload in each sum's chain) and each line builds the closure on the stack.
+            auto visit = [&](const float* t, bool black) __attribute__((always_inline)) {
                 const double x = xi - s0, q = An * x * x + by * x + cyy;
                 xi += 1;
                 if (!(q < N)) {
