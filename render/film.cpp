@@ -304,6 +304,7 @@ class FilmTracer {
           m_stratum_y(m_ny),
           m_sub_rows(scene.tags == TagPolicy::Scanline &&
                      scene.footprint_methods.has(FootprintMethod::Cmam)),
+          m_tags(scene.footprint_methods.has(FootprintMethod::Cmam)),
           m_limit_luminance(options.aov == AovKind::None &&
                             scene.film.max_sample_luminance <
                                 std::numeric_limits<float>::infinity()),
@@ -453,7 +454,10 @@ class FilmTracer {
             p.weight = camera_ray(m_scene, m_footprints, fx, fy, sp.seeds[i], sample, m_nx, m_ny,
                                   0.5f - j[0], 0.5f - j[1], p.ray);
         }
-        tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
+        if (m_tags)
+            tag_of(sp, col, sx, sy, j, p.ray.fp.tag);
+        else
+            p.ray.fp.tag = {};
         p.counts = i < sp.prime ? nullptr : &sp.counts;
         p.aov = m_options.aov == AovKind::None ? nullptr : &packet.aov[k];
     }
@@ -573,6 +577,7 @@ class FilmTracer {
     };
     const Stratum m_stratum_x, m_stratum_y;
     const bool m_sub_rows;
+    const bool m_tags;             // a CMAM reads the rays' tags (nothing else does)
     const bool m_limit_luminance;  // radiance (not an AOV) under a finite maxsampleluminance
     const FootprintProducers m_footprints;
     SplatFilm* m_splat;  // the filtered film, or null (each sample counts for its own pixel)

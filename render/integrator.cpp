@@ -1,5 +1,6 @@
 #include "render/integrator.h"
 
+#include <algorithm>
 #include <bit>
 #include <memory>
 
@@ -24,6 +25,21 @@ Rgb positional_intensity(const Light& light, const Vec3& w, Rgb i) {
 }
 
 namespace {
+// What a ray that leaves the scene sees: the infinite lights, environment maps filtered over the
+// ray differential's footprint when the ray carries one.
+Rgb escaped_radiance(const Scene& scene, const Vec3& dir, const RayDifferential& diff) {
+    Rgb l{};
+    for (const Light& light : scene.lights) {
+        if (light.type != Light::Type::Infinite) continue;
+        if (!light.env)
+            l += light.intensity;
+        else if (diff.valid && light.env_footprint)
+            l += light.intensity * light.env->radiance(dir, &diff.dddx, &diff.dddy);
+        else
+            l += light.intensity * light.env->radiance(dir);
+    }
+    return l;
+}
 
 float ray_epsilon(const Vec3& p) {
     return 1e-4f * (1 + max_abs(p));
@@ -69,20 +85,8 @@ struct Tracer {
                         strata / strata_x, u, v, u, v);
     }
 
-    // What a ray that leaves the scene sees: the infinite lights, environment maps filtered
-    // over the ray differential's footprint when the ray carries one.
     Rgb escaped(const Vec3& dir, const RayDifferential& diff) const {
-        Rgb l{};
-        for (const Light& light : scene.lights) {
-            if (light.type != Light::Type::Infinite) continue;
-            if (!light.env)
-                l += light.intensity;
-            else if (diff.valid && light.env_footprint)
-                l += light.intensity * light.env->radiance(dir, &diff.dddx, &diff.dddy);
-            else
-                l += light.intensity * light.env->radiance(dir);
-        }
-        return l;
+        return escaped_radiance(scene, dir, diff);
     }
 
     // pbrt-v3's "ambientocclusion" integrator at a hit seen along `dir` (algorithms.md §23):
@@ -1516,10 +1520,22 @@ void trace_packet(const Scene& scene, const FootprintProducers& footprints, cons
         }
         return;
     }
+    // A camera ray that leaves the scene sees what escapes it, as li would find without a
+    // medium to cross (nor random numbers, shadow rays or children): its radiance set here,
+    // without a tracer and li's set-up for it (paper scene 1's sky, half the image).
+    const bool plain_misses = !scene.volumetric;
+    const bool sky = std::any_of(scene.lights.begin(), scene.lights.end(),
+                                 [](const Light& l) { return l.type == Light::Type::Infinite; });
     for (int k = 0; k < n; ++k) {
         rng[k].emplace(paths[k].seed);
         if (paths[k].counts) ++paths[k].counts->camera;
-        tracer(k).li_deferred(paths[k].ray, 0, &hits[k], k);
+        const TracedRay& ray = paths[k].ray;
+        if (plain_misses && !hits[k] && finite(ray.org) && finite(ray.dir)) {
+            deferred[static_cast<std::size_t>(k)].radiance =
+                sky ? escaped_radiance(scene, ray.dir, ray.fp.diff) : Rgb{};
+            continue;
+        }
+        tracer(k).li_deferred(ray, 0, &hits[k], k);
     }
 
     // Then the samples' paths in lock step, each depth first as li traces it: each sample's
