@@ -61,7 +61,8 @@ FootprintProducers::FootprintProducers(FootprintMethods methods, const Camera& c
       m_cones_aniso(methods.has(FootprintMethod::ConesAniso)),
       m_cone_strata(cone_strata && m_cones),
       m_cone_world(cone_world && m_cones),
-      m_camera_differentials(m_differentials || m_cone_strata) {}
+      m_camera_differentials(m_differentials || m_cone_strata),
+      m_batches(!camera.orthographic && !camera.environment && !camera.has_lens()) {}
 
 RayFootprint FootprintProducers::camera_ray(float fx, float fy, const Vec3& dir,
                                             texture::RayTag tag, float to_stratum_x,

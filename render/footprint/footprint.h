@@ -124,9 +124,7 @@ class FootprintProducers {
     bool start_realistic_ray(RayFootprint& r, float fx, float fy, float lu, float lv,
                              const CameraRay& ray, float to_stratum_x, float to_stratum_y) const;
     /// Whether camera rays can be made together (camera_rays): the perspective pinhole's.
-    bool batches_camera_rays() const {
-        return !m_camera.orthographic && !m_camera.environment && !m_camera.has_lens();
-    }
+    bool batches_camera_rays() const { return m_batches; }
     /// The perspective camera's rays through (fx[i], fy[i]), i < n <= 16, together
     /// (perspective_rays); start_camera_ray then takes ray i from `batch`.
     void camera_rays(const float* fx, const float* fy, int n, CameraRayBatch& batch) const {
@@ -174,6 +172,7 @@ class FootprintProducers {
     bool m_cone_strata;           // cones' first hits centred on their strata (constructor)
     bool m_cone_world;            // the cones' world-space cross-sections kept (constructor)
     bool m_camera_differentials;  // m_differentials || m_cone_strata
+    bool m_batches;               // batches_camera_rays(), asked of every camera sample
 };
 
 }  // namespace cmam::render
