@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <optional>
 
 #include "expect_throw.h"
@@ -758,5 +759,40 @@ TEST(Packets, TracePacketGivesTraceOnesRadianceBitForBit) {
         auto s = build_scene(pbrt::parse_file(std::string(CMAM_SCENES_DIR) + "/paper/scene4.pbrt"),
                              bo, {});
         EXPECT_GT(expect_packets_match_single_rays(*s, {96, 112, 128, 240, 256}, 100, 220, 7), 0);
+    }
+}
+
+// Camera rays that leave the scene take trace_packet's short way (what escapes, set without a
+// tracer): trace_one's radiance bit for bit with no infinite light, a constant one and an
+// environment map filtered over the rays' differentials. The rows compared hold both rays that
+// leave and rays that hit (the floor, and a mirror whose reflections leave through li).
+TEST(Packets, CameraRaysThatLeaveTheSceneGiveTraceOnesRadiance) {
+    for (const char* light :
+         {"", "LightSource \"infinite\" \"rgb L\" [0.3 0.3 0.4]\n",
+          "LightSource \"infinite\" \"string mapname\" \"textures/grass.png\"\n"}) {
+        SCOPED_TRACE(light);
+        const std::string text =
+            std::string(
+                "LookAt 0 1 -5  0 1.2 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n"
+                "Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 48\n"
+                "Integrator \"whitted\" \"integer maxdepth\" 5\nWorldBegin\n"
+                "LightSource \"distant\" \"point from\" [-3 6 -4] \"point to\" [0 0 0]\n") +
+            light +
+            "Material \"matte\"\nShape \"trianglemesh\" \"point3 P\" [-4 0 -4  4 0 -4  4 0 4  -4 0 "
+            "4] \"integer indices\" [0 1 2 0 2 3]\n"
+            "AttributeBegin Material \"mirror\" Translate 0 1 0 Shape \"sphere\" \"float "
+            "radius\" 0.7 AttributeEnd\nWorldEnd\n";
+        const auto s = scene_beside_textures(text);
+        int leave = 0, hit = 0;
+        for (int py = 4; py < 48; py += 6)
+            for (int px = 8; px < 56; ++px) {
+                const CameraRay r = s->camera.generate_ray(px + 0.37f, py + 0.61f);
+                ++(s->intersect(r.org, r.dir, 0, std::numeric_limits<float>::infinity(), false)
+                       ? hit
+                       : leave);
+            }
+        EXPECT_GT(leave, 0);
+        EXPECT_GT(hit, 0);
+        expect_packets_match_single_rays(*s, {8, 24, 40}, 4, 48, 6);
     }
 }
