@@ -85,10 +85,6 @@ struct Tracer {
                         strata / strata_x, u, v, u, v);
     }
 
-    Rgb escaped(const Vec3& dir, const RayDifferential& diff) const {
-        return escaped_radiance(scene, dir, diff);
-    }
-
     // pbrt-v3's "ambientocclusion" integrator at a hit seen along `dir` (algorithms.md §23):
     // scene.ao_samples directions over the hemisphere of the geometric normal turned to the
     // viewer, cosine-weighted or uniform, from pairs of numbers in a Latin hypercube (each
@@ -754,7 +750,7 @@ struct Tracer {
             if (!hit)
                 return after_diffuse || scene.ambient_occlusion
                            ? Rgb()
-                           : through_media * escaped(ray.dir, ray.fp.diff);
+                           : through_media * escaped_radiance(scene, ray.dir, ray.fp.diff);
             SurfaceHit& h = *hit;
             const Material& m = material_of(*h.prim);
             // A hit whose shading reads no texture needs no (u,v) (nor footprints in it below);
@@ -1192,7 +1188,8 @@ struct Tracer {
             std::optional<SurfaceHit> hit =
                 scene.intersect(ray.org, ray.dir, 0, std::numeric_limits<float>::infinity(), false);
             if (!hit) {
-                if (depth == 0 || specular) vp.ld += beta * escaped(ray.dir, ray.fp.diff);
+                if (depth == 0 || specular)
+                    vp.ld += beta * escaped_radiance(scene, ray.dir, ray.fp.diff);
                 break;
             }
             SurfaceHit& h = *hit;
