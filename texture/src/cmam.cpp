@@ -188,10 +188,10 @@ struct CacheStep {
     bool in_range = false;
 };
 
-// Matches the sample at (s0, t0) (texture coordinate (u, v)) against the cache and enters it:
-// the paper's matching and cache update (§3.1), and the 2-D CMAM's row buffer.
-[[gnu::always_inline]] inline CacheStep advance(CmamCache& cache, RayTag tag, double s0, double t0,
-                                                double u, double v, const CmamOptions& o) {
+// Matches the sample at (s0, t0) (texture coordinate (u, v)) against the cache's two samples and
+// enters it: the paper's matching and cache update (§3.1).
+[[gnu::always_inline]] inline CacheStep step(CmamCache& cache, const RayTag& tag, double s0,
+                                             double t0, double u, double v, const CmamOptions& o) {
     // Matching (paper §3.1): the most recent sample, then both.
     int matches = 0;
     auto same = [&](const CmamCache::Entry& e, uint32_t steps_back) {
@@ -203,11 +203,18 @@ struct CacheStep {
     // not cached, so every region's samples lie within that range.
     const bool in_range =
         std::abs(s0) < detail::kMaxTexelCoord && std::abs(t0) < detail::kMaxTexelCoord;
-    CacheStep st{matches, nullptr, nullptr, nullptr, in_range};
     // Shift the cache: the most recent becomes the second, the current the most recent.
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, in_range, u, v};
-    // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
+    return {matches, nullptr, nullptr, nullptr, in_range};
+}
+
+// step(), and with the 2-D CMAM the row buffer, which gives the sample above (same sequence
+// number, previous ID).
+[[gnu::always_inline]] inline CacheStep advance(CmamCache& cache, const RayTag& tag, double s0,
+                                                double t0, double u, double v,
+                                                const CmamOptions& o) {
+    CacheStep st = step(cache, tag, s0, t0, u, v, o);
     if (o.two_d) {
         if (!cache.row_valid || tag.id != cache.row_id) {
             if (cache.row_valid && tag.id == cache.row_id + 1)
@@ -238,16 +245,22 @@ struct CacheStep {
 // Moves `e` by whole periods along the periodic coordinates to the copy nearest the sample at
 // (u, v); s and t follow, at `kw` and `kh` texels per unit of u and v. (A period of 1 moves it
 // by round(u - e.u), exactly: the division and product by 1 are exact.)
+bool moves_u(const CmamOptions& o) {
+    return o.periodic_u && o.period_u > 0 && std::isfinite(o.period_u);
+}
+bool moves_v(const CmamOptions& o) {
+    return o.periodic_v && o.period_v > 0 && std::isfinite(o.period_v);
+}
+Vec2d nearest_period(Vec2d p, double u, double v, const CmamOptions& o) {
+    if (moves_u(o)) p.u += std::round((u - p.u) / o.period_u) * o.period_u;
+    if (moves_v(o)) p.v += std::round((v - p.v) / o.period_v) * o.period_v;
+    return p;
+}
 void nearest_period(CmamCache::Entry& e, double u, double v, double kw, double kh,
                     const CmamOptions& o) {
-    if (o.periodic_u && o.period_u > 0 && std::isfinite(o.period_u)) {
-        e.u += std::round((u - e.u) / o.period_u) * o.period_u;
-        e.s = e.u * kw;
-    }
-    if (o.periodic_v && o.period_v > 0 && std::isfinite(o.period_v)) {
-        e.v += std::round((v - e.v) / o.period_v) * o.period_v;
-        e.t = e.v * kh;
-    }
+    const Vec2d p = nearest_period(Vec2d{e.u, e.v}, u, v, o);
+    if (moves_u(o)) e.s = (e.u = p.u) * kw;
+    if (moves_v(o)) e.t = (e.v = p.v) * kh;
 }
 
 // The sample's neighbours taken the short way round periodic coordinates: the cached samples in
@@ -273,6 +286,68 @@ void take_short_way(CmamCache::Entry (&cached)[2], const CmamCache::Entry*& abov
     move(right, copies->right);
 }
 
+// A sample beyond 2^30 texels (or not a number): the texture's mean, as in every filter.
+Texel out_of_range(const Image& img, LookupInfo* info) {
+    if (info) {
+        info->fallback = true;
+        info->texels_read = 1;
+    }
+    return img.mean();
+}
+
+// What a sample that matches no cached sample gets (paper §3.2.1 item 1).
+Texel miss_value(const FilteredTexture& tex, double u, double v, double s0, double t0,
+                 const CmamOptions& o, LookupInfo* info) {
+    const Image& img = tex.image();
+    const double W = img.width(), H = img.height();
+    if (o.filter == FilterKind::Sat && o.sat_miss == CmamSatMiss::PaperLiteral) {
+        // The region from the table's origin to the texture coordinate (in the base tile).
+        double s = s0 - std::floor(s0 / W) * W, t = t0 - std::floor(t0 / H) * H;
+        if (info) {
+            info->texels_read = 16;
+            info->rect = {{0, 0}, {s, t}};
+        }
+        return tex.sat().average(0, 0, std::max(s, 1e-6), std::max(t, 1e-6));
+    }
+    if (o.miss == CmamMiss::Average) {  // d = MAXLEVEL: the texture's average
+        if (info) {
+            info->texels_read = 1;
+            info->lambda = tex.pyramid().levels() - 1;
+            info->level_lo = info->level_hi = tex.pyramid().levels() - 1;
+        }
+        return img.mean();
+    }
+    if (info) info->texels_read = 4;  // d = 0: point sample
+    return bilinear(img, u, v);
+}
+
+// The 1-D CMAM's footprint: the current sample and its matching cached ones (the dispatcher
+// builds their region with cmam_region()).
+Footprint points_footprint(double u, double v, const Vec2d* cached_uv, int matches) {
+    Footprint fp;
+    fp.kind = Footprint::Kind::Points;
+    fp.point_count = 1 + std::min(matches, 2);
+    fp.points[0] = {u, v};
+    for (int k = 0; k + 1 < fp.point_count; ++k)
+        fp.points[k + 1] = cached_uv[k];  // s = u W exactly as cached
+    return fp;
+}
+
+// One route into the filters: the 2-D CMAM's left and above neighbours are the Jacobian columns
+// (an Axes footprint); the 1-D CMAM hands over its matching samples (a Points footprint).
+Texel filter(const FilteredTexture& tex, double u, double v, const Footprint& fp,
+             const CmamOptions& o, LookupInfo* info) {
+    FilterOptions fo;
+    fo.kind = o.filter;
+    fo.max_aniso = o.max_aniso;
+    fo.ellipse = o.ellipse;
+    fo.sat_box = o.sat_box;
+    if (!info) return tex.lookup(u, v, fp, fo);
+    const LookupResult filtered = tex.lookup_with_info(u, v, fp, fo);
+    *info = filtered.info;
+    return filtered.value;
+}
+
 // The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
 Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
@@ -296,13 +371,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
     const bool in_range = st.in_range;
 
     if (info) *info = LookupInfo{};
-    if (!in_range) {
-        if (info) {
-            info->fallback = true;
-            info->texels_read = 1;
-        }
-        return img.mean();
-    }
+    if (!in_range) return out_of_range(img, info);
     // The region: the 2-D CMAM's Jacobian columns; the 1-D region only where the hull weighting
     // or the caller needs it here (the dispatcher builds it from the Points footprint anyway).
     // (Built only where it is read: a CmamRegion is large enough that clearing it shows.)
@@ -375,52 +444,30 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, doub
         }
     }
     if (region_out) *region_out = *region;
-    if (matches == 0) {
-        if (o.filter == FilterKind::Sat && o.sat_miss == CmamSatMiss::PaperLiteral) {
-            // The region from the table's origin to the texture coordinate (in the base tile).
-            double s = s0 - std::floor(s0 / W) * W, t = t0 - std::floor(t0 / H) * H;
-            if (info) {
-                info->texels_read = 16;
-                info->rect = {{0, 0}, {s, t}};
-            }
-            return tex.sat().average(0, 0, std::max(s, 1e-6), std::max(t, 1e-6));
-        }
-        if (o.miss == CmamMiss::Average) {  // d = MAXLEVEL: the texture's average
-            if (info) {
-                info->texels_read = 1;
-                info->lambda = tex.pyramid().levels() - 1;
-                info->level_lo = info->level_hi = tex.pyramid().levels() - 1;
-            }
-            return img.mean();
-        }
-        if (info) info->texels_read = 4;  // d = 0: point sample
-        return bilinear(img, u, v);
-    }
-    // One route into the filters: the 2-D CMAM's left and above neighbours are the Jacobian
-    // columns (an Axes footprint); the 1-D CMAM hands over its matching samples (a Points
-    // footprint, whose region the dispatcher builds with cmam_region(), as above).
-    FilterOptions fo;
-    fo.kind = o.filter;
-    fo.max_aniso = o.max_aniso;
-    fo.ellipse = o.ellipse;
-    fo.sat_box = o.sat_box;
-    Footprint fp;
-    if (above) {
-        const CmamRegion& r = *region;
-        fp = Footprint::axes({r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
-        u += r.offset.u / W;  // the stratum's centre (positioned tags), else no move
-        v += r.offset.v / H;
-    } else {
-        fp.kind = Footprint::Kind::Points;
-        fp.point_count = 1 + std::min(matches, 2);
-        fp.points[0] = {u, v};
-        for (int k = 0; k + 1 < fp.point_count; ++k)
-            fp.points[k + 1] = cached_uv[k];  // s = u W exactly as cached
-    }
-    if (!info) return tex.lookup(u, v, fp, fo);
-    const LookupResult filtered = tex.lookup_with_info(u, v, fp, fo);
-    *info = filtered.info;
-    return filtered.value;
+    if (matches == 0) return miss_value(tex, u, v, s0, t0, o, info);
+    if (!above) return filter(tex, u, v, points_footprint(u, v, cached_uv, matches), o, info);
+    const CmamRegion& r = *region;
+    const Footprint fp = Footprint::axes({r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
+    // The stratum's centre (positioned tags), else no move.
+    return filter(tex, u + r.offset.u / W, v + r.offset.v / H, fp, o, info);
+}
+
+// The 1-D CMAM without hull weighting, when the caller does not ask for the region (the
+// renderer's lookups): lookup_into's steps for it, but only the cached samples' texture
+// coordinates are read, so the cache's entries are not copied whole (they are most of what a
+// lookup costs besides the filter's).
+Texel lookup_1d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u, double v,
+                const CmamOptions& o, LookupInfo* info) {
+    const Image& img = tex.image();
+    const double s0 = u * img.width(), t0 = v * img.height();
+    Vec2d cached_uv[2] = {{cache.last.u, cache.last.v}, {cache.second_last.u, cache.second_last.v}};
+    const CacheStep st = step(cache, tag, s0, t0, u, v, o);
+    if (o.periodic_u || o.periodic_v)
+        for (Vec2d& p : cached_uv) p = nearest_period(p, u, v, o);
+    if (info) *info = LookupInfo{};
+    if (!st.in_range) return out_of_range(img, info);
+    if (st.matches == 0) return miss_value(tex, u, v, s0, t0, o, info);
+    return filter(tex, u, v, points_footprint(u, v, cached_uv, st.matches), o, info);
 }
 
 }  // namespace
@@ -452,6 +499,7 @@ Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const
 
 Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
                   const CmamOptions& o) {
+    if (!o.two_d && !o.hull) return lookup_1d(tex, cache, tag, u, v, o, nullptr);
     return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
 }
 
