@@ -400,11 +400,13 @@ class FilmTracer {
     // Sets every member of `tag`.
     void tag_of(const Span& sp, int col, int sx, int sy, const float* j,
                 texture::RayTag& tag) const {
-        tag = {};
         // Counted from the first pixel traced (a filtered film's start beyond the film's own:
-        // the tags stay non-negative, the CMAM's caches being indexed by them).
+        // the tags stay non-negative, the CMAM's caches being indexed by them). Every field is
+        // written (camera rays are level 0, patch 0).
         col -= m_traced.x0;
         const int py = sp.py - m_traced.y0, xres = m_film.xres - m_traced.x0 * 2;
+        tag.level = 0;
+        tag.patch = 0;
         if (m_sub_rows) {
             tag.id = static_cast<uint32_t>(py * m_ny + sy);
             tag.seq = static_cast<uint32_t>(col * m_nx + sx);
@@ -414,6 +416,8 @@ class FilmTracer {
         } else {
             tag.id = static_cast<uint32_t>(py * xres + m_film.x0 + col);
             tag.seq = static_cast<uint32_t>(sy * m_nx + sx);
+            tag.positioned = false;
+            tag.x = tag.y = 0;
         }
     }
 

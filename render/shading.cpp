@@ -73,12 +73,16 @@ struct MappedSt {
     texture::Vec2d st;
     texture::Footprint footprint;  // None unless asked for
 };
-MappedSt node_st(const TextureNode& n, const TexContext& ctx, bool with_footprint) {
+// The (s,t) alone.
+texture::Vec2d node_st_only(const TextureNode& n, const TexContext& ctx) {
     if (n.mapping == TextureNode::Mapping::Uv)
-        return {{double(n.su) * ctx.u + n.du, double(n.sv) * ctx.v + n.dv},
-                with_footprint ? node_footprint(n, ctx) : texture::Footprint{}};
-    const texture::Vec2d st = mapped_st(n, ctx.p);
+        return {double(n.su) * ctx.u + n.du, double(n.sv) * ctx.v + n.dv};
+    return mapped_st(n, ctx.p);
+}
+MappedSt node_st(const TextureNode& n, const TexContext& ctx, bool with_footprint) {
+    const texture::Vec2d st = node_st_only(n, ctx);
     if (!with_footprint) return {st, {}};
+    if (n.mapping == TextureNode::Mapping::Uv) return {st, node_footprint(n, ctx)};
     const HitFootprint& f = ctx.footprints;
     Vec3 dp[2];
     switch (n.lod) {
@@ -213,13 +217,16 @@ void to_stratum_centre(const TextureNode& n, const TexContext& ctx, double& s, d
 }
 
 Rgb image_texture(const Scene& scene, const TextureNode& n, int node, const TexContext& ctx) {
-    // The CMAM's footprint is its cache's, not the hit's (which is none for it).
-    const MappedSt m = node_st(n, ctx, n.lod != FootprintMethod::Cmam);
-    double s = m.st.u, t = m.st.v;
     texture::Texel x;
-    if (n.lod == FootprintMethod::Cmam && ctx.cmam) {
-        x = cmam_texel(scene, n, node, s, t, ctx);
+    if (n.lod == FootprintMethod::Cmam) {
+        // The CMAM's footprint is its cache's, not the hit's (which is none for it); without
+        // the CMAM's caches, a point sample.
+        const texture::Vec2d st = node_st_only(n, ctx);
+        x = ctx.cmam ? cmam_texel(scene, n, node, st.u, st.v, ctx)
+                     : lookup_image(*n.image, n.filter, st.u, st.v, {}, ctx.counts);
     } else {
+        const MappedSt m = node_st(n, ctx, true);
+        double s = m.st.u, t = m.st.v;
         to_stratum_centre(n, ctx, s, t);
         x = lookup_image(*n.image, n.filter, s, t, m.footprint, ctx.counts);
     }

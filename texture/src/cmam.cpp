@@ -349,8 +349,8 @@ Texel filter(const FilteredTexture& tex, double u, double v, const Footprint& fp
 }
 
 // The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
-Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
-                  const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
+Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
+                  double v, const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
     const Image& img = tex.image();
     const double W = img.width(), H = img.height();
     const double s0 = u * W, t0 = v * H;
@@ -472,8 +472,8 @@ Texel lookup_1d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag,
 
 }  // namespace
 
-Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const CmamOptions& o,
-                         Vec2d* offset) {
+Footprint cmam_footprint(CmamCache& cache, const RayTag& tag, double u, double v,
+                         const CmamOptions& o, Vec2d* offset) {
     *offset = {};
     CmamCache::Entry cached[2] = {cache.last, cache.second_last};
     const CacheStep st = advance(cache, tag, u, v, u, v, o);
@@ -497,14 +497,14 @@ Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v, const
     return Footprint::axes(r.a, r.b);
 }
 
-Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u, double v,
-                  const CmamOptions& o) {
+Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
+                  double v, const CmamOptions& o) {
     if (!o.two_d && !o.hull) return lookup_1d(tex, cache, tag, u, v, o, nullptr);
     return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
 }
 
-CmamResult cmam_lookup_with_info(const FilteredTexture& tex, CmamCache& cache, RayTag tag, double u,
-                                 double v, const CmamOptions& o) {
+CmamResult cmam_lookup_with_info(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag,
+                                 double u, double v, const CmamOptions& o) {
     CmamResult r;
     r.value = lookup_into(tex, cache, tag, u, v, o, &r.info, &r.region);
     return r;

@@ -153,12 +153,14 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
 double cmam_width(Vec2d p0, const Vec2d* p, int matches);
 /// Its square (cmam_width() is the square root of exactly this). Inline: the MIP filters read
 /// nothing else of the region.
-inline double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches) {
+[[gnu::always_inline]] inline double cmam_width_squared(Vec2d p0, const Vec2d* p, int matches) {
     if (matches <= 0) return 0;
     const double du = p[0].u - p0.u, dv = p[0].v - p0.v;
     if (matches == 1) return du * du + dv * dv;
-    const double lo_u = std::min({p0.u, p[0].u, p[1].u}), hi_u = std::max({p0.u, p[0].u, p[1].u}),
-                 lo_v = std::min({p0.v, p[0].v, p[1].v}), hi_v = std::max({p0.v, p[0].v, p[1].v});
+    const double lo_u = std::min(p0.u, std::min(p[0].u, p[1].u)),
+                 hi_u = std::max(p0.u, std::max(p[0].u, p[1].u)),
+                 lo_v = std::min(p0.v, std::min(p[0].v, p[1].v)),
+                 hi_v = std::max(p0.v, std::max(p[0].v, p[1].v));
     return (hi_u - lo_u) * (hi_u - lo_u) + (hi_v - lo_v) * (hi_v - lo_v);
 }
 
@@ -170,8 +172,8 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
 /// The paper's module call: filtered value of `texture` at (u,v) for a ray with `tag`, using
 /// and then updating `cache` (the cache shifts: most recent becomes second, current becomes
 /// most recent).
-Texel cmam_lookup(const FilteredTexture& texture, CmamCache& cache, RayTag tag, double u, double v,
-                  const CmamOptions& options);
+Texel cmam_lookup(const FilteredTexture& texture, CmamCache& cache, const RayTag& tag, double u,
+                  double v, const CmamOptions& options);
 
 /// A CMAM lookup's value, what its filter did and the region it built.
 struct CmamResult {
@@ -181,8 +183,8 @@ struct CmamResult {
 };
 /// cmam_lookup() with what the filter did and the region (the 1-D region is built for it even
 /// where the filter does not need it). The value and the cache's update are cmam_lookup()'s.
-CmamResult cmam_lookup_with_info(const FilteredTexture& texture, CmamCache& cache, RayTag tag,
-                                 double u, double v, const CmamOptions& options);
+CmamResult cmam_lookup_with_info(const FilteredTexture& texture, CmamCache& cache,
+                                 const RayTag& tag, double u, double v, const CmamOptions& options);
 
 /// The CMAM as a footprint producer for a texture that is not an image (a closed-form
 /// checkerboard): the same matching and cache update as cmam_lookup(), with positions in the
@@ -190,7 +192,7 @@ CmamResult cmam_lookup_with_info(const FilteredTexture& texture, CmamCache& cach
 /// Jacobian columns, or for the 1-D CMAM the circle of radius |p1 - p0| to the most recent
 /// match (algorithms.md §6.3.3); none on a miss. `offset` receives the move to the sample's
 /// stratum centre (positioned 2-D tags), else zero.
-Footprint cmam_footprint(CmamCache& cache, RayTag tag, double u, double v,
+Footprint cmam_footprint(CmamCache& cache, const RayTag& tag, double u, double v,
                          const CmamOptions& options, Vec2d* offset);
 
 /// Convenience object for a ray tracer: one per textured object and worker thread.
