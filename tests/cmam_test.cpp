@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 using namespace cmam::texture;
 
@@ -545,4 +547,79 @@ TEST(Cmam2d, NeighboursAcrossAPeriodicSeamAreTakenTheShortWay) {
                 EXPECT_NEAR(a.value[0], b.value[0], 1e-6) << k;
             }
         }
+}
+
+TEST(Cmam, PlainLookupIsTheRecordedOnesValueAndCacheStep) {
+    // cmam_lookup takes a shorter way than cmam_lookup_with_info where no region is asked for
+    // (the 1-D CMAM without hull weighting): the two must give the same value, bit for bit, and
+    // leave the cache the same, over matches and misses (a new ID, a gap in the sequence, another
+    // level or patch), both miss policies, every filter, periodic coordinates across their seam,
+    // and samples beyond the texture's range.
+    std::vector<float> px(29 * 17 * 3);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 7919) % 103) / 102;
+    const FilteredTexture t(Image(29, 17, 3, px));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(0, 1);
+    int compared = 0, matched = 0;
+    for (FilterKind kind : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
+                            FilterKind::Area, FilterKind::Bilinear})
+        for (CmamMiss miss : {CmamMiss::Average, CmamMiss::Point})
+            for (int periodic : {0, 1, 2}) {
+                CmamOptions o;
+                o.filter = kind;
+                o.miss = miss;
+                o.periodic_u = periodic == 1;
+                o.periodic_v = periodic == 2;
+                o.period_u = 3;  // a closed quadric's u under uscale 3
+                CmamCache plain, recorded;
+                RayTag tag{};
+                // Along the row, across it; along is u, or v when v is the periodic one.
+                const double period = periodic == 1 ? o.period_u : o.period_v;
+                double along = 0.2, across = 0.7;
+                for (int k = 0; k < 400; ++k) {
+                    // Mostly steps along a row, now and then a new ID, a skipped sample, another
+                    // level or patch, or a sample far outside the texture.
+                    const double r = unit(rng);
+                    ++tag.seq;
+                    if (r < 0.05) {
+                        ++tag.id;
+                    } else if (r < 0.08) {
+                        ++tag.seq;
+                    } else if (r < 0.11) {
+                        tag.level ^= 1;
+                    } else if (r < 0.13) {
+                        tag.patch ^= 1;
+                    }
+                    along += 0.01 + 0.03 * unit(rng);
+                    across += 0.01 * (unit(rng) - 0.5);
+                    if (periodic != 0 && along >= period) along -= period;  // across the seam
+                    const bool far = r > 0.99;
+                    const double su = far             ? 1e12
+                                      : periodic == 2 ? across
+                                                      : along,
+                                 vv = far             ? -3e11
+                                      : periodic == 2 ? along
+                                                      : across;
+                    const Texel a = cmam_lookup(t, plain, tag, su, vv, o);
+                    const CmamResult b = cmam_lookup_with_info(t, recorded, tag, su, vv, o);
+                    for (int c = 0; c < 3; ++c)
+                        ASSERT_EQ(a[c], b.value[c])
+                            << to_string(kind) << " periodic " << periodic << " sample " << k;
+                    matched += b.region.matches > 0;
+                    ++compared;
+                    for (const auto* e : {&plain.last, &plain.second_last}) {
+                        const CmamCache::Entry& f =
+                            e == &plain.last ? recorded.last : recorded.second_last;
+                        ASSERT_EQ(e->valid, f.valid) << k;
+                        ASSERT_EQ(e->s, f.s) << k;
+                        ASSERT_EQ(e->t, f.t) << k;
+                        ASSERT_EQ(e->u, f.u) << k;
+                        ASSERT_EQ(e->v, f.v) << k;
+                        ASSERT_EQ(e->tag.seq, f.tag.seq) << k;
+                    }
+                }
+            }
+    // Most samples matched a cached one (the filters ran), and some did not (the misses).
+    EXPECT_GT(matched, compared / 2);
+    EXPECT_LT(matched, compared);
 }

@@ -242,20 +242,22 @@ struct CacheStep {
     return st;
 }
 
-// Moves `e` by whole periods along the periodic coordinates to the copy nearest the sample at
-// (u, v); s and t follow, at `kw` and `kh` texels per unit of u and v. (A period of 1 moves it
-// by round(u - e.u), exactly: the division and product by 1 are exact.)
+// Whether the options make u (v) periodic with a usable period.
 bool moves_u(const CmamOptions& o) {
     return o.periodic_u && o.period_u > 0 && std::isfinite(o.period_u);
 }
 bool moves_v(const CmamOptions& o) {
     return o.periodic_v && o.period_v > 0 && std::isfinite(o.period_v);
 }
+// Moves the texture coordinate `p` by whole periods along the periodic coordinates to the copy
+// nearest the sample at (u, v). (A period of 1 moves it by round(u - p.u), exactly: the division
+// and product by 1 are exact.)
 Vec2d nearest_period(Vec2d p, double u, double v, const CmamOptions& o) {
     if (moves_u(o)) p.u += std::round((u - p.u) / o.period_u) * o.period_u;
     if (moves_v(o)) p.v += std::round((v - p.v) / o.period_v) * o.period_v;
     return p;
 }
+// The same for a cached entry: s and t follow, at `kw` and `kh` texels per unit of u and v.
 void nearest_period(CmamCache::Entry& e, double u, double v, double kw, double kh,
                     const CmamOptions& o) {
     const Vec2d p = nearest_period(Vec2d{e.u, e.v}, u, v, o);
@@ -452,22 +454,21 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, const RayTag& ta
     return filter(tex, u + r.offset.u / W, v + r.offset.v / H, fp, o, info);
 }
 
-// The 1-D CMAM without hull weighting, when the caller does not ask for the region (the
-// renderer's lookups): lookup_into's steps for it, but only the cached samples' texture
-// coordinates are read, so the cache's entries are not copied whole (they are most of what a
-// lookup costs besides the filter's).
+// The 1-D CMAM without hull weighting and without a record (cmam_lookup's usual case, the
+// renderer's): lookup_into's steps for it, but only the cached samples' texture coordinates are
+// read, so the cache's entries are not copied whole (they were most of what a lookup cost
+// besides the filter's). The same values and cache as lookup_into (a test compares the two).
 Texel lookup_1d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u, double v,
-                const CmamOptions& o, LookupInfo* info) {
+                const CmamOptions& o) {
     const Image& img = tex.image();
     const double s0 = u * img.width(), t0 = v * img.height();
     Vec2d cached_uv[2] = {{cache.last.u, cache.last.v}, {cache.second_last.u, cache.second_last.v}};
     const CacheStep st = step(cache, tag, s0, t0, u, v, o);
     if (o.periodic_u || o.periodic_v)
         for (Vec2d& p : cached_uv) p = nearest_period(p, u, v, o);
-    if (info) *info = LookupInfo{};
-    if (!st.in_range) return out_of_range(img, info);
-    if (st.matches == 0) return miss_value(tex, u, v, s0, t0, o, info);
-    return filter(tex, u, v, points_footprint(u, v, cached_uv, st.matches), o, info);
+    if (!st.in_range) return out_of_range(img, nullptr);
+    if (st.matches == 0) return miss_value(tex, u, v, s0, t0, o, nullptr);
+    return filter(tex, u, v, points_footprint(u, v, cached_uv, st.matches), o, nullptr);
 }
 
 }  // namespace
@@ -499,7 +500,7 @@ Footprint cmam_footprint(CmamCache& cache, const RayTag& tag, double u, double v
 
 Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
                   double v, const CmamOptions& o) {
-    if (!o.two_d && !o.hull) return lookup_1d(tex, cache, tag, u, v, o, nullptr);
+    if (!o.two_d && !o.hull) return lookup_1d(tex, cache, tag, u, v, o);
     return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
 }
 
