@@ -90,9 +90,29 @@ CmamRegion cmam_region(double s0, double t0, const CmamCache::Entry* cached, int
     return r;
 }
 
-CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
-                          const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur,
-                          const CmamCache::Entry* above_left, const CmamCache::Entry* above_right) {
+namespace {
+
+// round(x) == x, without the library call: x is a whole number (or infinite). Below 2^52 a
+// truncation to an integer and back gives x exactly when x is whole; from there on every finite
+// double is whole.
+bool is_whole(double x) {
+    if (std::abs(x) < 0x1p52) return double(static_cast<int64_t>(x)) == x;
+    return !std::isnan(x);
+}
+
+// std::floor(x), without the library call where x is below 2^52 (from there on x is whole).
+double floor_of(double x) {
+    return std::abs(x) < 0x1p52 ? double(floor_to_int(x)) : std::floor(x);
+}
+
+// cmam_region_2d; with `full` false only what the filters read of it (the matches, the axes a
+// and b, the offset to the stratum's centre, used_above), not the MIP width and the SAT box,
+// whose square roots and divisions the renderer's lookups do not need (the dispatcher builds
+// its own from the axes).
+CmamRegion region_2d(double s0, double t0, const CmamCache::Entry* left,
+                     const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur,
+                     const CmamCache::Entry* above_left, const CmamCache::Entry* above_right,
+                     bool full) {
     CmamRegion r;
     r.used_above = true;
     Vec2d p0{s0, t0};
@@ -115,7 +135,7 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
         // stratum away, and the two-neighbour solve is the plain backward difference.
         auto on_grid = [&](const CmamCache::Entry& e) {
             const double dx = e.tag.x - cur.x, dy = e.tag.y - cur.y;
-            return dx == std::round(dx) && dy == std::round(dy);
+            return is_whole(dx) && is_whole(dy);
         };
         if ((positioned(above_left) || positioned(above_right)) &&
             !(on_grid(*left) && on_grid(above))) {
@@ -158,22 +178,31 @@ CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
             }
         }
         if (solved) {  // the axes are J's columns, the centre the stratum's
-            const Vec2d c{std::floor(cur.x) + 0.5 - cur.x, std::floor(cur.y) + 0.5 - cur.y};
+            const Vec2d c{floor_of(cur.x) + 0.5 - cur.x, floor_of(cur.y) + 0.5 - cur.y};
             r.offset = c.u * jx + c.v * jy;
             a = jx;
             b = jy;
             p0 = p0 + r.offset;
         }
     }
+    // EWA: the Jacobian columns are conjugate semi-diameters (algorithms.md §4.1).
+    r.a = a;
+    r.b = b;
+    if (!full) return r;
     r.width = std::max(length(a), length(b));  // GL-style: the longer Jacobian column
     // SAT: the box around the pixel's parallelogram p0 +- (a +- b) / 2.
     const Vec2d half{0.5 * (std::abs(a.u) + std::abs(b.u)), 0.5 * (std::abs(a.v) + std::abs(b.v))};
     r.rect = {p0 - half, p0 + half};
     detail::sat_min_extent(r.rect, o.max_aniso);
-    // EWA: the Jacobian columns are conjugate semi-diameters (algorithms.md §4.1).
-    r.a = a;
-    r.b = b;
     return r;
+}
+
+}  // namespace
+
+CmamRegion cmam_region_2d(double s0, double t0, const CmamCache::Entry* left,
+                          const CmamCache::Entry& above, const CmamOptions& o, const RayTag& cur,
+                          const CmamCache::Entry* above_left, const CmamCache::Entry* above_right) {
+    return region_2d(s0, t0, left, above, o, cur, above_left, above_right, true);
 }
 
 namespace {
@@ -379,8 +408,8 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, const RayTag& ta
     // (Built only where it is read: a CmamRegion is large enough that clearing it shows.)
     std::optional<CmamRegion> region;
     if (above)
-        region = cmam_region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag,
-                                above_left, above_right);
+        region = region_2d(s0, t0, matches > 0 ? &cached[0] : nullptr, *above, o, tag, above_left,
+                           above_right, region_out != nullptr);
     else if (o.hull || region_out)
         region = cmam_region(s0, t0, cached, matches, o);
     if (above) matches = std::max(matches, 1);  // a region exists: no miss
@@ -485,8 +514,8 @@ Footprint cmam_footprint(CmamCache& cache, const RayTag& tag, double u, double v
     if (o.periodic_u || o.periodic_v)
         take_short_way(cached, above, above_left, above_right, near_copies, u, v, 1, 1, o);
     if (above) {
-        const CmamRegion r = cmam_region_2d(u, v, st.matches > 0 ? &cached[0] : nullptr, *above, o,
-                                            tag, above_left, above_right);
+        const CmamRegion r = region_2d(u, v, st.matches > 0 ? &cached[0] : nullptr, *above, o, tag,
+                                       above_left, above_right, false);
         *offset = r.offset;
         return Footprint::axes(r.a, r.b);
     }
