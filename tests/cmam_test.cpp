@@ -549,20 +549,28 @@ TEST(Cmam2d, NeighboursAcrossAPeriodicSeamAreTakenTheShortWay) {
         }
 }
 
+namespace {
+// A w x h RGB texture of scrambled values in [0, 1].
+Image scrambled_rgb(int w, int h) {
+    std::vector<float> px(std::size_t(w) * h * 3);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 7919) % 103) / 102;
+    return Image(w, h, 3, px);
+}
+constexpr FilterKind kEveryFilter[] = {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
+                                       FilterKind::Area, FilterKind::Bilinear};
+}  // namespace
+
 TEST(Cmam, PlainLookupIsTheRecordedOnesValueAndCacheStep) {
     // cmam_lookup takes a shorter way than cmam_lookup_with_info where no region is asked for
     // (the 1-D CMAM without hull weighting): the two must give the same value, bit for bit, and
     // leave the cache the same, over matches and misses (a new ID, a gap in the sequence, another
     // level or patch), both miss policies, every filter, periodic coordinates across their seam,
     // and samples beyond the texture's range.
-    std::vector<float> px(29 * 17 * 3);
-    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 7919) % 103) / 102;
-    const FilteredTexture t(Image(29, 17, 3, px));
+    const FilteredTexture t(scrambled_rgb(29, 17));
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> unit(0, 1);
     int compared = 0, matched = 0;
-    for (FilterKind kind : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
-                            FilterKind::Area, FilterKind::Bilinear})
+    for (FilterKind kind : kEveryFilter)
         for (CmamMiss miss : {CmamMiss::Average, CmamMiss::Point})
             for (int periodic : {0, 1, 2}) {
                 CmamOptions o;
@@ -629,14 +637,11 @@ TEST(Cmam2d, PlainLookupIsTheRecordedOnesValue) {
     // reads), the recorded one the whole region: the same value, bit for bit, for every filter,
     // with tags that carry positions (jittered or on the strata's grid) and tags that do not,
     // over rows whose samples have a sample above, and across a periodic seam.
-    std::vector<float> px(31 * 19 * 3);
-    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float((i * 6151) % 97) / 96;
-    const FilteredTexture t(Image(31, 19, 3, px));
+    const FilteredTexture t(scrambled_rgb(31, 19));
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0, 1);
     int with_above = 0;
-    for (FilterKind kind : {FilterKind::Trilinear, FilterKind::Sat, FilterKind::Ewa,
-                            FilterKind::Area, FilterKind::Bilinear})
+    for (FilterKind kind : kEveryFilter)
         for (int tags : {0, 1, 2})  // unpositioned, positioned and jittered, positioned on a grid
             for (bool periodic : {false, true}) {
                 CmamOptions o;
