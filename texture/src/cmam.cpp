@@ -379,6 +379,15 @@ Texel filter(const FilteredTexture& tex, double u, double v, const Footprint& fp
     return filtered.value;
 }
 
+// The 2-D CMAM's region filtered: its Jacobian columns (level-0 texels) as an Axes footprint,
+// on the stratum's centre (positioned tags; otherwise the offset is zero).
+Texel filter_2d(const FilteredTexture& tex, double u, double v, const CmamRegion& r,
+                const CmamOptions& o, LookupInfo* info) {
+    const double W = tex.image().width(), H = tex.image().height();
+    const Footprint fp = Footprint::axes({r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
+    return filter(tex, u + r.offset.u / W, v + r.offset.v / H, fp, o, info);
+}
+
 // The lookup; `info` and `region_out`, when not null, receive what the filter did and the region.
 Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
                   double v, const CmamOptions& o, LookupInfo* info, CmamRegion* region_out) {
@@ -477,10 +486,7 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, const RayTag& ta
     if (region_out) *region_out = *region;
     if (matches == 0) return miss_value(tex, u, v, s0, t0, o, info);
     if (!above) return filter(tex, u, v, points_footprint(u, v, cached_uv, matches), o, info);
-    const CmamRegion& r = *region;
-    const Footprint fp = Footprint::axes({r.a.u / W, r.a.v / H}, {r.b.u / W, r.b.v / H});
-    // The stratum's centre (positioned tags), else no move.
-    return filter(tex, u + r.offset.u / W, v + r.offset.v / H, fp, o, info);
+    return filter_2d(tex, u, v, *region, o, info);
 }
 
 // The 1-D CMAM without hull weighting and without a record (cmam_lookup's usual case, the
@@ -496,6 +502,28 @@ Texel lookup_1d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag,
     if (o.periodic_u || o.periodic_v)
         for (Vec2d& p : cached_uv) p = nearest_period(p, u, v, o);
     if (!st.in_range) return out_of_range(img, nullptr);
+    if (st.matches == 0) return miss_value(tex, u, v, s0, t0, o, nullptr);
+    return filter(tex, u, v, points_footprint(u, v, cached_uv, st.matches), o, nullptr);
+}
+
+// The 2-D CMAM without hull weighting, periodic coordinates or a record (the renderer's plain
+// case): lookup_into's steps for it without copying the cached entries. After the step the
+// cache's second entry is the sample before (the left neighbour), and the row buffer holds the
+// row above; only the region's axes and centre are built. The same values and cache as
+// lookup_into (a test compares the two).
+Texel lookup_2d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u, double v,
+                const CmamOptions& o) {
+    const Image& img = tex.image();
+    const double s0 = u * img.width(), t0 = v * img.height();
+    const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
+                                {cache.second_last.u, cache.second_last.v}};
+    const CacheStep st = advance(cache, tag, s0, t0, u, v, o);
+    if (!st.in_range) return out_of_range(img, nullptr);
+    if (st.above)
+        return filter_2d(tex, u, v,
+                         region_2d(s0, t0, st.matches > 0 ? &cache.second_last : nullptr, *st.above,
+                                   o, tag, st.above_left, st.above_right, false),
+                         o, nullptr);
     if (st.matches == 0) return miss_value(tex, u, v, s0, t0, o, nullptr);
     return filter(tex, u, v, points_footprint(u, v, cached_uv, st.matches), o, nullptr);
 }
@@ -530,6 +558,8 @@ Footprint cmam_footprint(CmamCache& cache, const RayTag& tag, double u, double v
 Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
                   double v, const CmamOptions& o) {
     if (!o.two_d && !o.hull) return lookup_1d(tex, cache, tag, u, v, o);
+    if (o.two_d && !o.hull && !o.periodic_u && !o.periodic_v)
+        return lookup_2d(tex, cache, tag, u, v, o);
     return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
 }
 
