@@ -261,6 +261,32 @@ TEST(Cmam2d, TheRowBufferFindsTheSampleAboveOfTheSameLevel) {
     EXPECT_FALSE(r.used_above);
 }
 
+TEST(Cmam2d, RowBuffersHoldTheRowsOwnSamplesOnly) {
+    // A strip of the image far from its left edge: sequence numbers from 1000 on. The rows keep
+    // those samples only (not every number below them), and still find the samples above; a
+    // sample left of its row's first (not a left-to-right scan) extends the row to the left.
+    FilteredTexture tex(tmip1());
+    CmamOptions o;
+    o.two_d = true;
+    CmamCache c;
+    for (uint32_t row = 0; row < 3; ++row)
+        for (uint32_t x = 1000; x < 1010; ++x) {
+            const CmamRegion r =
+                cmam_lookup_with_info(tex, c, {row, 0, x}, 0.01 * x, 0.5 + 0.05 * row, o).region;
+            EXPECT_EQ(r.used_above, row > 0) << row << " " << x;
+            EXPECT_LE(c.row_current.size(), 10u);
+            EXPECT_LE(c.row_previous.size(), 10u);
+        }
+    // Row 3: 1003 first, then 998 to its left (row 2 has no 998: nothing above it).
+    EXPECT_TRUE(cmam_lookup_with_info(tex, c, {3, 0, 1003}, 10.03, 0.65, o).region.used_above);
+    EXPECT_FALSE(cmam_lookup_with_info(tex, c, {3, 0, 998}, 9.98, 0.65, o).region.used_above);
+    EXPECT_EQ(c.row_current.size(), 6u);  // 998 to 1003
+    // Row 4 finds both above: 998 (the extension) and 1003.
+    EXPECT_TRUE(cmam_lookup_with_info(tex, c, {4, 0, 998}, 9.98, 0.7, o).region.used_above);
+    EXPECT_TRUE(cmam_lookup_with_info(tex, c, {4, 0, 1003}, 10.03, 0.7, o).region.used_above);
+    EXPECT_FALSE(cmam_lookup_with_info(tex, c, {4, 0, 1001}, 10.01, 0.7, o).region.used_above);
+}
+
 // The CMAM as a footprint producer for textures that are not images: the same cache steps as a
 // lookup, positions in (u,v), the region as axes.
 TEST(Cmam, FootprintForTexturesThatAreNotImages) {

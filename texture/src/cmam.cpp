@@ -246,27 +246,39 @@ struct CacheStep {
     CacheStep st = step(cache, tag, s0, t0, u, v, o);
     if (o.two_d) {
         if (!cache.row_valid || tag.id != cache.row_id) {
-            if (cache.row_valid && tag.id == cache.row_id + 1)
+            if (cache.row_valid && tag.id == cache.row_id + 1) {
                 std::swap(cache.row_previous, cache.row_current);
-            else
+                cache.row_previous_first = cache.row_current_first;
+            } else {
                 cache.row_previous.clear();
+            }
             cache.row_current.clear();
+            cache.row_current_first = tag.seq;
             cache.row_id = tag.id;
             cache.row_valid = true;
         }
         // The row above's samples on either side of it too (the Jacobian's fit).
-        auto previous = [&](uint32_t seq) -> const CmamCache::Entry* {
-            if (seq >= cache.row_previous.size()) return nullptr;
-            const CmamCache::Entry& e = cache.row_previous[seq];
+        auto previous = [&](int64_t seq) -> const CmamCache::Entry* {
+            const int64_t i = seq - int64_t(cache.row_previous_first);
+            if (i < 0 || i >= int64_t(cache.row_previous.size())) return nullptr;
+            const CmamCache::Entry& e = cache.row_previous[std::size_t(i)];
             return e.valid && e.tag.level == tag.level && e.tag.patch == tag.patch ? &e : nullptr;
         };
         st.above = previous(tag.seq);
         if (st.above) {
-            st.above_left = tag.seq > 0 ? previous(tag.seq - 1) : nullptr;
-            st.above_right = previous(tag.seq + 1);
+            st.above_left = tag.seq > 0 ? previous(int64_t(tag.seq) - 1) : nullptr;
+            st.above_right = previous(int64_t(tag.seq) + 1);
         }
-        if (tag.seq >= cache.row_current.size()) cache.row_current.resize(tag.seq + 1);
-        cache.row_current[tag.seq] = cache.last;
+        // A sample left of the row's first so far (not in a left-to-right scan): the buffer
+        // grows to the left.
+        if (tag.seq < cache.row_current_first) {
+            cache.row_current.insert(cache.row_current.begin(), cache.row_current_first - tag.seq,
+                                     CmamCache::Entry{});
+            cache.row_current_first = tag.seq;
+        }
+        const std::size_t i = tag.seq - cache.row_current_first;
+        if (i >= cache.row_current.size()) cache.row_current.resize(i + 1);
+        cache.row_current[i] = cache.last;
     }
     return st;
 }

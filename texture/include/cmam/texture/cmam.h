@@ -99,8 +99,11 @@ struct CmamCache {
         double u = 0, v = 0;  // the texture coordinates s and t were made from
     };
     Entry last, second_last;
-    // 2-D CMAM: this ID's and the previous ID's samples by sequence number (a row buffer).
+    // 2-D CMAM: this ID's and the previous ID's samples by sequence number (a row buffer), each
+    // from the row's first sample's number on (row_*_first): a strip of the image keeps only its
+    // own columns, not every column to its left.
     std::vector<Entry> row_current, row_previous;
+    uint32_t row_current_first = 0, row_previous_first = 0;
     uint32_t row_id = 0;
     bool row_valid = false;
     // Convex hull weighting state of the current ID (pixel).
