@@ -217,10 +217,11 @@ struct CacheStep {
     bool in_range = false;
 };
 
-// Matches the sample at (s0, t0) (texture coordinate (u, v)) against the cache's two samples and
-// enters it: the paper's matching and cache update (§3.1).
-[[gnu::always_inline]] inline CacheStep step(CmamCache& cache, const RayTag& tag, double s0,
-                                             double t0, double u, double v, const CmamOptions& o) {
+// Matches the sample at (s0, t0) (texture coordinate (u, v)) against the cache and enters it:
+// the paper's matching and cache update (§3.1), and the 2-D CMAM's row buffer.
+[[gnu::always_inline]] inline CacheStep advance(CmamCache& cache, const RayTag& tag, double s0,
+                                                double t0, double u, double v,
+                                                const CmamOptions& o) {
     // Matching (paper §3.1): the most recent sample, then both.
     int matches = 0;
     auto same = [&](const CmamCache::Entry& e, uint32_t steps_back) {
@@ -232,18 +233,11 @@ struct CacheStep {
     // not cached, so every region's samples lie within that range.
     const bool in_range =
         std::abs(s0) < detail::kMaxTexelCoord && std::abs(t0) < detail::kMaxTexelCoord;
+    CacheStep st{matches, nullptr, nullptr, nullptr, in_range};
     // Shift the cache: the most recent becomes the second, the current the most recent.
     cache.second_last = cache.last;
     cache.last = {tag, s0, t0, in_range, u, v};
-    return {matches, nullptr, nullptr, nullptr, in_range};
-}
-
-// step(), and with the 2-D CMAM the row buffer, which gives the sample above (same sequence
-// number, previous ID).
-[[gnu::always_inline]] inline CacheStep advance(CmamCache& cache, const RayTag& tag, double s0,
-                                                double t0, double u, double v,
-                                                const CmamOptions& o) {
-    CacheStep st = step(cache, tag, s0, t0, u, v, o);
+    // 2-D CMAM: the row buffer gives the sample above (same sequence number, previous ID).
     if (o.two_d) {
         if (!cache.row_valid || tag.id != cache.row_id) {
             if (cache.row_valid && tag.id == cache.row_id + 1) {
@@ -501,35 +495,20 @@ Texel lookup_into(const FilteredTexture& tex, CmamCache& cache, const RayTag& ta
     return filter_2d(tex, u, v, *region, o, info);
 }
 
-// The 1-D CMAM without hull weighting and without a record (cmam_lookup's usual case, the
-// renderer's): lookup_into's steps for it, but only the cached samples' texture coordinates are
-// read, so the cache's entries are not copied whole (they were most of what a lookup cost
-// besides the filter's). The same values and cache as lookup_into (a test compares the two).
-Texel lookup_1d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u, double v,
-                const CmamOptions& o) {
+// The plain lookup, cmam_lookup's usual case and the renderer's: no hull weighting, no record
+// asked for, and with the 2-D CMAM no periodic coordinates. lookup_into's steps for it without
+// copying the cached entries: the 1-D footprint reads only their texture coordinates, and after
+// the step the cache's second entry is the sample before, the 2-D CMAM's left neighbour; only
+// the 2-D region's axes and centre are built. The same values and cache step as lookup_into
+// (tests compare the values, and for the 1-D CMAM the caches).
+Texel lookup_plain(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
+                   double v, const CmamOptions& o) {
     const Image& img = tex.image();
     const double s0 = u * img.width(), t0 = v * img.height();
     Vec2d cached_uv[2] = {{cache.last.u, cache.last.v}, {cache.second_last.u, cache.second_last.v}};
-    const CacheStep st = step(cache, tag, s0, t0, u, v, o);
-    if (o.periodic_u || o.periodic_v)
-        for (Vec2d& p : cached_uv) p = nearest_period(p, u, v, o);
-    if (!st.in_range) return out_of_range(img, nullptr);
-    if (st.matches == 0) return miss_value(tex, u, v, s0, t0, o, nullptr);
-    return filter(tex, u, v, points_footprint(u, v, cached_uv, st.matches), o, nullptr);
-}
-
-// The 2-D CMAM without hull weighting, periodic coordinates or a record (the renderer's plain
-// case): lookup_into's steps for it without copying the cached entries. After the step the
-// cache's second entry is the sample before (the left neighbour), and the row buffer holds the
-// row above; only the region's axes and centre are built. The same values and cache as
-// lookup_into (a test compares the two).
-Texel lookup_2d(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u, double v,
-                const CmamOptions& o) {
-    const Image& img = tex.image();
-    const double s0 = u * img.width(), t0 = v * img.height();
-    const Vec2d cached_uv[2] = {{cache.last.u, cache.last.v},
-                                {cache.second_last.u, cache.second_last.v}};
     const CacheStep st = advance(cache, tag, s0, t0, u, v, o);
+    if (o.periodic_u || o.periodic_v)  // (the 1-D CMAM's only: see cmam_lookup)
+        for (Vec2d& p : cached_uv) p = nearest_period(p, u, v, o);
     if (!st.in_range) return out_of_range(img, nullptr);
     if (st.above)
         return filter_2d(tex, u, v,
@@ -569,9 +548,10 @@ Footprint cmam_footprint(CmamCache& cache, const RayTag& tag, double u, double v
 
 Texel cmam_lookup(const FilteredTexture& tex, CmamCache& cache, const RayTag& tag, double u,
                   double v, const CmamOptions& o) {
-    if (!o.two_d && !o.hull) return lookup_1d(tex, cache, tag, u, v, o);
-    if (o.two_d && !o.hull && !o.periodic_u && !o.periodic_v)
-        return lookup_2d(tex, cache, tag, u, v, o);
+    // (The 2-D CMAM's periodic neighbours, copies of the row above's moved by whole periods,
+    // take the general way.)
+    if (!o.hull && !(o.two_d && (o.periodic_u || o.periodic_v)))
+        return lookup_plain(tex, cache, tag, u, v, o);
     return lookup_into(tex, cache, tag, u, v, o, nullptr, nullptr);
 }
 
