@@ -132,7 +132,9 @@ TEST_P(AreaWrap, RowsBuiltOnDemandEqualTheWholeTable) {
     // bit (a row read before it was built would hold another texture's sums, or nothing).
     const WrapMode w = GetParam();
     const int tw = 150, th = 70;
-    const std::size_t row_bytes = std::size_t(tw + 1) * 3 * sizeof(float);
+    // A stored row: W + 1 knots of three floats (1,812 bytes), padded to an odd number of
+    // 64-byte lines (29).
+    const std::size_t row_bytes = 29 * 64;
     std::mt19937 rng(41);
     for (int k = 0; k < 120; ++k) {
         const Image img(tw, th, 3, noise(tw, th, 3, 100 + k), w, w);
@@ -161,6 +163,22 @@ TEST_P(AreaWrap, RowsBuiltOnDemandEqualTheWholeTable) {
         EXPECT_EQ(lazy.memory_bytes(), whole.memory_bytes());
         EXPECT_EQ(lazy.memory_bytes(), th * row_bytes);
     }
+}
+
+TEST(RowPrefix, RowsAreAnOddNumberOfCacheLinesApart) {
+    // A steep edge reads a knot a row down one column: rows a power of two bytes apart would put
+    // all those reads in a few sets of the caches.
+    for (const int w : {4, 150, 511, 512, 1024})
+        for (const int c : {1, 2, 3, 4}) {
+            const int h = 3;
+            const Image img(w, h, c, noise(w, h, c, 7), WrapMode::Clamp, WrapMode::Clamp);
+            const RowPrefixTable table(img);
+            const std::size_t row = table.memory_bytes() / h;
+            EXPECT_EQ(row * h, table.memory_bytes());
+            EXPECT_GE(row, std::size_t(w + 1) * c * sizeof(float)) << w << "x" << c;
+            EXPECT_LT(row, std::size_t(w + 1) * c * sizeof(float) + 128) << w << "x" << c;
+            EXPECT_EQ(row % 128, 64u) << w << "x" << c;
+        }
 }
 
 TEST_P(AreaWrap, ConstantTextureStaysConstant) {
@@ -657,9 +675,9 @@ TEST(Area, TablesAreBuiltLazilyAndCounted) {
     EXPECT_EQ(t.row_prefix_bytes(), 0u);  // magnified: the Gauss rule reads the texels
     t.lookup(0.5, 0.5, Footprint::axes({0.1, 0}, {0, 0.1}), {FilterKind::Area});
     // Level 0 only: 65 knots a row and 32 rows, and as the texture repeats, the margin's knots
-    // and rows.
-    EXPECT_EQ(t.row_prefix_bytes(), std::size_t(65 + RowPrefixTable::kMarginKnots) *
-                                        (32 + RowPrefixTable::kMarginRows) * 3 * sizeof(float));
+    // and rows; a row padded to an odd number of 64-byte lines (101 knots of 12 bytes: 19).
+    static_assert(RowPrefixTable::kMarginKnots == 36);
+    EXPECT_EQ(t.row_prefix_bytes(), std::size_t(19 * 64) * (32 + RowPrefixTable::kMarginRows));
     EXPECT_GE(t.memory_bytes(), before + t.row_prefix_bytes());
 }
 

@@ -53,7 +53,11 @@ RowPrefixTable::RowPrefixTable(const Image& image, OnDemand)
     // next knot's first): a walked edge stays below x = W, or with the margin three knots before
     // the row's end.
     m_walk_w = margin ? double(m_row_len - 3) : double(m_w);
-    const std::size_t stride = static_cast<std::size_t>(m_row_len) * m_c;
+    constexpr int kLineFloats = 64 / sizeof(float);
+    int lines = (m_row_len * m_c + kLineFloats - 1) / kLineFloats;
+    if (lines % 2 == 0) ++lines;
+    m_stride = lines * kLineFloats;
+    const std::size_t stride = static_cast<std::size_t>(m_stride);
     m_d = TexelBuffer(stride * static_cast<std::size_t>(m_rows), TexelBuffer::Unfilled{});
     m_source = &image;
     if (!margin) {
@@ -84,7 +88,8 @@ RowPrefixTable::RowPrefixTable(const RowPrefixTable& other)
       m_mean(other.m_mean),
       m_row_len(other.m_row_len),
       m_rows(other.m_rows),
-      m_walk_w(other.m_walk_w) {
+      m_walk_w(other.m_walk_w),
+      m_stride(other.m_stride) {
     other.build_all();
     m_d = other.m_d;
 }
@@ -97,7 +102,7 @@ RowPrefixTable& RowPrefixTable::operator=(const RowPrefixTable& other) {
 // Rows j0 to j1 - 1 from the source image: entry 0 is 0, then the prefix sums, then the
 // margin's knots.
 void RowPrefixTable::build_rows(int j0, int j1) const {
-    const std::size_t stride = static_cast<std::size_t>(m_row_len) * m_c;
+    const std::size_t stride = static_cast<std::size_t>(m_stride);
     const double mean[4] = {m_mean[0], m_mean[1], m_mean[2], m_mean[3]};
     for (int j = j0; j < j1; ++j) {
         float* row = m_d.data() + stride * static_cast<std::size_t>(j);
@@ -112,6 +117,8 @@ void RowPrefixTable::build_rows(int j0, int j1) const {
                     row[std::size_t(k) * NC + c] = static_cast<float>(r[c]);
             }
         });
+        // The padding: read (times a zero weight) past a row's last knot.
+        std::fill(row + std::size_t(m_row_len) * m_c, row + stride, 0.0f);
     }
 }
 
@@ -163,8 +170,7 @@ std::size_t RowPrefixTable::memory_bytes() const {
     for (int b = 0; b < m_band_count; ++b)
         if (m_bands[static_cast<std::size_t>(b)].load(std::memory_order_acquire) == 2)
             rows += std::min(kBandRows, m_h - b * kBandRows);
-    return static_cast<std::size_t>(rows) * static_cast<std::size_t>(m_row_len) * m_c *
-           sizeof(float);
+    return static_cast<std::size_t>(rows) * static_cast<std::size_t>(m_stride) * sizeof(float);
 }
 
 namespace {
@@ -305,7 +311,7 @@ void RowPrefixTable::row_piece(int64_t j, double x0, double x1, double h, double
         for (int c = 0; c < NC; ++c) acc[c] -= h * m_mean[c] * 0.5 * (x0 + x1);
         return;
     }
-    const float* row = m_d.data() + static_cast<std::size_t>(jj) * m_row_len * NC;
+    const float* row = m_d.data() + static_cast<std::size_t>(jj) * m_stride;
     if (x0 > x1) std::swap(x0, x1);
     const int64_t k0 = floor_to_int(x0);
     double ra[NC], rb[NC];
@@ -631,7 +637,7 @@ template <int NC>
 [[gnu::always_inline]] inline void RowPrefixTable::edge_inside(Vec2d p, Vec2d q, double sign,
                                                                double dxdy, double h_per_x,
                                                                double* acc) const {
-    const std::size_t stride = static_cast<std::size_t>(m_row_len) * NC;
+    const std::size_t stride = static_cast<std::size_t>(m_stride);
 #if defined(__SSE2__)
     EdgeWalk<NC>(m_d.data(), stride, p, q, sign, dxdy, h_per_x).walk(acc);
 #else
@@ -683,7 +689,7 @@ template <int NC>
 void RowPrefixTable::edge_split(Vec2d p, Vec2d q, double sign, double dxdy, double h_per_x,
                                 double* acc) const {
     const double W = m_w, H = m_h;
-    const std::size_t stride = static_cast<std::size_t>(m_row_len) * NC;
+    const std::size_t stride = static_cast<std::size_t>(m_stride);
     // The cut points, in order along the edge (t its parameter): exactly on their lines.
     struct Cut {
         double t;
