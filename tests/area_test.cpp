@@ -166,7 +166,7 @@ TEST_P(AreaWrap, RowsBuiltOnDemandEqualTheWholeTable) {
 }
 
 TEST(RowPrefix, RowsAreAnOddNumberOfCacheLinesApart) {
-    // A steep edge reads a knot a row down one column: rows a power of two bytes apart would put
+    // A steep edge reads a knot a row down one column: rows about a power of two bytes apart put
     // all those reads in a few sets of the caches.
     for (const int w : {4, 150, 511, 512, 1024})
         for (const int c : {1, 2, 3, 4}) {

@@ -77,8 +77,8 @@ class RowPrefixTable {
     int m_row_len = 0, m_rows = 0;
     double m_walk_w = 0;
     // Floats from one stored row to the next: m_row_len * C, padded with zeros to an odd number
-    // of 64-byte cache lines. A steep edge reads one knot a row down a column; with a stride of
-    // a power of two bytes (a 512-texel row is 2,052 bytes) those knots all fall in two sets of
+    // of 64-byte cache lines. A steep edge reads one knot a row down a column; with a stride near
+    // a power of two bytes (a 512-texel grey row is 2,052 bytes) those knots fall in two sets of
     // the caches, and an edge of 16 rows fills both.
     int m_stride = 0;
     // m_rows rows of m_stride floats, in the image's buffer type: aligned and, when large,
