@@ -79,7 +79,7 @@ class RowPrefixTable {
     // Floats from one stored row to the next: m_row_len * C, padded with zeros to an odd number
     // of 64-byte cache lines. A steep edge reads one knot a row down a column; with a stride near
     // a power of two bytes (a 512-texel grey row is 2,052 bytes) those knots fall in two sets of
-    // the caches, and an edge of 16 rows fills both.
+    // the first-level cache, eight lines of a 16-row edge in each.
     int m_stride = 0;
     // m_rows rows of m_stride floats, in the image's buffer type: aligned and, when large,
     // on transparent huge pages, since a region's boundary reads one row after another. Mutable:
