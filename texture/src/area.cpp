@@ -495,9 +495,9 @@ struct EdgeWalk {
     // float (an edge of at most kSteepRows rows keeps x under about 2^6, within about 1e-6
     // texel, below the table's own rounding). Every piece spans at most one knot (|dxdy| <
     // 0.999): piece's short formula in float, h m0 + h_per_x l1 (m1 - m0). Row r adds to
-    // partial sum r mod 4 (in double), the four added ((0 + 2) + (1 + 3)) at the end. Each
-    // channel does a group's four rows in the four lanes at once (with more channels, the rows'
-    // knots are transposed into a vector per channel), so a channel's value is the same whatever
+    // partial sum r mod 4 (in double), the four added ((0 + 2) + (1 + 3)) at the end: one
+    // channel does a group's four rows in the four lanes at once, more channels the rows one
+    // after another with the same lane arithmetic, so a channel's value is the same whatever
     // the texture's channel count.
     [[gnu::always_inline]] void walk_steep(double* out) {
         const int64_t kb = static_cast<int64_t>(std::min(p.u, q.u));  // >= 0: the floor
@@ -512,7 +512,7 @@ struct EdgeWalk {
                      half = _mm_set1_ps(0.5f), four = _mm_set1_ps(4);
         const __m128i k_max = _mm_set1_epi32(static_cast<int32_t>(k_last - kb));
         __m128 r = _mm_setr_ps(0, 1, 2, 3);
-        Sum part[NC];  // per channel: rows 0 and 1 mod 4 (lo), 2 and 3 (hi)
+        Sum part[4];  // partial sums by row mod 4
         const std::ptrdiff_t row_step = static_cast<std::ptrdiff_t>(stride);
         const float* group_row = base;  // the group's first row, texel kb
         for (int64_t i = 0; i < n_rows; i += 4) {
@@ -562,31 +562,33 @@ struct EdgeWalk {
                                   _mm_unpacklo_ps(_mm_load_ss(at[2] + 2), _mm_load_ss(at[3] + 2)));
                 const __m128 v = short_piece(d0, d1, d2, f0, f1, h, w);
                 part[0].lo = _mm_add_pd(part[0].lo, _mm_cvtps_pd(v));  // rows 0 and 1: lanes
-                part[0].hi = _mm_add_pd(part[0].hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+                part[1].lo = _mm_add_pd(part[1].lo, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
             } else {
-                // Each row's knots k0, k0 + 1, k0 + 2 (a channel a lane), transposed: a channel's
-                // four rows a vector, each then as one channel's above.
-                __m128 d0[4], d1[4], d2[4];
-                for (int l = 0; l < 4; ++l) {
-                    d0[l] = knot4<NC>(at[l]);
-                    d1[l] = knot4<NC>(at[l] + NC);
-                    d2[l] = knot4<NC>(at[l] + 2 * NC);
-                }
-                _MM_TRANSPOSE4_PS(d0[0], d0[1], d0[2], d0[3]);
-                _MM_TRANSPOSE4_PS(d1[0], d1[1], d1[2], d1[3]);
-                _MM_TRANSPOSE4_PS(d2[0], d2[1], d2[2], d2[3]);
-                for (int cc = 0; cc < NC; ++cc) {
-                    const __m128 v = short_piece(d0[cc], d1[cc], d2[cc], f0, f1, h, w);
-                    part[cc].lo = _mm_add_pd(part[cc].lo, _mm_cvtps_pd(v));
-                    part[cc].hi = _mm_add_pd(part[cc].hi, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
-                }
+                alignas(16) float lf0[4], lf1[4], lw[4], lh[4];
+                _mm_store_ps(lf0, f0);
+                _mm_store_ps(lf1, f1);
+                _mm_store_ps(lw, w);
+                _mm_store_ps(lh, h);
+                const int lanes = static_cast<int>(std::min<int64_t>(4, n_rows - i));
+                for (int l = 0; l < lanes; ++l)
+                    add(part[l],
+                        short_piece(knot4<NC>(at[l]), knot4<NC>(at[l] + NC),
+                                    knot4<NC>(at[l] + 2 * NC), _mm_set1_ps(lf0[l]),
+                                    _mm_set1_ps(lf1[l]), _mm_set1_ps(lh[l]), _mm_set1_ps(lw[l])));
             }
         }
-        // Per channel, part[c].lo holds rows 0 and 1 mod 4 (lanes), part[c].hi rows 2 and 3.
-        for (int cc = 0; cc < NC; ++cc) {
-            alignas(16) double sum[2];
-            _mm_store_pd(sum, _mm_add_pd(part[cc].lo, part[cc].hi));  // (0 + 2, 1 + 3)
-            out[cc] += sum[0] + sum[1];
+        alignas(16) double sum[4];
+        if constexpr (NC == 1) {
+            // part[0].lo holds rows 0 and 1 mod 4 (lanes), part[1].lo rows 2 and 3.
+            const __m128d t = _mm_add_pd(part[0].lo, part[1].lo);  // (0 + 2, 1 + 3)
+            _mm_store_pd(sum, t);
+            out[0] += sum[0] + sum[1];
+        } else {
+            _mm_store_pd(sum, _mm_add_pd(_mm_add_pd(part[0].lo, part[2].lo),
+                                         _mm_add_pd(part[1].lo, part[3].lo)));
+            _mm_store_pd(sum + 2, _mm_add_pd(_mm_add_pd(part[0].hi, part[2].hi),
+                                             _mm_add_pd(part[1].hi, part[3].hi)));
+            for (int cc = 0; cc < NC; ++cc) out[cc] += sum[cc];
         }
     }
     // The last row's piece (none when first() had the whole edge); the sums into `out`.
